@@ -1,0 +1,1 @@
+//! Parameterized texture codec (placeholder until the codec issue lands).

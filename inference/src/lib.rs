@@ -1,0 +1,1 @@
+//! Offline side: scene, texgen, tracer, inference (placeholder).
