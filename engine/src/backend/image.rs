@@ -1,0 +1,253 @@
+//! Images described by a hashable `ImageDesc` (2D, 1D, cube with all MIP
+//! levels), with the views the passes need: the full view for sampling and
+//! one single-level, single-layer 2D view per attachment target.
+
+use super::device::Device;
+use super::error::{GpuError, GpuResult, VkContext};
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ImageKind {
+    D1,
+    D2,
+    Cube,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ImageDesc {
+    pub kind: ImageKind,
+    pub format: vk::Format,
+    pub width: u32,
+    pub height: u32,
+    pub mip_levels: u32,
+    pub usage: vk::ImageUsageFlags,
+}
+
+impl ImageDesc {
+    pub fn new_2d(format: vk::Format, width: u32, height: u32) -> Self {
+        Self {
+            kind: ImageKind::D2,
+            format,
+            width,
+            height,
+            mip_levels: 1,
+            usage: vk::ImageUsageFlags::empty(),
+        }
+    }
+    pub fn new_1d(format: vk::Format, width: u32) -> Self {
+        Self {
+            kind: ImageKind::D1,
+            ..Self::new_2d(format, width, 1)
+        }
+    }
+    pub fn new_cube(format: vk::Format, size: u32) -> Self {
+        Self {
+            kind: ImageKind::Cube,
+            ..Self::new_2d(format, size, size)
+        }
+    }
+    pub fn all_mip_levels(mut self) -> Self {
+        self.mip_levels = 32 - self.width.max(self.height).max(1).leading_zeros();
+        self
+    }
+    pub fn usage(mut self, usage: vk::ImageUsageFlags) -> Self {
+        self.usage |= usage;
+        self
+    }
+    pub fn layers(&self) -> u32 {
+        if self.kind == ImageKind::Cube { 6 } else { 1 }
+    }
+    pub fn aspect(&self) -> vk::ImageAspectFlags {
+        match self.format {
+            vk::Format::D32_SFLOAT | vk::Format::D16_UNORM => vk::ImageAspectFlags::DEPTH,
+            _ => vk::ImageAspectFlags::COLOR,
+        }
+    }
+    pub fn mip_extent(&self, level: u32) -> (u32, u32) {
+        ((self.width >> level).max(1), (self.height >> level).max(1))
+    }
+    pub fn full_range(&self) -> vk::ImageSubresourceRange {
+        vk::ImageSubresourceRange {
+            aspect_mask: self.aspect(),
+            base_mip_level: 0,
+            level_count: self.mip_levels,
+            base_array_layer: 0,
+            layer_count: self.layers(),
+        }
+    }
+}
+
+pub struct Image {
+    device: Device,
+    pub raw: vk::Image,
+    pub desc: ImageDesc,
+    /// Samples every level and layer (cube view for cube maps).
+    pub view: vk::ImageView,
+    /// `target_views[level * layers + layer]`: a 2D view to render into.
+    target_views: Vec<vk::ImageView>,
+    allocation: Option<Allocation>,
+}
+
+impl Image {
+    pub fn new(device: &Device, name: &str, desc: ImageDesc) -> GpuResult<Self> {
+        let (image_type, flags) = match desc.kind {
+            ImageKind::D1 => (vk::ImageType::TYPE_1D, vk::ImageCreateFlags::empty()),
+            ImageKind::D2 => (vk::ImageType::TYPE_2D, vk::ImageCreateFlags::empty()),
+            ImageKind::Cube => (vk::ImageType::TYPE_2D, vk::ImageCreateFlags::CUBE_COMPATIBLE),
+        };
+        let info = vk::ImageCreateInfo::default()
+            .flags(flags)
+            .image_type(image_type)
+            .format(desc.format)
+            .extent(vk::Extent3D {
+                width: desc.width,
+                height: desc.height,
+                depth: 1,
+            })
+            .mip_levels(desc.mip_levels)
+            .array_layers(desc.layers())
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(desc.usage)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        // SAFETY: valid device and create info; destroyed in Drop.
+        let raw = unsafe { device.device.create_image(&info, None) }.vk("vkCreateImage")?;
+        let mut image = Self {
+            device: device.clone(),
+            raw,
+            desc,
+            view: vk::ImageView::null(),
+            target_views: Vec::new(),
+            allocation: None,
+        };
+        // SAFETY: `raw` was just created on this device.
+        let requirements = unsafe { device.device.get_image_memory_requirements(raw) };
+        let allocation = device
+            .allocator()
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location: MemoryLocation::GpuOnly,
+                linear: false,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|source| GpuError::Allocation {
+                name: name.into(),
+                source,
+            })?;
+        // SAFETY: fresh allocation meeting the image's requirements.
+        unsafe {
+            device
+                .device
+                .bind_image_memory(raw, allocation.memory(), allocation.offset())
+        }
+        .vk("vkBindImageMemory")?;
+        image.allocation = Some(allocation);
+
+        let view_type = match desc.kind {
+            ImageKind::D1 => vk::ImageViewType::TYPE_1D,
+            ImageKind::D2 => vk::ImageViewType::TYPE_2D,
+            ImageKind::Cube => vk::ImageViewType::CUBE,
+        };
+        image.view = image.create_view(view_type, desc.full_range())?;
+        let wants_targets = desc.usage.intersects(
+            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+        );
+        if wants_targets && desc.kind != ImageKind::D1 {
+            for level in 0..desc.mip_levels {
+                for layer in 0..desc.layers() {
+                    let range = vk::ImageSubresourceRange {
+                        aspect_mask: desc.aspect(),
+                        base_mip_level: level,
+                        level_count: 1,
+                        base_array_layer: layer,
+                        layer_count: 1,
+                    };
+                    let view = image.create_view(vk::ImageViewType::TYPE_2D, range)?;
+                    image.target_views.push(view);
+                }
+            }
+        }
+        Ok(image)
+    }
+
+    fn create_view(
+        &self,
+        view_type: vk::ImageViewType,
+        range: vk::ImageSubresourceRange,
+    ) -> GpuResult<vk::ImageView> {
+        let info = vk::ImageViewCreateInfo::default()
+            .image(self.raw)
+            .view_type(view_type)
+            .format(self.desc.format)
+            .subresource_range(range);
+        // SAFETY: the range lies inside this image; destroyed in Drop.
+        unsafe { self.device.device.create_image_view(&info, None) }.vk("vkCreateImageView")
+    }
+
+    /// The 2D view of one MIP level of one layer (cube face) to render into.
+    pub fn target_view(&self, level: u32, layer: u32) -> GpuResult<vk::ImageView> {
+        self.target_views
+            .get((level * self.desc.layers() + layer) as usize)
+            .copied()
+            .ok_or_else(|| {
+                GpuError::Invalid(format!(
+                    "no attachment view for level {level} layer {layer} of a {:?}",
+                    self.desc
+                ))
+            })
+    }
+}
+
+impl Drop for Image {
+    fn drop(&mut self) {
+        // SAFETY: images are dropped only after the last frame using them
+        // completed (the engine waits on every frame's fence).
+        unsafe {
+            for view in self.target_views.drain(..).chain([self.view]) {
+                if view != vk::ImageView::null() {
+                    self.device.device.destroy_image_view(view, None);
+                }
+            }
+            self.device.device.destroy_image(self.raw, None);
+        }
+        if let Some(allocation) = self.allocation.take() {
+            let _ = self.device.allocator().free(allocation);
+        }
+    }
+}
+
+/// A sampler; trilinear with the given address mode (the only filtering
+/// lavapipe implements faithfully, see README "Device notes").
+pub struct Sampler {
+    device: Device,
+    pub raw: vk::Sampler,
+}
+
+impl Sampler {
+    pub fn trilinear(device: &Device, address: vk::SamplerAddressMode) -> GpuResult<Self> {
+        let info = vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::LINEAR)
+            .min_filter(vk::Filter::LINEAR)
+            .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+            .address_mode_u(address)
+            .address_mode_v(address)
+            .address_mode_w(address)
+            .max_lod(vk::LOD_CLAMP_NONE);
+        // SAFETY: valid device; destroyed in Drop.
+        let raw = unsafe { device.device.create_sampler(&info, None) }.vk("vkCreateSampler")?;
+        Ok(Self {
+            device: device.clone(),
+            raw,
+        })
+    }
+}
+
+impl Drop for Sampler {
+    fn drop(&mut self) {
+        // SAFETY: dropped after the last frame using it completed.
+        unsafe { self.device.device.destroy_sampler(self.raw, None) };
+    }
+}

@@ -1,0 +1,20 @@
+//! Thin ash wrappers: device, buffers, images, pipelines, commands, queries.
+//! Every `unsafe` block of the engine lives here or in a pass's `record`.
+
+pub mod buffer;
+pub mod commands;
+pub mod device;
+pub mod error;
+pub mod image;
+pub mod pipeline;
+pub mod queries;
+pub mod upload;
+pub mod validation;
+
+pub use buffer::Buffer;
+pub use commands::Commands;
+pub use device::{Device, DeviceOptions, create_device};
+pub use error::{GpuError, GpuResult, VkContext};
+pub use image::{Image, ImageDesc, ImageKind, Sampler};
+pub use pipeline::{Pipeline, PipelineDesc};
+pub use queries::{PassQueries, PassSample};

@@ -1,0 +1,289 @@
+//! Graphics pipelines for dynamic rendering, each with its own descriptor
+//! set layout (combined image samplers at bindings 0..n, fragment stage) and
+//! a small pool to allocate sets from.
+
+use super::device::Device;
+use super::error::{GpuError, GpuResult, VkContext};
+use ash::vk;
+
+pub struct PipelineDesc<'a> {
+    pub name: &'a str,
+    pub vertex_spirv: &'a [u8],
+    pub fragment_spirv: &'a [u8],
+    pub vertex_bindings: &'a [vk::VertexInputBindingDescription],
+    pub vertex_attributes: &'a [vk::VertexInputAttributeDescription],
+    pub color_format: vk::Format,
+    pub depth_format: vk::Format,
+    pub cull_mode: vk::CullModeFlags,
+    /// Size of the `#[repr(C)]` push-constant struct shared with the shader.
+    pub push_constant_size: u32,
+    /// Combined image samplers in set 0, bindings 0..n.
+    pub sampler_count: u32,
+}
+
+pub struct Pipeline {
+    device: Device,
+    pub name: String,
+    pub raw: vk::Pipeline,
+    pub layout: vk::PipelineLayout,
+    set_layout: vk::DescriptorSetLayout,
+    pool: vk::DescriptorPool,
+    pub push_constant_size: u32,
+}
+
+const MAX_SETS: u32 = 64;
+
+impl Pipeline {
+    pub fn new(device: &Device, desc: &PipelineDesc) -> GpuResult<Self> {
+        let limit = device.properties.limits.max_push_constants_size;
+        if desc.push_constant_size > limit || desc.push_constant_size % 4 != 0 {
+            return Err(GpuError::Invalid(format!(
+                "pipeline {}: push constants of {} bytes (device limit {limit}, must be a multiple of 4)",
+                desc.name, desc.push_constant_size
+            )));
+        }
+        let mut pipeline = Self {
+            device: device.clone(),
+            name: desc.name.into(),
+            raw: vk::Pipeline::null(),
+            layout: vk::PipelineLayout::null(),
+            set_layout: vk::DescriptorSetLayout::null(),
+            pool: vk::DescriptorPool::null(),
+            push_constant_size: desc.push_constant_size,
+        };
+        let d = &device.device;
+        let bindings: Vec<_> = (0..desc.sampler_count)
+            .map(|b| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(b)
+                    .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::FRAGMENT)
+            })
+            .collect();
+        // SAFETY (this block): each handle is created on this device and
+        // stored in `pipeline` at once, so Drop destroys whatever was made.
+        unsafe {
+            pipeline.set_layout = d
+                .create_descriptor_set_layout(
+                    &vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings),
+                    None,
+                )
+                .vk("vkCreateDescriptorSetLayout")?;
+            if desc.sampler_count > 0 {
+                let sizes = [vk::DescriptorPoolSize {
+                    ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                    descriptor_count: MAX_SETS * desc.sampler_count,
+                }];
+                pipeline.pool = d
+                    .create_descriptor_pool(
+                        &vk::DescriptorPoolCreateInfo::default()
+                            .max_sets(MAX_SETS)
+                            .pool_sizes(&sizes),
+                        None,
+                    )
+                    .vk("vkCreateDescriptorPool")?;
+            }
+            let ranges = [vk::PushConstantRange {
+                stage_flags: vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+                offset: 0,
+                size: desc.push_constant_size,
+            }];
+            let set_layouts = [pipeline.set_layout];
+            let mut layout_info =
+                vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+            if desc.push_constant_size > 0 {
+                layout_info = layout_info.push_constant_ranges(&ranges);
+            }
+            pipeline.layout = d
+                .create_pipeline_layout(&layout_info, None)
+                .vk("vkCreatePipelineLayout")?;
+
+            let vertex = shader_module(device, desc.vertex_spirv, desc.name)?;
+            let fragment = match shader_module(device, desc.fragment_spirv, desc.name) {
+                Ok(m) => m,
+                Err(e) => {
+                    d.destroy_shader_module(vertex, None);
+                    return Err(e);
+                }
+            };
+            let result = create_graphics_pipeline(d, desc, pipeline.layout, vertex, fragment);
+            d.destroy_shader_module(vertex, None);
+            d.destroy_shader_module(fragment, None);
+            pipeline.raw = result?;
+        }
+        Ok(pipeline)
+    }
+
+    /// A descriptor set binding `images[i]` (view, sampler) at binding i.
+    pub fn descriptor_set(
+        &self,
+        images: &[(vk::ImageView, vk::Sampler)],
+    ) -> GpuResult<vk::DescriptorSet> {
+        let layouts = [self.set_layout];
+        let info = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(self.pool)
+            .set_layouts(&layouts);
+        // SAFETY: pool and layout belong to this pipeline; sets are freed
+        // with the pool.
+        let set = unsafe { self.device.device.allocate_descriptor_sets(&info) }
+            .vk("vkAllocateDescriptorSets")?[0];
+        let infos: Vec<[vk::DescriptorImageInfo; 1]> = images
+            .iter()
+            .map(|&(view, sampler)| {
+                [vk::DescriptorImageInfo {
+                    sampler,
+                    image_view: view,
+                    image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                }]
+            })
+            .collect();
+        let writes: Vec<_> = infos
+            .iter()
+            .enumerate()
+            .map(|(binding, info)| {
+                vk::WriteDescriptorSet::default()
+                    .dst_set(set)
+                    .dst_binding(binding as u32)
+                    .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                    .image_info(info)
+            })
+            .collect();
+        // SAFETY: the set was just allocated and is not in use.
+        unsafe { self.device.device.update_descriptor_sets(&writes, &[]) };
+        Ok(set)
+    }
+
+    /// Binds the pipeline, the set, and the push constants (size-checked
+    /// against the layout, as niagara's dispatch() does).
+    pub fn bind<P: bytemuck::Pod>(
+        &self,
+        cmd: vk::CommandBuffer,
+        set: Option<vk::DescriptorSet>,
+        push: &P,
+    ) -> GpuResult<()> {
+        let bytes = bytemuck::bytes_of(push);
+        if bytes.len() as u32 != self.push_constant_size {
+            return Err(GpuError::Invalid(format!(
+                "pipeline {}: push constants of {} bytes, layout declares {}",
+                self.name,
+                bytes.len(),
+                self.push_constant_size
+            )));
+        }
+        // SAFETY: the command buffer is recording inside dynamic rendering
+        // with formats matching this pipeline; the set matches its layout.
+        unsafe {
+            let d = &self.device.device;
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.raw);
+            if let Some(set) = set {
+                d.cmd_bind_descriptor_sets(
+                    cmd,
+                    vk::PipelineBindPoint::GRAPHICS,
+                    self.layout,
+                    0,
+                    &[set],
+                    &[],
+                );
+            }
+            if !bytes.is_empty() {
+                d.cmd_push_constants(
+                    cmd,
+                    self.layout,
+                    vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+                    0,
+                    bytes,
+                );
+            }
+        }
+        Ok(())
+    }
+}
+
+fn shader_module(device: &Device, spirv: &[u8], name: &str) -> GpuResult<vk::ShaderModule> {
+    let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv))
+        .map_err(|e| GpuError::Invalid(format!("pipeline {name}: bad SPIR-V: {e}")))?;
+    let info = vk::ShaderModuleCreateInfo::default().code(&words);
+    // SAFETY: words is valid SPIR-V produced by shaderc at build time.
+    unsafe { device.device.create_shader_module(&info, None) }.vk("vkCreateShaderModule")
+}
+
+/// # Safety
+/// `layout` and both modules must belong to `d`.
+unsafe fn create_graphics_pipeline(
+    d: &ash::Device,
+    desc: &PipelineDesc,
+    layout: vk::PipelineLayout,
+    vertex: vk::ShaderModule,
+    fragment: vk::ShaderModule,
+) -> GpuResult<vk::Pipeline> {
+    let stages = [
+        vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::VERTEX)
+            .module(vertex)
+            .name(c"main"),
+        vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::FRAGMENT)
+            .module(fragment)
+            .name(c"main"),
+    ];
+    let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+        .vertex_binding_descriptions(desc.vertex_bindings)
+        .vertex_attribute_descriptions(desc.vertex_attributes);
+    let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
+        .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+    let viewport = vk::PipelineViewportStateCreateInfo::default()
+        .viewport_count(1)
+        .scissor_count(1);
+    let raster = vk::PipelineRasterizationStateCreateInfo::default()
+        .polygon_mode(vk::PolygonMode::FILL)
+        .cull_mode(desc.cull_mode)
+        .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+        .line_width(1.0);
+    let multisample = vk::PipelineMultisampleStateCreateInfo::default()
+        .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+    let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+        .depth_test_enable(true)
+        .depth_write_enable(true)
+        .depth_compare_op(vk::CompareOp::LESS_OR_EQUAL);
+    let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
+        .color_write_mask(vk::ColorComponentFlags::RGBA)];
+    let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
+    let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+    let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+    let color_formats = [desc.color_format];
+    let mut rendering = vk::PipelineRenderingCreateInfo::default()
+        .color_attachment_formats(&color_formats)
+        .depth_attachment_format(desc.depth_format);
+    let info = vk::GraphicsPipelineCreateInfo::default()
+        .stages(&stages)
+        .vertex_input_state(&vertex_input)
+        .input_assembly_state(&assembly)
+        .viewport_state(&viewport)
+        .rasterization_state(&raster)
+        .multisample_state(&multisample)
+        .depth_stencil_state(&depth)
+        .color_blend_state(&blend)
+        .dynamic_state(&dynamic)
+        .layout(layout)
+        .push_next(&mut rendering);
+    // SAFETY: every pointer in `info` borrows locals alive for the call.
+    unsafe { d.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) }
+        .map(|p| p[0])
+        .map_err(|(_, e)| e)
+        .vk("vkCreateGraphicsPipelines")
+}
+
+impl Drop for Pipeline {
+    fn drop(&mut self) {
+        // SAFETY: no pending frame uses the pipeline; null handles are
+        // ignored by vkDestroy*.
+        unsafe {
+            let d = &self.device.device;
+            d.destroy_pipeline(self.raw, None);
+            d.destroy_pipeline_layout(self.layout, None);
+            d.destroy_descriptor_pool(self.pool, None);
+            d.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}

@@ -1,0 +1,132 @@
+//! Headless capture: frames to PNG (sRGB, 8-bit, for people) and EXR
+//! (linear float, for measurement). Files are written atomically (temp file
+//! then rename), so a failed run never leaves half an image behind.
+
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, thiserror::Error)]
+pub enum CaptureError {
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: PNG encoding failed: {source}")]
+    Png {
+        path: PathBuf,
+        source: image::ImageError,
+    },
+    #[error("{path}: EXR encoding failed: {source}")]
+    Exr { path: PathBuf, source: exr::error::Error },
+    #[error("{path}: expected {expected} pixels ({width}x{height}), got {got}")]
+    Size {
+        path: PathBuf,
+        width: u32,
+        height: u32,
+        expected: usize,
+        got: usize,
+    },
+}
+
+/// The sRGB transfer function of a linear value, clamped to [0, 1].
+pub fn linear_to_srgb(x: f32) -> f32 {
+    let x = if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 };
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+pub fn srgb_to_linear(v: f32) -> f32 {
+    if v <= 0.040_45 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+fn check_size(path: &Path, width: u32, height: u32, pixels: &[[f32; 4]]) -> Result<(), CaptureError> {
+    let expected = width as usize * height as usize;
+    if pixels.len() != expected {
+        return Err(CaptureError::Size {
+            path: path.into(),
+            width,
+            height,
+            expected,
+            got: pixels.len(),
+        });
+    }
+    Ok(())
+}
+
+/// Writes through `write(tmp)` then renames onto `path`.
+fn atomically<E>(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), E>,
+    wrap: impl FnOnce(E) -> CaptureError,
+) -> Result<(), CaptureError> {
+    let file_name = path.file_name().map(|n| n.to_string_lossy()).unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{file_name}.tmp"));
+    if let Err(e) = write(&tmp) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(wrap(e));
+    }
+    std::fs::rename(&tmp, path).map_err(|source| {
+        let _ = std::fs::remove_file(&tmp);
+        CaptureError::Io {
+            path: path.into(),
+            source,
+        }
+    })
+}
+
+/// 8-bit sRGB PNG of linear RGBA pixels (alpha dropped).
+pub fn write_png(path: &Path, width: u32, height: u32, pixels: &[[f32; 4]]) -> Result<(), CaptureError> {
+    check_size(path, width, height, pixels)?;
+    let bytes: Vec<u8> = pixels
+        .iter()
+        .flat_map(|p| [p[0], p[1], p[2]])
+        .map(|c| (linear_to_srgb(c) * 255.0 + 0.5) as u8)
+        .collect();
+    let owned = path.to_path_buf();
+    atomically(
+        path,
+        |tmp| image::save_buffer_with_format(tmp, &bytes, width, height, image::ExtendedColorType::Rgb8, image::ImageFormat::Png),
+        |source| CaptureError::Png { path: owned, source },
+    )
+}
+
+/// Linear float RGBA EXR.
+pub fn write_exr(path: &Path, width: u32, height: u32, pixels: &[[f32; 4]]) -> Result<(), CaptureError> {
+    check_size(path, width, height, pixels)?;
+    let owned = path.to_path_buf();
+    atomically(
+        path,
+        |tmp| {
+            exr::prelude::write_rgba_file(tmp, width as usize, height as usize, |x, y| {
+                let p = pixels[y * width as usize + x];
+                (p[0], p[1], p[2], p[3])
+            })
+        },
+        |source| CaptureError::Exr { path: owned, source },
+    )
+}
+
+/// Reads an 8-bit PNG back as linear RGBA (alpha 1), for golden images.
+pub fn read_png(path: &Path) -> Result<(u32, u32, Vec<[f32; 4]>), CaptureError> {
+    let image = image::open(path)
+        .map_err(|source| CaptureError::Png {
+            path: path.into(),
+            source,
+        })?
+        .to_rgb8();
+    let pixels = image
+        .pixels()
+        .map(|p| {
+            let [r, g, b] = p.0.map(|c| srgb_to_linear(f32::from(c) / 255.0));
+            [r, g, b, 1.0]
+        })
+        .collect();
+    Ok((image.width(), image.height(), pixels))
+}

@@ -1,0 +1,89 @@
+//! Command-line interface of the `engine` binary.
+
+use clap::{Args, Parser, ValueEnum};
+use std::path::PathBuf;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "engine",
+    version,
+    about = "Replays ray-traced imagery as parameterized environment maps, headless on Vulkan (lavapipe by default)."
+)]
+pub struct Cli {
+    #[command(flatten)]
+    pub play: PlayArgs,
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct PlayArgs {
+    /// Scene name (a file in assets/scenes/) or path to a scene file.
+    #[arg(long, default_value = "teapot")]
+    pub scene: String,
+    /// Frames to render along the orbit [default: one per viewpoint sample].
+    #[arg(long)]
+    pub frames: Option<u32>,
+    /// Frame size as WIDTHxHEIGHT.
+    #[arg(long, default_value = "640x480", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Output folder for frames and perf.json [default: out/<scene>].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// What each frame draws.
+    #[arg(long, value_enum, default_value_t = Mode::StaticEm)]
+    pub mode: Mode,
+    /// Turn the Khronos validation layer on; the run ends with
+    /// `validation messages: N` and fails when N > 0.
+    #[arg(long)]
+    pub validate: bool,
+    /// Vulkan device to use (substring of its name) [default: lavapipe].
+    #[arg(long, env = "ENGINE_DEVICE")]
+    pub device: Option<String>,
+    /// Untimed frames first (lavapipe compiles shaders at the first draw).
+    #[arg(long, default_value_t = 3)]
+    pub warmup: u32,
+    /// Also write each frame as linear float EXR.
+    #[arg(long)]
+    pub exr: bool,
+    /// Write no frames (only perf.json): for benchmarks.
+    #[arg(long)]
+    pub no_capture: bool,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    /// Mirror reflectors from one static cube map (the baseline).
+    StaticEm,
+    /// Every mesh with one texture and nothing else (reference cost).
+    Bare,
+}
+
+/// Parses `WIDTHxHEIGHT`, each 1..=8192.
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let expected = || format!("expected WIDTHxHEIGHT (each 1 to 8192, e.g. 640x480), got {s:?}");
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(expected)?;
+    let w: u32 = w.trim().parse().map_err(|_| expected())?;
+    let h: u32 = h.trim().parse().map_err(|_| expected())?;
+    if !(1..=8192).contains(&w) || !(1..=8192).contains(&h) {
+        return Err(expected());
+    }
+    Ok((w, h))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_parse_and_reject() {
+        assert_eq!(parse_size("640x480"), Ok((640, 480)));
+        for bad in ["640", "0x480", "640x", "axb", "9000x10", "-1x5"] {
+            assert!(parse_size(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn cli_is_well_formed() {
+        use clap::CommandFactory;
+        Cli::command().debug_assert();
+    }
+}

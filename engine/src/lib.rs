@@ -1,0 +1,15 @@
+//! The Vulkan engine: a thin ash backend, an explicit pass list with its
+//! executor, one module per pass, headless capture and per-pass counters.
+
+pub mod backend;
+pub mod capture;
+pub mod cli;
+pub mod compare;
+pub mod cube;
+pub mod gpu_scene;
+pub mod graph;
+pub mod passes;
+pub mod perf;
+pub mod play;
+pub mod renderer;
+pub mod shader_interface;

@@ -1,0 +1,7 @@
+//! One module per pass.
+
+pub mod em_capture;
+pub mod mirror;
+pub mod readback;
+pub mod room;
+pub mod target;

@@ -1,0 +1,153 @@
+//! Per-pass performance counters over a run: GPU milliseconds (median and
+//! max from timestamps), fragment-shader invocations (pipeline statistics)
+//! and the CPU stages, printed as a table and written as `perf.json`.
+
+use crate::graph::PassTiming;
+use crate::renderer::CpuTimes;
+use serde::Serialize;
+
+#[derive(Default)]
+pub struct PerfLog {
+    /// Pass names in first-seen order with every frame's sample.
+    passes: Vec<(String, Vec<PassTiming>)>,
+    frame_ms: Vec<f64>,
+    cpu: Vec<CpuTimes>,
+}
+
+#[derive(Serialize)]
+pub struct PassReport {
+    pub name: String,
+    pub gpu_ms_median: f64,
+    pub gpu_ms_max: f64,
+    pub fragment_invocations: u64,
+}
+
+#[derive(Serialize)]
+pub struct CpuReport {
+    pub texgen_ms_median: f64,
+    pub upload_ms_median: f64,
+    pub submit_to_fence_ms_median: f64,
+}
+
+#[derive(Serialize)]
+pub struct PerfReport {
+    pub device: String,
+    pub scene: String,
+    pub mode: String,
+    pub size: [u32; 2],
+    pub frames: usize,
+    pub frame_ms_median: f64,
+    pub frame_ms_max: f64,
+    pub passes: Vec<PassReport>,
+    pub cpu: CpuReport,
+}
+
+pub fn median(values: &[f64]) -> f64 {
+    if values.is_empty() {
+        return f64::NAN;
+    }
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let mid = sorted.len() / 2;
+    if sorted.len() % 2 == 1 {
+        sorted[mid]
+    } else {
+        0.5 * (sorted[mid - 1] + sorted[mid])
+    }
+}
+
+impl PerfLog {
+    pub fn record(&mut self, frame_ms: f64, passes: &[PassTiming], cpu: CpuTimes) {
+        self.frame_ms.push(frame_ms);
+        self.cpu.push(cpu);
+        for timing in passes {
+            match self.passes.iter_mut().find(|(name, _)| *name == timing.name) {
+                Some((_, samples)) => samples.push(timing.clone()),
+                None => self.passes.push((timing.name.clone(), vec![timing.clone()])),
+            }
+        }
+    }
+
+    pub fn report(&self, device: &str, scene: &str, mode: &str, size: [u32; 2]) -> PerfReport {
+        let cpu_median = |f: fn(&CpuTimes) -> f64| median(&self.cpu.iter().map(f).collect::<Vec<_>>());
+        PerfReport {
+            device: device.into(),
+            scene: scene.into(),
+            mode: mode.into(),
+            size,
+            frames: self.frame_ms.len(),
+            frame_ms_median: median(&self.frame_ms),
+            frame_ms_max: self.frame_ms.iter().copied().fold(0.0, f64::max),
+            passes: self
+                .passes
+                .iter()
+                .map(|(name, samples)| {
+                    let ms: Vec<f64> = samples.iter().map(|s| s.sample.gpu_ms).collect();
+                    let mut invocations: Vec<u64> =
+                        samples.iter().map(|s| s.sample.fragment_invocations).collect();
+                    invocations.sort_unstable();
+                    PassReport {
+                        name: name.clone(),
+                        gpu_ms_median: median(&ms),
+                        gpu_ms_max: ms.iter().copied().fold(0.0, f64::max),
+                        fragment_invocations: invocations.get(invocations.len() / 2).copied().unwrap_or(0),
+                    }
+                })
+                .collect(),
+            cpu: CpuReport {
+                texgen_ms_median: cpu_median(|c| c.texgen_ms),
+                upload_ms_median: cpu_median(|c| c.upload_ms),
+                submit_to_fence_ms_median: cpu_median(|c| c.submit_ms),
+            },
+        }
+    }
+}
+
+impl PerfReport {
+    /// The human-readable table printed at the end of a run.
+    pub fn table(&self) -> String {
+        let mut out = format!(
+            "{} | {} {}x{} | {} frames | frame {:.2} ms median ({:.1} fps), {:.2} ms max\n",
+            self.device,
+            self.mode,
+            self.size[0],
+            self.size[1],
+            self.frames,
+            self.frame_ms_median,
+            1e3 / self.frame_ms_median,
+            self.frame_ms_max
+        );
+        out += &format!(
+            "{:<16} {:>12} {:>12} {:>14}\n",
+            "pass", "GPU ms med", "GPU ms max", "frag. invoc."
+        );
+        for p in &self.passes {
+            out += &format!(
+                "{:<16} {:>12.3} {:>12.3} {:>14}\n",
+                p.name, p.gpu_ms_median, p.gpu_ms_max, p.fragment_invocations
+            );
+        }
+        out += &format!(
+            "{:<16} {:>12.3}\n{:<16} {:>12.3}\n{:<16} {:>12.3}\n",
+            "cpu texgen",
+            self.cpu.texgen_ms_median,
+            "cpu upload",
+            self.cpu.upload_ms_median,
+            "cpu submit→fence",
+            self.cpu.submit_to_fence_ms_median
+        );
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_of_odd_even_and_empty() {
+        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
+        assert!(median(&[]).is_nan());
+    }
+}

@@ -1,0 +1,257 @@
+//! Owns everything a scene needs on the device and builds each frame as an
+//! explicit list of passes — only the passes the scene requires.
+
+use crate::backend::{Buffer, Device, GpuError, GpuResult, Image, ImageDesc};
+use crate::gpu_scene::GpuScene;
+use crate::graph::{Executor, Pass, PassTiming};
+use crate::passes::em_capture::{CubeTarget, EmCapturePass, MipPass};
+use crate::passes::mirror::{MirrorDraw, MirrorRenderer};
+use crate::passes::readback::ReadbackPass;
+use crate::passes::room::{RoomRenderer, RoomStyle};
+use crate::passes::target::Target;
+use ash::vk;
+use glam::{Mat4, Vec3};
+use half::f16;
+use inference::scene::{Material, Scene};
+use std::time::Instant;
+
+pub const COLOR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+/// EM resolution when an object's `[em]` settings give none.
+pub const DEFAULT_EM_RESOLUTION: u32 = 256;
+
+/// What a frame draws.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameMode {
+    /// The lit room, reflectors from one static cube map each.
+    StaticEm,
+    /// Every mesh with one texture: the reference cost of drawing at all.
+    Bare,
+}
+
+/// A reflective object and the static environment map it samples.
+struct Reflector {
+    draw: MirrorDraw,
+    cube: CubeTarget,
+    /// World-space vertices, the input of CPU texgen every frame.
+    positions: Vec<Vec3>,
+    normals: Vec<Vec3>,
+}
+
+/// CPU-side costs of one frame, in milliseconds.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CpuTimes {
+    pub texgen_ms: f64,
+    pub upload_ms: f64,
+    pub submit_ms: f64,
+}
+
+pub struct FrameStats {
+    pub passes: Vec<PassTiming>,
+    pub cpu: CpuTimes,
+}
+
+pub struct Renderer {
+    device: Device,
+    executor: Executor,
+    gpu: GpuScene,
+    room: RoomRenderer,
+    bare: RoomRenderer,
+    mirror: MirrorRenderer,
+    reflectors: Vec<Reflector>,
+    color: Image,
+    depth: Image,
+    readback: Buffer,
+    width: u32,
+    height: u32,
+    projection: Mat4,
+    texgen_scratch: Vec<inference::texgen::TexgenVertex>,
+}
+
+impl Renderer {
+    pub fn new(device: &Device, scene: &Scene, width: u32, height: u32) -> GpuResult<Self> {
+        if width == 0 || height == 0 {
+            return Err(GpuError::Invalid(format!("frame size {width}x{height}")));
+        }
+        let mut executor = Executor::new(device)?;
+        let gpu = GpuScene::upload(device, &mut executor, scene)?;
+        let room = RoomRenderer::new(device, scene, &gpu, RoomStyle::Lit, COLOR_FORMAT, DEPTH_FORMAT)?;
+        let bare = RoomRenderer::new(device, scene, &gpu, RoomStyle::Bare, COLOR_FORMAT, DEPTH_FORMAT)?;
+        let mirror = MirrorRenderer::new(device, &mut executor, COLOR_FORMAT, DEPTH_FORMAT)?;
+        let mut reflectors = Vec::new();
+        for (index, object) in scene.objects.iter().enumerate() {
+            let f0 = match scene.materials.get(object.material) {
+                Some(Material::Mirror { f0 }) | Some(Material::Glossy { f0, .. }) => *f0,
+                _ => continue,
+            };
+            let size = object
+                .em
+                .as_ref()
+                .map_or(DEFAULT_EM_RESOLUTION, |em| em.resolution);
+            let cube = CubeTarget::new(
+                device,
+                &format!("{} static EM", object.name),
+                size,
+                COLOR_FORMAT,
+                object.mesh.area_weighted_centroid(),
+            )?;
+            let draw = mirror.draw_for(index, object.mesh.positions.len(), f0, &cube.color)?;
+            reflectors.push(Reflector {
+                draw,
+                cube,
+                positions: object.mesh.positions.clone(),
+                normals: object.mesh.normals.clone(),
+            });
+        }
+        let color = Image::new(
+            device,
+            "frame colour",
+            ImageDesc::new_2d(COLOR_FORMAT, width, height).usage(
+                vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
+            ),
+        )?;
+        let depth = Image::new(
+            device,
+            "frame depth",
+            ImageDesc::new_2d(DEPTH_FORMAT, width, height)
+                .usage(vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT),
+        )?;
+        let readback = Buffer::new(
+            device,
+            "frame read-back",
+            u64::from(width) * u64::from(height) * 8,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            gpu_allocator::MemoryLocation::GpuToCpu,
+        )?;
+        let (lo, hi) = scene.bounds();
+        let far = (hi - lo).length().max(scene.camera.far);
+        let projection = glam::camera::rh::proj::vulkan::perspective(
+            scene.camera.fov_y_deg.to_radians(),
+            width as f32 / height as f32,
+            scene.camera.near,
+            far,
+        );
+        let mut renderer = Self {
+            device: device.clone(),
+            executor,
+            gpu,
+            room,
+            bare,
+            mirror,
+            reflectors,
+            color,
+            depth,
+            readback,
+            width,
+            height,
+            projection,
+            texgen_scratch: Vec::new(),
+        };
+        renderer.capture_static_ems(scene.camera.near, far)?;
+        Ok(renderer)
+    }
+
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Renders every reflector's static EM (set-up, once): the room into
+    /// six faces, then each MIP level from the one above.
+    fn capture_static_ems(&mut self, near: f32, far: f32) -> GpuResult<Vec<PassTiming>> {
+        let mut passes: Vec<Box<dyn Pass + '_>> = Vec::new();
+        for r in &self.reflectors {
+            passes.push(Box::new(EmCapturePass {
+                room: &self.room,
+                gpu: &self.gpu,
+                cube: &r.cube,
+                near,
+                far,
+            }));
+            for level in 1..r.cube.color.desc.mip_levels {
+                passes.push(Box::new(MipPass {
+                    device: &self.device,
+                    image: &r.cube.color,
+                    level,
+                    name: format!("em_mip{level}"),
+                }));
+            }
+        }
+        let list: Vec<&dyn Pass> = passes.iter().map(|p| p.as_ref()).collect();
+        self.executor.run(&list)
+    }
+
+    /// Renders one frame from `eye` (looking at `center`) and reads it back.
+    pub fn frame(&mut self, mode: FrameMode, eye: Vec3, view: Mat4) -> GpuResult<FrameStats> {
+        let view_proj = self.projection * view;
+        let mut cpu = CpuTimes::default();
+        if mode == FrameMode::StaticEm {
+            self.texgen(eye, &mut cpu)?;
+        }
+        let target = Target {
+            color: &self.color,
+            depth: &self.depth,
+            level: 0,
+            layer: 0,
+            clear: true,
+        };
+        let mut passes: Vec<Box<dyn Pass + '_>> = Vec::new();
+        match mode {
+            FrameMode::StaticEm => {
+                passes.push(Box::new(self.room.pass("room", &self.gpu, target, view_proj)));
+                if !self.reflectors.is_empty() {
+                    passes.push(Box::new(self.mirror.pass(
+                        &self.gpu,
+                        self.reflectors.iter().map(|r| &r.draw).collect(),
+                        self.reflectors.iter().map(|r| &r.cube.color).collect(),
+                        Target { clear: false, ..target },
+                        view_proj,
+                    )));
+                }
+            }
+            FrameMode::Bare => {
+                passes.push(Box::new(self.bare.pass("bare", &self.gpu, target, view_proj)));
+            }
+        }
+        passes.push(Box::new(ReadbackPass {
+            device: &self.device,
+            image: &self.color,
+            buffer: &self.readback,
+        }));
+        let list: Vec<&dyn Pass> = passes.iter().map(|p| p.as_ref()).collect();
+        let start = Instant::now();
+        let timings = self.executor.run(&list)?;
+        cpu.submit_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok(FrameStats {
+            passes: timings,
+            cpu,
+        })
+    }
+
+    /// CPU texgen for every reflector, then the copy into its vertex buffer
+    /// (host-visible; the previous frame's fence guarantees it is idle).
+    fn texgen(&mut self, eye: Vec3, cpu: &mut CpuTimes) -> GpuResult<()> {
+        for r in &mut self.reflectors {
+            let start = Instant::now();
+            let out = &mut self.texgen_scratch;
+            out.resize(r.positions.len(), [0.0; 4]);
+            inference::texgen::sphere_at_infinity(eye, &r.positions, &r.normals, out);
+            let generated = Instant::now();
+            let bytes: &[u8] = bytemuck::cast_slice(out);
+            r.draw.texgen.mapped_mut()?[..bytes.len()].copy_from_slice(bytes);
+            cpu.texgen_ms += (generated - start).as_secs_f64() * 1e3;
+            cpu.upload_ms += generated.elapsed().as_secs_f64() * 1e3;
+        }
+        Ok(())
+    }
+
+    /// The last frame's pixels as linear RGBA f32, row-major from the top.
+    pub fn pixels(&self) -> GpuResult<Vec<[f32; 4]>> {
+        let bytes = self.readback.mapped()?;
+        let texels = (self.width * self.height) as usize;
+        let halves: &[f16] = bytemuck::cast_slice(&bytes[..texels * 8]);
+        Ok(halves
+            .chunks_exact(4)
+            .map(|c| [c[0].to_f32(), c[1].to_f32(), c[2].to_f32(), c[3].to_f32()])
+            .collect())
+    }
+}

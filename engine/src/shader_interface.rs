@@ -1,0 +1,93 @@
+//! `#[repr(C)]` mirrors of the shaders' inputs; one struct per interface.
+//! Pipeline::bind checks each push struct's size against its layout.
+
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec4};
+use std::mem::{offset_of, size_of};
+
+/// Static mesh vertex (binding 0 of every pipeline).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Vertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    pub uv: [f32; 2],
+}
+
+impl Vertex {
+    pub const BINDING: vk::VertexInputBindingDescription = vk::VertexInputBindingDescription {
+        binding: 0,
+        stride: size_of::<Vertex>() as u32,
+        input_rate: vk::VertexInputRate::VERTEX,
+    };
+    pub const ATTRIBUTES: [vk::VertexInputAttributeDescription; 3] = [
+        attribute(0, 0, vk::Format::R32G32B32_SFLOAT, offset_of!(Vertex, position)),
+        attribute(1, 0, vk::Format::R32G32B32_SFLOAT, offset_of!(Vertex, normal)),
+        attribute(2, 0, vk::Format::R32G32_SFLOAT, offset_of!(Vertex, uv)),
+    ];
+}
+
+/// Per-frame texgen output (binding 1 of the mirror pipeline), from
+/// `inference::texgen`.
+pub const TEXGEN_BINDING: vk::VertexInputBindingDescription = vk::VertexInputBindingDescription {
+    binding: 1,
+    stride: 16,
+    input_rate: vk::VertexInputRate::VERTEX,
+};
+pub const MIRROR_ATTRIBUTES: [vk::VertexInputAttributeDescription; 2] = [
+    attribute(0, 0, vk::Format::R32G32B32_SFLOAT, offset_of!(Vertex, position)),
+    attribute(1, 1, vk::Format::R32G32B32A32_SFLOAT, 0),
+];
+
+const fn attribute(
+    location: u32,
+    binding: u32,
+    format: vk::Format,
+    offset: usize,
+) -> vk::VertexInputAttributeDescription {
+    vk::VertexInputAttributeDescription {
+        location,
+        binding,
+        format,
+        offset: offset as u32,
+    }
+}
+
+/// `shaders/room.vert` / `room.frag` / `bare.frag` push constants.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct RoomPush {
+    pub view_proj: Mat4,
+    /// rgb albedo; a = 1 when the texture modulates it.
+    pub albedo: Vec4,
+    pub emission: Vec4,
+    /// xyz centre; w = area.
+    pub light_center: Vec4,
+    /// xyz unit normal into the room; w = ambient radiance scale.
+    pub light_normal: Vec4,
+    pub light_radiance: Vec4,
+}
+
+/// `shaders/mirror.vert` / `mirror.frag` push constants.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct MirrorPush {
+    pub view_proj: Mat4,
+    /// rgb Schlick F0.
+    pub f0: Vec4,
+}
+
+/// Embedded SPIR-V compiled by build.rs from `shaders/`.
+pub mod spirv {
+    macro_rules! shader {
+        ($name:literal) => {
+            include_bytes!(concat!(env!("OUT_DIR"), "/", $name, ".spv"))
+        };
+    }
+    pub const ROOM_VERT: &[u8] = shader!("room.vert");
+    pub const ROOM_FRAG: &[u8] = shader!("room.frag");
+    pub const BARE_FRAG: &[u8] = shader!("bare.frag");
+    pub const MIRROR_VERT: &[u8] = shader!("mirror.vert");
+    pub const MIRROR_FRAG: &[u8] = shader!("mirror.frag");
+}

@@ -1,0 +1,161 @@
+//! The `engine` binary end to end: a validated run writes frames and
+//! perf.json; bad input gives a one-line error naming what was wrong, a
+//! non-zero exit and never a panic.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn engine(args: &[&str], envs: &[(&str, &str)]) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_engine"));
+    cmd.args(args);
+    for (k, v) in envs {
+        cmd.env(k, v);
+    }
+    cmd.output().expect("run engine")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A failed run: non-zero exit, an `error:` line containing every needle,
+/// and no panic.
+fn assert_clean_failure(o: &Output, needles: &[&str]) {
+    let err = stderr(o);
+    assert!(!o.status.success(), "expected failure, stderr:\n{err}");
+    assert!(!err.contains("panicked"), "panicked:\n{err}");
+    let line = err
+        .lines()
+        .find(|l| l.starts_with("error:"))
+        .unwrap_or_else(|| panic!("no error line in:\n{err}"));
+    for n in needles {
+        assert!(line.contains(n), "error line lacks {n:?}: {line}");
+    }
+}
+
+#[test]
+fn validated_run_writes_frames_and_perf_json() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().to_str().expect("utf-8 temp path");
+    let o = engine(
+        &["--scene", "teapot", "--frames", "3", "--size", "96x64", "--warmup", "1", "--out", out, "--validate", "--exr"],
+        &[],
+    );
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "stderr:\n{}", stderr(&o));
+    assert!(stdout.lines().any(|l| l == "validation messages: 0"), "{stdout}");
+    for i in 0..3 {
+        assert!(dir.path().join(format!("frame_{i:04}.png")).is_file());
+        assert!(dir.path().join(format!("frame_{i:04}.exr")).is_file());
+    }
+    let perf: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("perf.json")).expect("perf.json"))
+            .expect("valid JSON");
+    assert_eq!(perf["size"], serde_json::json!([96, 64]));
+    assert_eq!(perf["frames"], 3);
+    assert!(perf["device"].as_str().is_some_and(|d| !d.is_empty()));
+    assert!(perf["frame_ms_median"].as_f64().is_some_and(|v| v > 0.0));
+    assert!(perf["cpu"]["texgen_ms_median"].as_f64().is_some());
+    assert!(perf["cpu"]["upload_ms_median"].as_f64().is_some());
+    let passes = perf["passes"].as_array().expect("passes");
+    let names: Vec<&str> = passes.iter().filter_map(|p| p["name"].as_str()).collect();
+    assert_eq!(names, ["room", "mirror", "readback"]);
+    let room = &passes[0];
+    // The room covers the whole frame at least once.
+    assert!(room["fragment_invocations"].as_u64().is_some_and(|n| n >= 96 * 64), "{room}");
+    assert!(room["gpu_ms_median"].as_f64().is_some_and(|v| v > 0.0));
+    assert!(room["gpu_ms_max"].as_f64() >= room["gpu_ms_median"].as_f64());
+}
+
+#[test]
+fn help_documents_every_flag() {
+    let o = engine(&["--help"], &[]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success());
+    for flag in ["--scene", "--frames", "--size", "--out", "--validate", "--device", "--mode"] {
+        assert!(text.contains(flag), "--help lacks {flag}");
+    }
+}
+
+#[test]
+fn unknown_scene_name() {
+    let o = engine(&["--scene", "no-such-scene"], &[]);
+    assert_clean_failure(&o, &["no-such-scene"]);
+}
+
+#[test]
+fn malformed_scene_file_names_file_and_line() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("broken.toml");
+    std::fs::write(&path, "[camera]\nfov_y_deg = = 40\n").expect("write");
+    let o = engine(&["--scene", path.to_str().expect("utf-8")], &[]);
+    assert_clean_failure(&o, &["broken.toml", "line 2"]);
+}
+
+fn scene_with_obj(dir: &Path, obj: &str) -> std::path::PathBuf {
+    let teapot = inference::scene::assets_dir().join("scenes/teapot.toml");
+    let text = std::fs::read_to_string(teapot).expect("teapot.toml");
+    std::fs::write(dir.join("mesh.obj"), obj).expect("write obj");
+    // Swap the generated teapot for the OBJ next to the scene file.
+    let start = text.find("generator").expect("teapot scene uses the generator");
+    let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
+    let line_end = text[start..].find('\n').map_or(text.len(), |i| start + i);
+    let patched = format!(
+        "{}mesh = {{ obj = \"{}\" }}{}",
+        &text[..line_start],
+        dir.join("mesh.obj").display(),
+        &text[line_end..]
+    );
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, patched).expect("write scene");
+    path
+}
+
+#[test]
+fn obj_with_nan_coordinates() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = scene_with_obj(dir.path(), "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n");
+    let o = engine(&["--scene", scene.to_str().expect("utf-8"), "--frames", "1"], &[]);
+    assert_clean_failure(&o, &["mesh.obj"]);
+}
+
+#[test]
+fn obj_with_degenerate_triangle() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = scene_with_obj(dir.path(), "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+    let o = engine(&["--scene", scene.to_str().expect("utf-8"), "--frames", "1"], &[]);
+    assert_clean_failure(&o, &["mesh.obj", "degenerate"]);
+}
+
+#[test]
+fn unwritable_output_folder() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let file = dir.path().join("a-file");
+    std::fs::write(&file, b"").expect("write");
+    // A folder cannot be made under a regular file (root ignores modes).
+    let out = file.join("frames");
+    let o = engine(&["--out", out.to_str().expect("utf-8"), "--frames", "1"], &[]);
+    assert_clean_failure(&o, &["output folder", "a-file"]);
+}
+
+#[test]
+fn no_vulkan_driver() {
+    let o = engine(
+        &["--frames", "1", "--size", "8x8", "--no-capture"],
+        &[("VK_DRIVER_FILES", "/nonexistent/icd.json"), ("VK_ICD_FILENAMES", "/nonexistent/icd.json")],
+    );
+    assert_clean_failure(&o, &["Vulkan"]);
+}
+
+#[test]
+fn unknown_device_name_lists_available() {
+    let o = engine(&["--device", "no-such-gpu", "--frames", "1", "--no-capture"], &[]);
+    assert_clean_failure(&o, &["no-such-gpu", "llvmpipe"]);
+}
+
+#[test]
+fn bad_size_is_rejected_by_the_parser() {
+    let o = engine(&["--size", "0x480"], &[]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("WIDTHxHEIGHT"));
+}

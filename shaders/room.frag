@@ -1,0 +1,39 @@
+#version 460
+// Lambertian room lit by the ceiling area light, approximated as a point
+// emitter at its centre (no shadows) plus an ambient term. This is the
+// real-time approximation the static-EM baseline uses; the gold standard
+// is the tracer's, and inferred textures replace this shading later.
+layout(location = 0) in vec3 in_position;
+layout(location = 1) in vec3 in_normal;
+layout(location = 2) in vec2 in_uv;
+
+layout(push_constant) uniform Push {
+    mat4 view_proj;
+    vec4 albedo;
+    vec4 emission;
+    vec4 light_center;
+    vec4 light_normal;
+    vec4 light_radiance;
+} pc;
+
+layout(set = 0, binding = 0) uniform sampler2D albedo_texture;
+
+layout(location = 0) out vec4 out_color;
+
+const float PI = 3.14159265358979;
+
+void main() {
+    vec3 albedo = pc.albedo.rgb;
+    if (pc.albedo.a > 0.5) {
+        albedo *= texture(albedo_texture, in_uv).rgb;
+    }
+    vec3 n = normalize(in_normal);
+    vec3 to_light = pc.light_center.xyz - in_position;
+    float d2 = max(dot(to_light, to_light), 1e-6);
+    vec3 l = to_light * inversesqrt(d2);
+    float cos_surface = max(dot(n, l), 0.0);
+    float cos_light = max(dot(pc.light_normal.xyz, -l), 0.0);
+    vec3 irradiance = pc.light_radiance.rgb * pc.light_center.w * cos_surface * cos_light / d2;
+    vec3 ambient = pc.light_radiance.rgb * pc.light_normal.w;
+    out_color = vec4(pc.emission.rgb + albedo / PI * (irradiance + PI * ambient), 1.0);
+}
