@@ -175,9 +175,6 @@ impl Loader<'_> {
             objects.push(self.object(i, o, &lookup)?);
         }
         for (i, o) in objects.iter().enumerate() {
-            if o.name.is_empty() {
-                return Err(self.err(format!("objects[{i}].name"), "empty name"));
-            }
             if objects[..i].iter().any(|p| p.name == o.name) {
                 return Err(self.err(
                     "objects",
@@ -307,6 +304,9 @@ impl Loader<'_> {
         lookup: &dyn Fn(&str, &str) -> Result<usize, SceneError>,
     ) -> Result<Object, SceneError> {
         let f = |k: &str| format!("objects[{i}].{k}");
+        if o.name.trim().is_empty() {
+            return Err(self.err(f("name"), "empty (expected a unique object name)"));
+        }
         let material = lookup(&f("material"), &o.material)?;
         let mut mesh = self.mesh(&f("mesh"), &o.mesh)?;
 
