@@ -47,4 +47,17 @@ mod tests {
             prev = f;
         }
     }
+
+    proptest::proptest! {
+        #[test]
+        fn finite_and_between_f0_and_one(
+            f0 in proptest::array::uniform3(0.0f32..=1.0),
+            cos in proptest::num::f32::ANY,
+        ) {
+            let f0 = Vec3::from_array(f0);
+            let f = schlick_fresnel(f0, cos);
+            proptest::prop_assert!(f.is_finite());
+            proptest::prop_assert!(f.cmpge(f0).all() && f.cmple(Vec3::ONE).all());
+        }
+    }
 }

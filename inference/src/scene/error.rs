@@ -11,6 +11,9 @@ pub enum SceneError {
         #[source]
         source: std::io::Error,
     },
+    /// The scene file does not exist; `available` lists the scenes beside where it was sought.
+    #[error("{}: no such scene file (available there: {available})", path.display())]
+    NoScene { path: PathBuf, available: String },
     /// TOML syntax or type error; `toml`'s message carries line and column.
     #[error("{}: {source}", path.display())]
     Toml {

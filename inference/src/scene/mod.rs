@@ -68,7 +68,13 @@ impl Scene {
     /// As [`Scene::load`], with generated meshes cached in `cache_dir`.
     pub fn load_with_cache(name_or_path: &str, cache_dir: &Path) -> Result<Scene, SceneError> {
         let path = scene_path(name_or_path);
-        let text = std::fs::read_to_string(&path).map_err(|e| SceneError::io(&path, e))?;
+        let text = std::fs::read_to_string(&path).map_err(|e| match e.kind() {
+            std::io::ErrorKind::NotFound => SceneError::NoScene {
+                available: available_scenes(&path),
+                path: path.clone(),
+            },
+            _ => SceneError::io(&path, e),
+        })?;
         Scene::from_toml(&text, &path, cache_dir)
     }
 
@@ -99,6 +105,25 @@ impl Scene {
 
     pub fn material_index(&self, name: &str) -> Option<usize> {
         self.material_names.iter().position(|n| n == name)
+    }
+}
+
+/// Stems of the `.toml` files beside `path`, for "did you mean" messages.
+fn available_scenes(path: &Path) -> String {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .filter_map(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
+        .collect();
+    names.sort();
+    if names.is_empty() {
+        "none".to_owned()
+    } else {
+        names.join(", ")
     }
 }
 

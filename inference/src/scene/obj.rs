@@ -62,7 +62,12 @@ pub fn write_obj(path: &Path, mesh: &Mesh, header: &str) -> Result<(), SceneErro
 /// (area-weighted smooth); missing UVs are zero. Rejects non-finite numbers, indices out
 /// of range and zero-area triangles with an error naming the file and the line or face.
 pub fn load_obj(path: &Path) -> Result<Mesh, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|e| SceneError::io(path, e))?;
+    let text = std::fs::read_to_string(path).map_err(|e| match e.kind() {
+        std::io::ErrorKind::NotFound => {
+            SceneError::obj(path, "file", "not found (expected an OBJ mesh file)")
+        }
+        _ => SceneError::io(path, e),
+    })?;
     check_lines(path, &text)?;
 
     let options = tobj::LoadOptions {
@@ -366,7 +371,10 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("nope.obj");
         let e = load_obj(&p).unwrap_err().to_string();
-        assert!(e.contains("nope.obj"), "{e}");
+        assert!(
+            e.contains("nope.obj") && e.contains("expected an OBJ mesh file"),
+            "{e}"
+        );
     }
 
     #[test]
@@ -387,5 +395,30 @@ mod tests {
         assert_eq!(load_obj(&p).unwrap(), mesh);
         let leftovers = std::fs::read_dir(dir.path().join("sub")).unwrap().count();
         assert_eq!(leftovers, 1, "temp file must be renamed away");
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(200))]
+
+        /// Whatever the text, loading returns Ok or an error — it never panics — and an
+        /// Ok mesh is fully finite with in-range indices.
+        #[test]
+        fn arbitrary_obj_text_never_panics(lines in proptest::collection::vec(
+            proptest::collection::vec(proptest::sample::select(vec![
+                "v", "vt", "vn", "f", "o", "g", "#", "0", "1", "-1", "2", "3", "-3", "0.5",
+                "nan", "inf", "1e39", "x", "1/1", "1//1", "2/2/2", "-1/-1/-1", "3//", "/",
+            ]), 0..6),
+            0..24,
+        )) {
+            let text: String = lines.iter().map(|l| l.join(" ") + "\n").collect();
+            let dir = tempfile::tempdir().unwrap();
+            let p = write(&dir, "fuzz.obj", &text);
+            if let Ok(m) = load_obj(&p) {
+                proptest::prop_assert!(m.positions.iter().all(|p| p.is_finite()));
+                proptest::prop_assert!(m.normals.iter().all(|n| n.is_finite()));
+                let count = m.positions.len() as u32;
+                proptest::prop_assert!(m.indices.iter().all(|&i| i < count));
+            }
+        }
     }
 }

@@ -363,15 +363,14 @@ fn broken_mesh_file_is_reported_through_the_scene() {
 
 #[test]
 fn missing_scene_file_is_named() {
-    let e = Scene::load("/nonexistent/dir/nothing.toml")
-        .expect_err("missing")
-        .to_string();
+    let e = Scene::load("/nonexistent/dir/nothing.toml").expect_err("missing");
+    let e = e.to_string();
     assert!(e.contains("/nonexistent/dir/nothing.toml"), "{e}");
-    let e = Scene::load("no_such_scene_name")
-        .expect_err("missing")
-        .to_string();
+    let e = Scene::load("no_such_scene_name").expect_err("missing");
+    let e = e.to_string();
+    assert!(e.contains("scenes/no_such_scene_name.toml"), "{e}");
     assert!(
-        e.contains("scenes") && e.contains("no_such_scene_name.toml"),
+        e.contains("no such scene file (available there: teapot"),
         "{e}"
     );
 }

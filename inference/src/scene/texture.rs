@@ -90,11 +90,17 @@ impl Texture {
         }
     }
 
-    /// Texel at integer coordinates, wrapped.
+    /// Texel at integer coordinates, wrapped; zero for an empty or inconsistent texture.
     pub fn texel(&self, x: i64, y: i64) -> Vec4 {
-        let x = x.rem_euclid(self.width as i64) as usize;
-        let y = y.rem_euclid(self.height as i64) as usize;
-        Vec4::from_array(self.texels[y * self.width as usize + x])
+        let (w, h) = (self.width as i64, self.height as i64);
+        if w == 0 || h == 0 {
+            return Vec4::ZERO;
+        }
+        let i = (y.rem_euclid(h) * w + x.rem_euclid(w)) as usize;
+        self.texels
+            .get(i)
+            .copied()
+            .map_or(Vec4::ZERO, Vec4::from_array)
     }
 
     /// Bilinear lookup with repeat wrap; texel centres at (i + ½)/size, as on the GPU.
@@ -154,5 +160,12 @@ mod tests {
         // At the tile corner the four wrapped neighbours average.
         assert!((t.sample_bilinear(Vec2::ZERO).x - 0.5).abs() < 1e-6);
         assert!(t.sample_bilinear(Vec2::new(f32::NAN, 1e30)).is_finite());
+        let empty = Texture {
+            name: String::new(),
+            width: 0,
+            height: 0,
+            texels: vec![],
+        };
+        assert_eq!(empty.sample_bilinear(Vec2::ONE), Vec4::ZERO);
     }
 }

@@ -25,13 +25,13 @@ pub struct Sample {
 }
 
 impl Patch {
-    /// Patch `index` of the teapot, in y-up coordinates (original units).
-    pub fn teapot(index: usize) -> Patch {
-        let ids = &PATCHES[index];
+    /// Patch `index` (0..32) of the teapot, in y-up coordinates (original units).
+    pub fn teapot(index: usize) -> Option<Patch> {
+        let ids = PATCHES.get(index)?;
         let cp = std::array::from_fn(|r| {
             std::array::from_fn(|c| to_y_up(POINTS[ids[4 * r + c] as usize]))
         });
-        Patch { cp }
+        Some(Patch { cp })
     }
 
     pub fn eval(&self, u: f32, v: f32) -> Sample {
@@ -102,7 +102,7 @@ mod tests {
 
     #[test]
     fn derivatives_match_finite_differences() {
-        let p = Patch::teapot(16); // spout: nothing axis-aligned, a fair test
+        let p = Patch::teapot(16).expect("patch"); // spout: nothing axis-aligned, a fair test
         let h = 1e-3;
         for &(u, v) in &[(0.3f32, 0.6f32), (0.5, 0.5), (0.9, 0.1)] {
             let s = p.eval(u, v);
@@ -115,8 +115,9 @@ mod tests {
 
     #[test]
     fn corners_interpolate_control_points() {
+        assert!(Patch::teapot(32).is_none());
         for i in 0..32 {
-            let p = Patch::teapot(i);
+            let p = Patch::teapot(i).expect("patch");
             assert_eq!(p.eval(0.0, 0.0).position, p.cp[0][0]);
             assert_eq!(p.eval(1.0, 1.0).position, p.cp[3][3]);
         }
@@ -127,13 +128,19 @@ mod tests {
         // Lid knob (20..24) has its pole at the top, bottom (28..32) at the origin.
         for i in 20..24 {
             for v in [0.0, 0.3, 1.0] {
-                let n = Patch::teapot(i).normal(0.0, v).unwrap_or(Vec3::ZERO);
+                let n = Patch::teapot(i)
+                    .expect("patch")
+                    .normal(0.0, v)
+                    .unwrap_or(Vec3::ZERO);
                 assert!(n.dot(Vec3::Y) > 0.999, "lid patch {i} v {v}: {n:?}");
             }
         }
         for i in 28..32 {
             for v in [0.0, 0.3, 1.0] {
-                let n = Patch::teapot(i).normal(0.0, v).unwrap_or(Vec3::ZERO);
+                let n = Patch::teapot(i)
+                    .expect("patch")
+                    .normal(0.0, v)
+                    .unwrap_or(Vec3::ZERO);
                 assert!(n.dot(-Vec3::Y) > 0.999, "bottom patch {i} v {v}: {n:?}");
             }
         }

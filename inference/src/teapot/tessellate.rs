@@ -44,8 +44,7 @@ pub fn tessellate(segments: u32, part: TeapotPart) -> Result<Tessellation, Scene
     let mut normals = Vec::with_capacity(positions.capacity());
     let mut soup_indices = Vec::with_capacity(patches.len() * n * n * 6);
 
-    for p in patches {
-        let patch = Patch::teapot(p);
+    for patch in patches.into_iter().filter_map(Patch::teapot) {
         let base = positions.len() as u32;
         for i in 0..=n {
             let u = i as f32 / n as f32;
