@@ -1,6 +1,8 @@
 //! Rectangular area light.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
+
+use super::mesh::Mesh;
 
 /// One-sided emitter: the parallelogram `center ± edge_u/2 ± edge_v/2`, emitting
 /// `radiance` (W·sr⁻¹·m⁻² per channel) on the side of `normal() = edge_u × edge_v`.
@@ -20,6 +22,16 @@ impl AreaLight {
 
     pub fn area(&self) -> f32 {
         self.edge_u.cross(self.edge_v).length()
+    }
+
+    /// The rectangle as two triangles facing the emitting side; UVs span [0, 1]².
+    pub fn mesh(&self) -> Mesh {
+        Mesh {
+            positions: self.corners().to_vec(),
+            normals: vec![self.normal(); 4],
+            uvs: vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y],
+            indices: vec![0, 1, 2, 0, 2, 3],
+        }
     }
 
     /// Corners counter-clockwise seen from the emitting side.
@@ -53,5 +65,14 @@ mod tests {
         let n = (c[1] - c[0]).cross(c[2] - c[0]);
         assert!(n.normalize().abs_diff_eq(l.normal(), 1e-6));
         assert!(((c[0] + c[2]) * 0.5).abs_diff_eq(l.center, 1e-6));
+        let m = l.mesh();
+        assert!((m.area() - l.area()).abs() < 1e-6);
+        let [a, b, d] = m.triangle(1);
+        assert!(
+            (b - a)
+                .cross(d - a)
+                .normalize()
+                .abs_diff_eq(l.normal(), 1e-6)
+        );
     }
 }
