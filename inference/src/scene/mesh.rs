@@ -16,7 +16,7 @@ impl Mesh {
         self.indices.len() / 3
     }
 
-    /// Corner positions of triangle `t`.
+    /// Corner positions of triangle `t` (panics if `t >= triangle_count()`, like indexing).
     pub fn triangle(&self, t: usize) -> [Vec3; 3] {
         let i = &self.indices[3 * t..3 * t + 3];
         [
