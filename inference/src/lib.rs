@@ -1,4 +1,10 @@
-//! Offline side and the math shared with the runtime: scene, CPU texgen,
-//! gold-standard tracer, rendering-matrix inference.
+//! Offline side and the math shared with the runtime: scene, teapot,
+//! Fresnel, CPU texgen (gold-standard tracer and inference come next).
+//! Pure CPU, no Vulkan.
 
+pub mod fresnel;
+pub mod scene;
+pub mod teapot;
 pub mod texgen;
+
+pub use fresnel::schlick_fresnel;

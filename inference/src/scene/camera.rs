@@ -1,0 +1,142 @@
+//! Camera intrinsics and the orbit: the 1D viewpoint parameter of the PEM paper.
+
+use glam::{Mat4, Vec3};
+
+use super::error::SceneError;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    pub fov_y_deg: f32,
+    pub near: f32,
+    pub far: f32,
+}
+
+/// Viewpoints on a horizontal circle of `radius` around `center`, at height `height`;
+/// sample `i` sits at azimuth `start_deg + i · step_deg`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Orbit {
+    pub center: Vec3,
+    pub radius: f32,
+    pub height: f32,
+    pub start_deg: f32,
+    pub step_deg: f32,
+    pub samples: u32,
+}
+
+/// Keeps the eye off the poles, where a y-up look-at is undefined.
+const MAX_ELEVATION_DEG: f32 = 89.0;
+
+impl Orbit {
+    /// Azimuth of sample `sample` (not range-checked: off-manifold callers extrapolate).
+    pub fn angle_deg(&self, sample: u32) -> f32 {
+        self.start_deg + sample as f32 * self.step_deg
+    }
+
+    /// Eye position at azimuth `angle_deg` (0 = +z side of `center`, 90 = +x side).
+    ///
+    /// `elevation_deg` moves the eye off the orbit along the sphere through the orbit
+    /// around `center`: 0 is the orbit itself (eye at `height`), positive rises above
+    /// it, negative sinks below. The total elevation seen from `center` is clamped to
+    /// ±89° so `view` stays well defined.
+    pub fn eye(&self, angle_deg: f32, elevation_deg: f32) -> Vec3 {
+        let dy = self.height - self.center.y;
+        let sphere_radius = self.radius.hypot(dy);
+        let base = dy.atan2(self.radius).to_degrees();
+        let elevation = (base + elevation_deg)
+            .clamp(-MAX_ELEVATION_DEG, MAX_ELEVATION_DEG)
+            .to_radians();
+        let azimuth = angle_deg.to_radians();
+        let horizontal = sphere_radius * elevation.cos();
+        self.center
+            + Vec3::new(
+                horizontal * azimuth.sin(),
+                sphere_radius * elevation.sin(),
+                horizontal * azimuth.cos(),
+            )
+    }
+
+    /// Eye of orbit sample `sample`; an error outside `0..samples`.
+    pub fn sample_eye(&self, sample: u32) -> Result<Vec3, SceneError> {
+        if sample >= self.samples {
+            return Err(SceneError::OrbitSampleOutOfRange {
+                sample,
+                samples: self.samples,
+            });
+        }
+        Ok(self.eye(self.angle_deg(sample), 0.0))
+    }
+
+    /// Right-handed world-to-view matrix looking from `eye` at `center`, y up (view space
+    /// looks down −z). Always finite: straight above or below `center` the up vector
+    /// becomes −z, and an eye at `center` looks down −z.
+    pub fn view(&self, eye: Vec3) -> Mat4 {
+        let dir = (self.center - eye).normalize_or(-Vec3::Z);
+        let up = if dir.cross(Vec3::Y).length_squared() > 1e-10 {
+            Vec3::Y
+        } else {
+            -Vec3::Z
+        };
+        glam::camera::rh::view::look_to_mat4(eye, dir, up)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn orbit() -> Orbit {
+        Orbit {
+            center: Vec3::new(0.0, 0.3, 0.0),
+            radius: 2.0,
+            height: 1.0,
+            start_deg: 10.0,
+            step_deg: 1.0,
+            samples: 100,
+        }
+    }
+
+    #[test]
+    fn samples_lie_on_the_orbit() {
+        let o = orbit();
+        for s in [0, 37, 99] {
+            let e = o.sample_eye(s).unwrap();
+            assert!((e.y - 1.0).abs() < 1e-5);
+            assert!(((e - o.center).with_y(0.0).length() - 2.0).abs() < 1e-5);
+        }
+        assert_eq!(o.angle_deg(5), 15.0);
+        assert!(o.eye(0.0, 0.0).abs_diff_eq(Vec3::new(0.0, 1.0, 2.0), 1e-5));
+        assert!(o.eye(90.0, 0.0).abs_diff_eq(Vec3::new(2.0, 1.0, 0.0), 1e-5));
+    }
+
+    #[test]
+    fn out_of_range_sample_names_the_range() {
+        let e = orbit().sample_eye(100).unwrap_err().to_string();
+        assert_eq!(e, "orbit sample 100 out of range 0..100");
+    }
+
+    #[test]
+    fn elevation_stays_on_sphere_and_is_clamped() {
+        let o = orbit();
+        let r = (o.eye(30.0, 0.0) - o.center).length();
+        for el in [-200.0, -30.0, 10.0, 45.0, 1e9] {
+            let e = o.eye(30.0, el);
+            assert!(e.is_finite());
+            assert!(((e - o.center).length() - r).abs() < 1e-4);
+            assert!(o.view(e).is_finite());
+        }
+        assert!(o.view(o.center).is_finite());
+        assert!(o.view(o.center + Vec3::Y).is_finite());
+        assert!(o.eye(30.0, 10.0).y > o.eye(30.0, 0.0).y);
+    }
+
+    #[test]
+    fn view_looks_at_center() {
+        let o = orbit();
+        let eye = o.sample_eye(3).unwrap();
+        let v = o.view(eye);
+        let c = v.transform_point3(o.center);
+        // Right-handed view space looks down −z.
+        assert!(c.x.abs() < 1e-5 && c.y.abs() < 1e-5 && c.z < 0.0);
+        assert!(v.transform_point3(eye).length() < 1e-5);
+    }
+}

@@ -1,0 +1,71 @@
+//! The one error type for scene, mesh and OBJ loading.
+
+use std::path::PathBuf;
+
+/// Everything a user, a scene file or a mesh file can get wrong. Every variant names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// The scene file does not exist; `available` lists the scenes beside where it was sought.
+    #[error("{}: no such scene file (available there: {available})", path.display())]
+    NoScene { path: PathBuf, available: String },
+    /// TOML syntax or type error; `toml`'s message carries line and column.
+    #[error("{}: {source}", path.display())]
+    Toml {
+        path: PathBuf,
+        #[source]
+        source: Box<toml::de::Error>,
+    },
+    /// A value that parsed but makes no sense; `field` is a path like `objects[0].material`.
+    #[error("{}: {field}: {message}", path.display())]
+    Invalid {
+        path: PathBuf,
+        field: String,
+        message: String,
+    },
+    /// A bad OBJ file; `location` is e.g. `line 12` or `face 7 of object "body"`.
+    #[error("{}: {location}: {message}", path.display())]
+    Obj {
+        path: PathBuf,
+        location: String,
+        message: String,
+    },
+    /// An error inside a file the scene refers to, e.g. a mesh.
+    #[error("{}: {field}: {source}", path.display())]
+    Nested {
+        path: PathBuf,
+        field: String,
+        #[source]
+        source: Box<SceneError>,
+    },
+    #[error("orbit sample {sample} out of range 0..{samples}")]
+    OrbitSampleOutOfRange { sample: u32, samples: u32 },
+    #[error("tessellation segments must be in 1..={max}, got {segments}")]
+    Segments { segments: u32, max: u32 },
+}
+
+impl SceneError {
+    pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        SceneError::Io {
+            path: path.into(),
+            source,
+        }
+    }
+
+    pub(crate) fn obj(
+        path: impl Into<PathBuf>,
+        location: impl Into<String>,
+        message: impl Into<String>,
+    ) -> Self {
+        SceneError::Obj {
+            path: path.into(),
+            location: location.into(),
+            message: message.into(),
+        }
+    }
+}

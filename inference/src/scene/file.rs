@@ -1,0 +1,180 @@
+//! The scene file as written by hand (TOML), before validation. Field docs live in
+//! `assets/scenes/teapot.toml`; every table rejects unknown keys so typos surface.
+
+use std::collections::BTreeMap;
+
+use serde::Deserialize;
+
+use super::material::EmLayer;
+use super::texture::Pattern;
+use crate::teapot::TeapotPart;
+
+pub type V3 = [f32; 3];
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// Defaults to the file stem.
+    pub name: Option<String>,
+    pub camera: CameraFile,
+    pub orbit: OrbitFile,
+    pub room: RoomFile,
+    #[serde(default)]
+    pub lights: Vec<LightFile>,
+    /// Sorted by name; a material's index in `Scene::materials` follows this order.
+    pub materials: BTreeMap<String, MaterialFile>,
+    #[serde(default)]
+    pub objects: Vec<ObjectFile>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraFile {
+    pub fov_y_deg: f32,
+    pub near: f32,
+    pub far: f32,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OrbitFile {
+    pub center: V3,
+    pub radius: f32,
+    pub height: f32,
+    #[serde(default)]
+    pub start_deg: f32,
+    #[serde(default = "one")]
+    pub step_deg: f32,
+    #[serde(default = "hundred")]
+    pub samples: u32,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RoomFile {
+    pub min: V3,
+    pub max: V3,
+    /// Material names.
+    pub floor: String,
+    pub walls: String,
+    pub ceiling: String,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightFile {
+    pub name: String,
+    pub center: V3,
+    pub edge_u: V3,
+    pub edge_v: V3,
+    pub radiance: V3,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+pub enum MaterialFile {
+    Diffuse {
+        albedo: V3,
+        texture: Option<TextureFile>,
+    },
+    Mirror {
+        f0: V3,
+    },
+    Glossy {
+        f0: V3,
+        roughness: f32,
+    },
+    Glass {
+        ior: f32,
+        #[serde(default)]
+        absorption: V3,
+    },
+    Emissive {
+        radiance: V3,
+    },
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TextureFile {
+    pub pattern: Pattern,
+    pub colors: [V3; 2],
+    /// World-space size of one texture repeat, metres.
+    pub tile_size: f32,
+    #[serde(default = "default_line_width")]
+    pub line_width: f32,
+    #[serde(default = "default_texture_resolution")]
+    pub resolution: u32,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectFile {
+    pub name: String,
+    pub mesh: MeshFile,
+    pub material: String,
+    #[serde(default)]
+    pub transform: TransformFile,
+    pub em: Option<EmFile>,
+}
+
+/// Either `{ generator = "newell_teapot", segments = 25, part = "whole" }` or
+/// `{ obj = "path/relative/to/the/scene/file.obj" }`; checked after parsing so the error
+/// can say which keys clash.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshFile {
+    pub generator: Option<String>,
+    pub segments: Option<u32>,
+    pub part: Option<TeapotPart>,
+    pub obj: Option<String>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TransformFile {
+    #[serde(default)]
+    pub translate: V3,
+    #[serde(default = "one")]
+    pub scale: f32,
+    #[serde(default)]
+    pub rotate_y_deg: f32,
+}
+
+impl Default for TransformFile {
+    fn default() -> Self {
+        TransformFile {
+            translate: [0.0; 3],
+            scale: 1.0,
+            rotate_y_deg: 0.0,
+        }
+    }
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EmFile {
+    #[serde(default = "default_em_resolution")]
+    pub resolution: u32,
+    #[serde(default = "default_layers")]
+    pub layers: Vec<EmLayer>,
+}
+
+fn one() -> f32 {
+    1.0
+}
+fn hundred() -> u32 {
+    100
+}
+fn default_line_width() -> f32 {
+    0.04
+}
+fn default_texture_resolution() -> u32 {
+    512
+}
+fn default_em_resolution() -> u32 {
+    256
+}
+fn default_layers() -> Vec<EmLayer> {
+    vec![EmLayer::Distant, EmLayer::Local]
+}

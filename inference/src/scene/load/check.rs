@@ -1,0 +1,48 @@
+//! Small value checks shared by the loader; each error names the file and field.
+
+use glam::Vec3;
+
+use super::Loader;
+use crate::scene::error::SceneError;
+use crate::scene::file::V3;
+
+impl Loader<'_> {
+    pub(super) fn err(&self, field: impl Into<String>, message: impl Into<String>) -> SceneError {
+        SceneError::Invalid {
+            path: self.path.to_owned(),
+            field: field.into(),
+            message: message.into(),
+        }
+    }
+
+    pub(super) fn vec3(&self, field: &str, v: V3) -> Result<Vec3, SceneError> {
+        let v = Vec3::from_array(v);
+        if !v.is_finite() {
+            return Err(self.err(field, format!("{v:?} is not finite (expected numbers)")));
+        }
+        Ok(v)
+    }
+
+    /// Finite, each component in `[lo, hi]`.
+    pub(super) fn vec3_in(&self, field: &str, v: V3, lo: f32, hi: f32) -> Result<Vec3, SceneError> {
+        let v = self.vec3(field, v)?;
+        if v.cmplt(Vec3::splat(lo)).any() || v.cmpgt(Vec3::splat(hi)).any() {
+            return Err(self.err(field, format!("{v:?} outside [{lo}, {hi}]")));
+        }
+        Ok(v)
+    }
+
+    pub(super) fn finite(&self, field: &str, x: f32) -> Result<f32, SceneError> {
+        if !x.is_finite() {
+            return Err(self.err(field, format!("{x} is not finite")));
+        }
+        Ok(x)
+    }
+
+    pub(super) fn positive(&self, field: &str, x: f32) -> Result<f32, SceneError> {
+        if !(x > 0.0 && x.is_finite()) {
+            return Err(self.err(field, format!("{x} must be positive and finite")));
+        }
+        Ok(x)
+    }
+}

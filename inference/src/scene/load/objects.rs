@@ -1,0 +1,128 @@
+//! Scene objects: mesh source (generator or OBJ), transform, material, EM settings.
+
+use std::path::{Path, PathBuf};
+
+use glam::{Affine3A, Quat, Vec3};
+
+use super::Loader;
+use crate::scene::Object;
+use crate::scene::error::SceneError;
+use crate::scene::file::{EmFile, MeshFile, ObjectFile};
+use crate::scene::material::EmSettings;
+use crate::scene::mesh::Mesh;
+use crate::scene::obj::load_obj;
+use crate::teapot::{self, DEFAULT_SEGMENTS, MAX_SEGMENTS, TeapotPart};
+
+const MAX_EM_RESOLUTION: u32 = 8192;
+
+impl Loader<'_> {
+    pub(super) fn object(
+        &self,
+        i: usize,
+        o: &ObjectFile,
+        lookup: &dyn Fn(&str, &str) -> Result<usize, SceneError>,
+    ) -> Result<Object, SceneError> {
+        let f = |k: &str| format!("objects[{i}].{k}");
+        if o.name.trim().is_empty() {
+            return Err(self.err(f("name"), "empty (expected a unique object name)"));
+        }
+        let material = lookup(&f("material"), &o.material)?;
+        let mut mesh = self.mesh(&f("mesh"), &o.mesh)?;
+
+        let t = &o.transform;
+        let translate = self.vec3(&f("transform.translate"), t.translate)?;
+        let scale = self.positive(&f("transform.scale"), t.scale)?;
+        let angle = self.finite(&f("transform.rotate_y_deg"), t.rotate_y_deg)?;
+        mesh.transform(&Affine3A::from_scale_rotation_translation(
+            Vec3::splat(scale),
+            Quat::from_rotation_y(angle.to_radians()),
+            translate,
+        ));
+
+        let em = match &o.em {
+            Some(em) => Some(self.em(&f("em"), em)?),
+            None => None,
+        };
+        Ok(Object {
+            name: o.name.clone(),
+            mesh,
+            material,
+            em,
+        })
+    }
+
+    fn mesh(&self, field: &str, m: &MeshFile) -> Result<Mesh, SceneError> {
+        let nested = |source: SceneError| SceneError::Nested {
+            path: self.path.to_owned(),
+            field: field.to_owned(),
+            source: Box::new(source),
+        };
+        let obj_path: PathBuf = match (&m.generator, &m.obj) {
+            (Some(g), None) => {
+                if g != "newell_teapot" {
+                    return Err(self.err(
+                        format!("{field}.generator"),
+                        format!("unknown generator \"{g}\" (known: newell_teapot)"),
+                    ));
+                }
+                let segments = m.segments.unwrap_or(DEFAULT_SEGMENTS);
+                if !(1..=MAX_SEGMENTS).contains(&segments) {
+                    return Err(self.err(
+                        format!("{field}.segments"),
+                        format!("{segments} outside 1..={MAX_SEGMENTS}"),
+                    ));
+                }
+                let part = m.part.unwrap_or(TeapotPart::Whole);
+                teapot::cached_obj(segments, part, self.cache_dir).map_err(nested)?
+            }
+            (None, Some(obj)) => {
+                if m.segments.is_some() || m.part.is_some() {
+                    return Err(self.err(
+                        field,
+                        "`segments` and `part` belong to a generator, not to `obj`",
+                    ));
+                }
+                self.path.parent().unwrap_or(Path::new(".")).join(obj)
+            }
+            _ => {
+                return Err(self.err(
+                    field,
+                    "expected exactly one of `generator = \"newell_teapot\"` or `obj = \"path.obj\"`",
+                ));
+            }
+        };
+        load_obj(&obj_path).map_err(nested)
+    }
+    fn em(&self, field: &str, em: &EmFile) -> Result<EmSettings, SceneError> {
+        if !(em.resolution.is_power_of_two() && em.resolution <= MAX_EM_RESOLUTION) {
+            return Err(self.err(
+                format!("{field}.resolution"),
+                format!(
+                    "{} is not a power of two in 1..={MAX_EM_RESOLUTION}",
+                    em.resolution
+                ),
+            ));
+        }
+        if em.layers.is_empty() {
+            return Err(self.err(
+                format!("{field}.layers"),
+                "empty (expected \"distant\" and/or \"local\")",
+            ));
+        }
+        let repeats = em
+            .layers
+            .iter()
+            .enumerate()
+            .any(|(i, l)| em.layers[..i].contains(l));
+        if repeats {
+            return Err(self.err(
+                format!("{field}.layers"),
+                format!("{:?} repeats a layer", em.layers),
+            ));
+        }
+        Ok(EmSettings {
+            resolution: em.resolution,
+            layers: em.layers.clone(),
+        })
+    }
+}

@@ -1,0 +1,47 @@
+//! Surface materials and per-object environment-map settings.
+
+use glam::Vec3;
+
+/// Reflectance model of a surface. The tracer and the runtime share these parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Material {
+    /// Lambertian; `texture` (index into `Scene::textures`) multiplies `albedo`.
+    Diffuse {
+        albedo: Vec3,
+        texture: Option<usize>,
+    },
+    /// Perfect specular reflector with Schlick Fresnel from `f0`.
+    Mirror { f0: Vec3 },
+    /// Rough specular reflector; `roughness` in (0, 1].
+    Glossy { f0: Vec3, roughness: f32 },
+    /// Dielectric with Beer–Lambert `absorption` per metre and channel.
+    Glass { ior: f32, absorption: Vec3 },
+    /// Light source surface.
+    Emissive { radiance: Vec3 },
+}
+
+/// Per-object environment-map settings (PEM layers).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct EmSettings {
+    /// Cube face edge length in texels.
+    pub resolution: u32,
+    pub layers: Vec<EmLayer>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum EmLayer {
+    /// Box aligned with the room: what the reflector sees of its surroundings.
+    Distant,
+    /// Ellipsoid around the object: its self-reflections.
+    Local,
+}
+
+impl Default for EmSettings {
+    fn default() -> Self {
+        EmSettings {
+            resolution: 256,
+            layers: vec![EmLayer::Distant, EmLayer::Local],
+        }
+    }
+}

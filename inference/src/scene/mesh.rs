@@ -1,0 +1,140 @@
+//! Indexed triangle mesh, the unit every consumer (rasteriser, tracer, texgen) works on.
+
+use glam::{Affine3A, Vec2, Vec3};
+
+/// Triangle list with per-vertex attributes; `normals` and `uvs` have one entry per position.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    pub uvs: Vec<Vec2>,
+    pub indices: Vec<u32>,
+}
+
+impl Mesh {
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    /// Corner positions of triangle `t` (panics if `t >= triangle_count()`, like indexing).
+    pub fn triangle(&self, t: usize) -> [Vec3; 3] {
+        let i = &self.indices[3 * t..3 * t + 3];
+        [
+            self.positions[i[0] as usize],
+            self.positions[i[1] as usize],
+            self.positions[i[2] as usize],
+        ]
+    }
+
+    /// Total surface area.
+    pub fn area(&self) -> f32 {
+        (0..self.triangle_count())
+            .map(|t| triangle_area(self.triangle(t)))
+            .sum()
+    }
+
+    /// Area-weighted mean of triangle centroids: the PEM paper's EM origin.
+    /// Falls back to the mean position when the area is zero, and to the origin when empty.
+    pub fn area_weighted_centroid(&self) -> Vec3 {
+        let (mut sum, mut total) = (Vec3::ZERO, 0.0f64);
+        for t in 0..self.triangle_count() {
+            let [a, b, c] = self.triangle(t);
+            let area = triangle_area([a, b, c]) as f64;
+            sum += (a + b + c) / 3.0 * area as f32;
+            total += area;
+        }
+        if total > 0.0 {
+            sum / total as f32
+        } else if !self.positions.is_empty() {
+            self.positions.iter().copied().sum::<Vec3>() / self.positions.len() as f32
+        } else {
+            Vec3::ZERO
+        }
+    }
+
+    /// Axis-aligned bounds `(min, max)`; `(0, 0)` for an empty mesh.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        if self.positions.is_empty() {
+            return (Vec3::ZERO, Vec3::ZERO);
+        }
+        self.positions
+            .iter()
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
+                (lo.min(p), hi.max(p))
+            })
+    }
+
+    /// Applies a rigid-plus-uniform-scale transform (normals stay unit length).
+    pub fn transform(&mut self, m: &Affine3A) {
+        for p in &mut self.positions {
+            *p = m.transform_point3(*p);
+        }
+        for n in &mut self.normals {
+            *n = m.transform_vector3(*n).normalize_or(*n);
+        }
+    }
+}
+
+pub fn triangle_area([a, b, c]: [Vec3; 3]) -> f32 {
+    0.5 * (b - a).cross(c - a).length()
+}
+
+/// True when a triangle has (numerically) no area: coincident corners or collinear ones.
+/// Relative to the longest edge so the test is scale-free.
+pub fn is_degenerate([a, b, c]: [Vec3; 3]) -> bool {
+    let longest = (b - a)
+        .length_squared()
+        .max((c - b).length_squared())
+        .max((a - c).length_squared());
+    let twice_area = (b - a).cross(c - a).length();
+    // Written so that NaN corners count as degenerate.
+    let well_shaped = twice_area > 1e-7 * longest;
+    !well_shaped
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn quad() -> Mesh {
+        Mesh {
+            positions: vec![
+                Vec3::new(0.0, 0.0, 0.0),
+                Vec3::new(2.0, 0.0, 0.0),
+                Vec3::new(2.0, 0.0, 2.0),
+                Vec3::new(0.0, 0.0, 2.0),
+                Vec3::new(100.0, 5.0, 0.0), // unreferenced: must not move the centroid
+            ],
+            normals: vec![Vec3::Y; 5],
+            uvs: vec![Vec2::ZERO; 5],
+            indices: vec![0, 2, 1, 0, 3, 2],
+        }
+    }
+
+    #[test]
+    fn centroid_area_bounds() {
+        let m = quad();
+        assert_eq!(m.triangle_count(), 2);
+        assert!((m.area() - 4.0).abs() < 1e-6);
+        assert!(
+            m.area_weighted_centroid()
+                .abs_diff_eq(Vec3::new(1.0, 0.0, 1.0), 1e-6)
+        );
+        assert_eq!(m.bounds(), (Vec3::ZERO, Vec3::new(100.0, 5.0, 2.0)));
+        assert_eq!(Mesh::default().bounds(), (Vec3::ZERO, Vec3::ZERO));
+        assert_eq!(Mesh::default().area_weighted_centroid(), Vec3::ZERO);
+    }
+
+    #[test]
+    fn degenerate_detection() {
+        let a = Vec3::ZERO;
+        let b = Vec3::X;
+        assert!(is_degenerate([a, a, b]));
+        assert!(is_degenerate([a, b, 2.0 * b]));
+        assert!(is_degenerate([a, a, a]));
+        assert!(is_degenerate([a, b, Vec3::new(f32::NAN, 0.0, 0.0)]));
+        assert!(!is_degenerate([a, b, Vec3::Y]));
+        // Tiny but well-shaped triangles are fine.
+        assert!(!is_degenerate([a, b * 1e-6, Vec3::Y * 1e-6]));
+    }
+}

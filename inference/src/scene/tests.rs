@@ -1,0 +1,376 @@
+//! Scene loading: the committed teapot scene, and every kind of bad input.
+
+use glam::Vec3;
+
+use super::*;
+
+const BASE: &str = r#"
+[camera]
+fov_y_deg = 40.0
+near = 0.05
+far = 30.0
+
+[orbit]
+center = [0.0, 0.25, 0.0]
+radius = 1.8
+height = 0.8
+
+[room]
+min = [-4.0, 0.0, -4.0]
+max = [4.0, 4.0, 4.0]
+floor = "floor"
+walls = "walls"
+ceiling = "walls"
+
+[[lights]]
+name = "light"
+center = [0.0, 3.99, 0.0]
+edge_u = [1.0, 0.0, 0.0]
+edge_v = [0.0, 0.0, 1.0]
+radiance = [10.0, 10.0, 10.0]
+
+[materials.chrome]
+kind = "mirror"
+f0 = [0.55, 0.56, 0.55]
+
+[materials.floor]
+kind = "diffuse"
+albedo = [1.0, 1.0, 1.0]
+texture = { pattern = "checker", colors = [[0.8, 0.8, 0.8], [0.1, 0.1, 0.1]], tile_size = 0.5, resolution = 16 }
+
+[materials.walls]
+kind = "diffuse"
+albedo = [0.7, 0.7, 0.7]
+"#;
+
+const TETRA: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+
+/// Writes `text` as `x.toml` (plus `tetra.obj`) into a temp dir and loads it.
+fn load(text: &str) -> Result<Scene, SceneError> {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("tetra.obj"), TETRA).expect("write obj");
+    let path = dir.path().join("x.toml");
+    std::fs::write(&path, text).expect("write scene");
+    Scene::load_with_cache(&path.to_string_lossy(), dir.path())
+}
+
+/// The error text for `BASE` with `from` replaced by `to` (or `to` appended if `from` is "").
+fn error_of(from: &str, to: &str) -> String {
+    let text = if from.is_empty() {
+        format!("{BASE}\n{to}")
+    } else {
+        assert!(BASE.contains(from), "test bug: {from:?} not in BASE");
+        BASE.replacen(from, to, 1)
+    };
+    let e = load(&text).expect_err("must be rejected").to_string();
+    assert!(e.contains("x.toml"), "error must name the file: {e}");
+    e
+}
+
+const TETRA_OBJECT: &str = r#"
+[[objects]]
+name = "tetra"
+mesh = { obj = "tetra.obj" }
+material = "chrome"
+"#;
+
+#[test]
+fn committed_teapot_scene_loads() {
+    let cache = tempfile::tempdir().expect("temp dir");
+    let path = assets_dir().join("scenes/teapot.toml");
+    let s = Scene::load_with_cache(&path.to_string_lossy(), cache.path()).expect("loads");
+    assert_eq!(s.name, "teapot");
+    let names: Vec<&str> = s.objects.iter().map(|o| o.name.as_str()).collect();
+    assert_eq!(names, ["floor", "walls", "ceiling", "light", "teapot"]);
+    assert_eq!(s.orbit.samples, 100);
+    assert_eq!(s.orbit.step_deg, 1.0);
+
+    let teapot = s.object("teapot").expect("teapot object");
+    assert_eq!(teapot.mesh.triangle_count(), 39_800);
+    assert!(matches!(
+        s.materials[teapot.material],
+        Material::Mirror { .. }
+    ));
+    let em = teapot.em.as_ref().expect("teapot has EMs");
+    assert_eq!(em.resolution, 256);
+    assert_eq!(em.layers, [EmLayer::Distant, EmLayer::Local]);
+    let (lo, hi) = teapot.mesh.bounds();
+    assert!(lo.y.abs() < 1e-6, "teapot stands on the floor: {lo}");
+    assert!(((hi.x - lo.x) - 6.434 * 0.16).abs() < 1e-3);
+
+    let light = &s.lights[0];
+    assert_eq!(light.normal(), -Vec3::Y);
+    let lamp = s.object("light").expect("light object");
+    assert_eq!(
+        s.materials[lamp.material],
+        Material::Emissive {
+            radiance: light.radiance
+        }
+    );
+    assert_eq!(s.material_names[lamp.material], "light");
+
+    assert_eq!(s.textures.len(), 3);
+    for t in &s.textures {
+        assert_eq!(t.texels.len(), (t.width * t.height) as usize);
+        assert!(t.texels.iter().flatten().all(|c| c.is_finite()));
+    }
+    let floor = s.object("floor").expect("floor");
+    let Material::Diffuse {
+        texture: Some(ti), ..
+    } = s.materials[floor.material]
+    else {
+        panic!("floor must be textured diffuse");
+    };
+    assert_eq!(s.textures[ti].name, "floor");
+
+    assert_eq!(
+        s.bounds(),
+        (Vec3::new(-4.0, 0.0, -4.0), Vec3::new(4.0, 4.0, 4.0))
+    );
+    // Every orbit eye is inside the room and sees the teapot's centre ahead.
+    for i in 0..s.orbit.samples {
+        let eye = s.orbit.sample_eye(i).expect("in range");
+        assert!(eye.cmpgt(Vec3::splat(-4.0)).all() && eye.cmplt(Vec3::splat(4.0)).all());
+        let c = s
+            .orbit
+            .view(eye)
+            .transform_point3(teapot.mesh.area_weighted_centroid());
+        assert!(c.z < 0.0);
+    }
+}
+
+#[test]
+fn minimal_scene_defaults_and_obj_mesh() {
+    let s = load(&format!("{BASE}{TETRA_OBJECT}")).expect("loads");
+    assert_eq!(s.name, "x");
+    assert_eq!(s.orbit.samples, 100);
+    assert_eq!(s.orbit.step_deg, 1.0);
+    let t = s.object("tetra").expect("tetra");
+    assert_eq!(t.mesh.triangle_count(), 4);
+    assert!(t.em.is_none());
+    assert_eq!(s.material_names, ["chrome", "floor", "walls", "light"]);
+    // Floor UVs follow world position over the texture's tile size.
+    let floor = s.object("floor").expect("floor");
+    for (p, uv) in floor.mesh.positions.iter().zip(&floor.mesh.uvs) {
+        assert_eq!(uv.x, p.x / 0.5);
+    }
+}
+
+#[test]
+fn transform_and_em_defaults_apply() {
+    let s = load(&format!(
+        "{BASE}{TETRA_OBJECT}transform = {{ translate = [1.0, 0.0, 0.0], scale = 2.0, rotate_y_deg = 90.0 }}\n[objects.em]\n"
+    ))
+    .expect("loads");
+    let t = s.object("tetra").expect("tetra");
+    let (lo, hi) = t.mesh.bounds();
+    // Unit tetra scaled by 2, x → −z under +90° about y, then moved +1 in x.
+    assert!(lo.abs_diff_eq(Vec3::new(1.0, 0.0, -2.0), 1e-5), "{lo}");
+    assert!(hi.abs_diff_eq(Vec3::new(3.0, 2.0, 0.0), 1e-5), "{hi}");
+    assert_eq!(t.em, Some(EmSettings::default()));
+}
+
+#[test]
+fn unknown_material_lists_the_known_ones() {
+    let e = error_of("", &TETRA_OBJECT.replace("\"chrome\"", "\"chromee\""));
+    assert!(
+        e.ends_with(r#"x.toml: objects[0].material: unknown material "chromee" (known: chrome, floor, walls)"#),
+        "{e}"
+    );
+    let e = error_of(r#"floor = "floor""#, r#"floor = "flor""#);
+    assert!(e.contains("room.floor: unknown material \"flor\""), "{e}");
+}
+
+#[test]
+fn toml_errors_keep_line_and_column() {
+    let e = error_of("radius = 1.8", "radius = 1.8\nradiuss = 2.0");
+    assert!(
+        e.contains("unknown field `radiuss`") && e.contains("line 10, column 1"),
+        "{e}"
+    );
+    let e = error_of("near = 0.05", "near = = 0.05");
+    assert!(e.contains("line 4, column 8"), "{e}");
+    let e = error_of(r#"kind = "mirror""#, r#"kind = "mirorr""#);
+    assert!(e.contains("mirorr"), "{e}");
+    // Fields of another material kind are unknown fields, not silently ignored.
+    let e = error_of(r#"kind = "mirror""#, "kind = \"mirror\"\nroughness = 0.3");
+    assert!(e.contains("roughness"), "{e}");
+    let e = error_of("[camera]\n", "[camera]\nfov_y_deg = 30.0\n");
+    assert!(e.contains("duplicate") || e.contains("fov_y_deg"), "{e}");
+}
+
+#[test]
+fn bad_numbers_name_their_field() {
+    let cases: &[(&str, &str, &str)] = &[
+        ("fov_y_deg = 40.0", "fov_y_deg = 0.0", "camera.fov_y_deg"),
+        ("fov_y_deg = 40.0", "fov_y_deg = nan", "camera.fov_y_deg"),
+        ("near = 0.05", "near = -1.0", "camera.near"),
+        ("far = 30.0", "far = 0.01", "camera.far"),
+        ("radius = 1.8", "radius = 0.0", "orbit.radius"),
+        ("radius = 1.8", "radius = 1.8\nsamples = 0", "orbit.samples"),
+        (
+            "radius = 1.8",
+            "radius = 1.8\nstep_deg = inf",
+            "orbit.step_deg",
+        ),
+        (
+            "center = [0.0, 0.25, 0.0]",
+            "center = [0.0, nan, 0.0]",
+            "orbit.center",
+        ),
+        ("max = [4.0, 4.0, 4.0]", "max = [4.0, 0.0, 4.0]", "room"),
+        (
+            "edge_v = [0.0, 0.0, 1.0]",
+            "edge_v = [2.0, 0.0, 0.0]",
+            "lights[0].edge_u",
+        ),
+        (
+            "edge_v = [0.0, 0.0, 1.0]",
+            "edge_v = [0.0, 0.0, 0.0]",
+            "lights[0].edge_u",
+        ),
+        (
+            "radiance = [10.0, 10.0, 10.0]",
+            "radiance = [-1.0, 0.0, 0.0]",
+            "lights[0].radiance",
+        ),
+        (
+            "center = [0.0, 3.99, 0.0]",
+            "center = [0.0, 5.0, 0.0]",
+            "lights[0].center",
+        ),
+        (
+            "f0 = [0.55, 0.56, 0.55]",
+            "f0 = [1.5, 0.56, 0.55]",
+            "materials.chrome.f0",
+        ),
+        (
+            "albedo = [0.7, 0.7, 0.7]",
+            "albedo = [0.7, -0.1, 0.7]",
+            "materials.walls.albedo",
+        ),
+        (
+            "tile_size = 0.5",
+            "tile_size = 0.0",
+            "materials.floor.texture.tile_size",
+        ),
+        (
+            "resolution = 16",
+            "resolution = 0",
+            "materials.floor.texture.resolution",
+        ),
+    ];
+    for (from, to, field) in cases {
+        let e = error_of(from, to);
+        assert!(e.contains(&format!("x.toml: {field}: ")), "{to:?} → {e}");
+    }
+}
+
+#[test]
+fn bad_material_kinds_are_checked() {
+    let glossy = "[materials.g]\nkind = \"glossy\"\nf0 = [0.9, 0.8, 0.4]\nroughness = 0.0\n";
+    assert!(error_of("", glossy).contains("materials.g.roughness"));
+    let glass = "[materials.g]\nkind = \"glass\"\nior = 0.5\n";
+    assert!(error_of("", glass).contains("materials.g.ior"));
+    let emissive = "[materials.e]\nkind = \"emissive\"\nradiance = [1.0, inf, 1.0]\n";
+    assert!(error_of("", emissive).contains("materials.e.radiance"));
+    let ok = "[materials.g]\nkind = \"glass\"\nior = 1.5\n";
+    assert!(load(&format!("{BASE}{ok}")).is_ok());
+}
+
+#[test]
+fn bad_objects_are_rejected() {
+    let obj = |extra: &str| format!("{TETRA_OBJECT}{extra}");
+    let cases: Vec<(String, &str)> = vec![
+        (
+            TETRA_OBJECT.replace(
+                r#"{ obj = "tetra.obj" }"#,
+                r#"{ obj = "tetra.obj", generator = "newell_teapot" }"#,
+            ),
+            "objects[0].mesh: expected exactly one of",
+        ),
+        (
+            TETRA_OBJECT.replace(r#"{ obj = "tetra.obj" }"#, "{}"),
+            "objects[0].mesh: expected exactly one",
+        ),
+        (
+            TETRA_OBJECT.replace(
+                r#"{ obj = "tetra.obj" }"#,
+                r#"{ generator = "klein_bottle" }"#,
+            ),
+            "objects[0].mesh.generator: unknown generator \"klein_bottle\"",
+        ),
+        (
+            TETRA_OBJECT.replace(
+                r#"{ obj = "tetra.obj" }"#,
+                r#"{ generator = "newell_teapot", segments = 0 }"#,
+            ),
+            "objects[0].mesh.segments",
+        ),
+        (
+            TETRA_OBJECT.replace(
+                r#"{ obj = "tetra.obj" }"#,
+                r#"{ obj = "tetra.obj", segments = 4 }"#,
+            ),
+            "objects[0].mesh: `segments` and `part`",
+        ),
+        (
+            obj("transform = { scale = -1.0 }\n"),
+            "objects[0].transform.scale",
+        ),
+        (
+            obj("transform = { translate = [0.0, nan, 0.0] }\n"),
+            "objects[0].transform.translate",
+        ),
+        (
+            obj("[objects.em]\nresolution = 300\n"),
+            "objects[0].em.resolution",
+        ),
+        (obj("[objects.em]\nlayers = []\n"), "objects[0].em.layers"),
+        (
+            obj("[objects.em]\nlayers = [\"local\", \"local\"]\n"),
+            "objects[0].em.layers",
+        ),
+        (
+            TETRA_OBJECT.replace("\"tetra\"\nmesh", "\"floor\"\nmesh"),
+            "object name \"floor\" used twice",
+        ),
+        (
+            TETRA_OBJECT.replace("\"tetra\"\nmesh", "\"\"\nmesh"),
+            "objects[0].name: empty",
+        ),
+    ];
+    for (extra, expected) in cases {
+        let e = error_of("", &extra);
+        assert!(e.contains(expected), "{extra} → {e}");
+    }
+}
+
+#[test]
+fn light_name_may_not_shadow_a_material() {
+    let e = error_of(r#"name = "light""#, r#"name = "chrome""#);
+    assert!(e.contains("lights[0].name"), "{e}");
+}
+
+#[test]
+fn broken_mesh_file_is_reported_through_the_scene() {
+    let e = error_of("", &TETRA_OBJECT.replace("tetra.obj", "missing.obj"));
+    assert!(
+        e.contains("x.toml: objects[0].mesh: ") && e.contains("missing.obj"),
+        "{e}"
+    );
+}
+
+#[test]
+fn missing_scene_file_is_named() {
+    let e = Scene::load("/nonexistent/dir/nothing.toml").expect_err("missing");
+    let e = e.to_string();
+    assert!(e.contains("/nonexistent/dir/nothing.toml"), "{e}");
+    let e = Scene::load("no_such_scene_name").expect_err("missing");
+    let e = e.to_string();
+    assert!(e.contains("scenes/no_such_scene_name.toml"), "{e}");
+    assert!(
+        e.contains("no such scene file (available there: teapot"),
+        "{e}"
+    );
+}
