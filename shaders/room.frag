@@ -11,12 +11,14 @@ layout(push_constant) uniform Push {
     mat4 view_proj;
     vec4 albedo;
     vec4 emission;
-    vec4 light_center;
-    vec4 light_normal;
-    vec4 light_radiance;
 } pc;
 
 layout(set = 0, binding = 0) uniform sampler2D albedo_texture;
+layout(set = 0, binding = 1, std140) uniform Light {
+    vec4 center;   // xyz; w = area
+    vec4 normal;   // xyz unit, into the room; w = ambient radiance scale
+    vec4 radiance; // rgb
+} light;
 
 layout(location = 0) out vec4 out_color;
 
@@ -28,12 +30,12 @@ void main() {
         albedo *= texture(albedo_texture, in_uv).rgb;
     }
     vec3 n = normalize(in_normal);
-    vec3 to_light = pc.light_center.xyz - in_position;
+    vec3 to_light = light.center.xyz - in_position;
     float d2 = max(dot(to_light, to_light), 1e-6);
     vec3 l = to_light * inversesqrt(d2);
     float cos_surface = max(dot(n, l), 0.0);
-    float cos_light = max(dot(pc.light_normal.xyz, -l), 0.0);
-    vec3 irradiance = pc.light_radiance.rgb * pc.light_center.w * cos_surface * cos_light / d2;
-    vec3 ambient = pc.light_radiance.rgb * pc.light_normal.w;
+    float cos_light = max(dot(light.normal.xyz, -l), 0.0);
+    vec3 irradiance = light.radiance.rgb * light.center.w * cos_surface * cos_light / d2;
+    vec3 ambient = light.radiance.rgb * light.normal.w;
     out_color = vec4(pc.emission.rgb + albedo / PI * (irradiance + PI * ambient), 1.0);
 }

@@ -8,9 +8,6 @@ layout(push_constant) uniform Push {
     mat4 view_proj;
     vec4 albedo;          // rgb; a = 1 when the texture modulates it
     vec4 emission;        // rgb emitted radiance
-    vec4 light_center;    // xyz; w = light area
-    vec4 light_normal;    // xyz (unit, facing into the room); w = ambient radiance scale
-    vec4 light_radiance;  // rgb
 } pc;
 
 layout(location = 0) out vec3 out_position;

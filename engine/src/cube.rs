@@ -7,7 +7,7 @@
 //! `s = (sc/|ma| + 1)/2`, `t = (tc/|ma| + 1)/2`, with t growing down the
 //! image rows, which is Vulkan's NDC y. So clip = (sc, tc, z(|ma|), |ma|).
 
-use glam::{Mat4, Vec3, Vec4};
+use glam::{Mat4, Vec3};
 
 pub const FACE_COUNT: u32 = 6;
 
@@ -58,6 +58,7 @@ pub fn face_coords(d: Vec3) -> (u32, f32, f32) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec4;
 
     #[test]
     fn face_projection_agrees_with_spec_face_selection() {

@@ -193,6 +193,7 @@ impl Renderer {
             level: 0,
             layer: 0,
             clear: true,
+            front_face: vk::FrontFace::COUNTER_CLOCKWISE,
         };
         let mut passes: Vec<Box<dyn Pass + '_>> = Vec::new();
         match mode {

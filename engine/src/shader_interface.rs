@@ -62,11 +62,17 @@ pub struct RoomPush {
     /// rgb albedo; a = 1 when the texture modulates it.
     pub albedo: Vec4,
     pub emission: Vec4,
+}
+
+/// `shaders/room.frag` uniform block `Light` (set 0, binding 1), std140.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct RoomLight {
     /// xyz centre; w = area.
-    pub light_center: Vec4,
+    pub center: Vec4,
     /// xyz unit normal into the room; w = ambient radiance scale.
-    pub light_normal: Vec4,
-    pub light_radiance: Vec4,
+    pub normal: Vec4,
+    pub radiance: Vec4,
 }
 
 /// `shaders/mirror.vert` / `mirror.frag` push constants.

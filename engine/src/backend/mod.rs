@@ -16,5 +16,5 @@ pub use commands::Commands;
 pub use device::{Device, DeviceOptions, create_device};
 pub use error::{GpuError, GpuResult, VkContext};
 pub use image::{Image, ImageDesc, ImageKind, Sampler};
-pub use pipeline::{Pipeline, PipelineDesc};
+pub use pipeline::{Binding, Pipeline, PipelineDesc};
 pub use queries::{PassQueries, PassSample};

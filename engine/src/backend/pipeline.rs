@@ -17,8 +17,15 @@ pub struct PipelineDesc<'a> {
     pub cull_mode: vk::CullModeFlags,
     /// Size of the `#[repr(C)]` push-constant struct shared with the shader.
     pub push_constant_size: u32,
-    /// Combined image samplers in set 0, bindings 0..n.
-    pub sampler_count: u32,
+    /// Set 0, binding i has descriptor type `bindings[i]` (fragment stage).
+    pub bindings: &'a [vk::DescriptorType],
+}
+
+/// What a descriptor set binds at one binding.
+#[derive(Clone, Copy)]
+pub enum Binding<'a> {
+    Image(vk::ImageView, vk::Sampler),
+    Uniform(&'a super::buffer::Buffer),
 }
 
 pub struct Pipeline {
@@ -52,11 +59,14 @@ impl Pipeline {
             push_constant_size: desc.push_constant_size,
         };
         let d = &device.device;
-        let bindings: Vec<_> = (0..desc.sampler_count)
-            .map(|b| {
+        let bindings: Vec<_> = desc
+            .bindings
+            .iter()
+            .enumerate()
+            .map(|(b, &ty)| {
                 vk::DescriptorSetLayoutBinding::default()
-                    .binding(b)
-                    .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                    .binding(b as u32)
+                    .descriptor_type(ty)
                     .descriptor_count(1)
                     .stage_flags(vk::ShaderStageFlags::FRAGMENT)
             })
@@ -70,11 +80,15 @@ impl Pipeline {
                     None,
                 )
                 .vk("vkCreateDescriptorSetLayout")?;
-            if desc.sampler_count > 0 {
-                let sizes = [vk::DescriptorPoolSize {
-                    ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-                    descriptor_count: MAX_SETS * desc.sampler_count,
-                }];
+            if !desc.bindings.is_empty() {
+                let sizes: Vec<_> = desc
+                    .bindings
+                    .iter()
+                    .map(|&ty| vk::DescriptorPoolSize {
+                        ty,
+                        descriptor_count: MAX_SETS,
+                    })
+                    .collect();
                 pipeline.pool = d
                     .create_descriptor_pool(
                         &vk::DescriptorPoolCreateInfo::default()
@@ -115,11 +129,8 @@ impl Pipeline {
         Ok(pipeline)
     }
 
-    /// A descriptor set binding `images[i]` (view, sampler) at binding i.
-    pub fn descriptor_set(
-        &self,
-        images: &[(vk::ImageView, vk::Sampler)],
-    ) -> GpuResult<vk::DescriptorSet> {
+    /// A descriptor set binding `resources[i]` at binding i.
+    pub fn descriptor_set(&self, resources: &[Binding]) -> GpuResult<vk::DescriptorSet> {
         let layouts = [self.set_layout];
         let info = vk::DescriptorSetAllocateInfo::default()
             .descriptor_pool(self.pool)
@@ -128,25 +139,43 @@ impl Pipeline {
         // with the pool.
         let set = unsafe { self.device.device.allocate_descriptor_sets(&info) }
             .vk("vkAllocateDescriptorSets")?[0];
-        let infos: Vec<[vk::DescriptorImageInfo; 1]> = images
+        let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = resources
             .iter()
-            .map(|&(view, sampler)| {
-                [vk::DescriptorImageInfo {
+            .map(|r| match *r {
+                Binding::Image(image_view, sampler) => [vk::DescriptorImageInfo {
                     sampler,
-                    image_view: view,
+                    image_view,
                     image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                }]
+                }],
+                Binding::Uniform(_) => [vk::DescriptorImageInfo::default()],
             })
             .collect();
-        let writes: Vec<_> = infos
+        let buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = resources
+            .iter()
+            .map(|r| match *r {
+                Binding::Uniform(buffer) => [vk::DescriptorBufferInfo {
+                    buffer: buffer.raw,
+                    offset: 0,
+                    range: vk::WHOLE_SIZE,
+                }],
+                Binding::Image(..) => [vk::DescriptorBufferInfo::default()],
+            })
+            .collect();
+        let writes: Vec<_> = resources
             .iter()
             .enumerate()
-            .map(|(binding, info)| {
-                vk::WriteDescriptorSet::default()
+            .map(|(i, r)| {
+                let write = vk::WriteDescriptorSet::default()
                     .dst_set(set)
-                    .dst_binding(binding as u32)
-                    .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-                    .image_info(info)
+                    .dst_binding(i as u32);
+                match r {
+                    Binding::Image(..) => write
+                        .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                        .image_info(&image_infos[i]),
+                    Binding::Uniform(_) => write
+                        .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
+                        .buffer_info(&buffer_infos[i]),
+                }
             })
             .collect();
         // SAFETY: the set was just allocated and is not in use.
@@ -249,7 +278,12 @@ unsafe fn create_graphics_pipeline(
     let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
         .color_write_mask(vk::ColorComponentFlags::RGBA)];
     let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
-    let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+    // Front face is dynamic: the same pipeline renders mirrored cube faces.
+    let dynamic_states = [
+        vk::DynamicState::VIEWPORT,
+        vk::DynamicState::SCISSOR,
+        vk::DynamicState::FRONT_FACE,
+    ];
     let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
     let color_formats = [desc.color_format];
     let mut rendering = vk::PipelineRenderingCreateInfo::default()

@@ -76,6 +76,7 @@ impl Pass for EmCapturePass<'_> {
                 level: 0,
                 layer: face,
                 clear: true,
+                front_face: vk::FrontFace::CLOCKWISE,
             };
             let view_proj = face_view_proj(face, self.cube.origin, self.near, self.far);
             target.render(self.room_device(), cmd, || {

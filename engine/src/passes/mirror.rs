@@ -3,7 +3,7 @@
 
 use super::target::{Target, draw_mesh};
 use crate::backend::upload::upload_image;
-use crate::backend::{Buffer, Device, GpuResult, Image, ImageDesc, Pipeline, PipelineDesc, Sampler};
+use crate::backend::{Binding, Buffer, Device, GpuResult, Image, ImageDesc, Pipeline, PipelineDesc, Sampler};
 use crate::gpu_scene::GpuScene;
 use crate::graph::{Access, Executor, Pass, Usage};
 use crate::shader_interface::{MIRROR_ATTRIBUTES, MirrorPush, TEXGEN_BINDING, Vertex, spirv};
@@ -55,9 +55,9 @@ impl MirrorRenderer {
                 vertex_attributes: &MIRROR_ATTRIBUTES,
                 color_format,
                 depth_format,
-                cull_mode: vk::CullModeFlags::NONE,
+                cull_mode: vk::CullModeFlags::BACK,
                 push_constant_size: size_of::<MirrorPush>() as u32,
-                sampler_count: 2,
+                bindings: &[vk::DescriptorType::COMBINED_IMAGE_SAMPLER; 2],
             },
         )?;
         let lut = Image::new(
@@ -98,8 +98,8 @@ impl MirrorRenderer {
             gpu_allocator::MemoryLocation::CpuToGpu,
         )?;
         let set = self.pipeline.descriptor_set(&[
-            (cube.view, self.cube_sampler.raw),
-            (self.lut.view, self.lut_sampler.raw),
+            Binding::Image(cube.view, self.cube_sampler.raw),
+            Binding::Image(self.lut.view, self.lut_sampler.raw),
         ])?;
         Ok(MirrorDraw {
             object,

@@ -3,10 +3,10 @@
 //! the "bare" variant: every mesh with one texture, nothing else.
 
 use super::target::{Target, draw_mesh};
-use crate::backend::{Device, GpuResult, Pipeline, PipelineDesc};
+use crate::backend::{Binding, Buffer, Device, GpuResult, Pipeline, PipelineDesc};
 use crate::gpu_scene::GpuScene;
 use crate::graph::{Access, Pass, Usage};
-use crate::shader_interface::{RoomPush, Vertex, spirv};
+use crate::shader_interface::{RoomLight, RoomPush, Vertex, spirv};
 use ash::vk;
 use glam::{Mat4, Vec4};
 use inference::scene::{Material, Scene};
@@ -22,6 +22,8 @@ pub struct RoomRenderer {
     device: Device,
     pipeline: Pipeline,
     draws: Vec<Draw>,
+    /// The `Light` uniform block, constant for the scene.
+    _light: Buffer,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -55,12 +57,20 @@ impl RoomRenderer {
                 vertex_attributes: &Vertex::ATTRIBUTES,
                 color_format,
                 depth_format,
-                cull_mode: vk::CullModeFlags::NONE,
+                cull_mode: vk::CullModeFlags::BACK,
                 push_constant_size: size_of::<RoomPush>() as u32,
-                sampler_count: 1,
+                bindings: &[
+                    vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                    vk::DescriptorType::UNIFORM_BUFFER,
+                ],
             },
         )?;
-        let lighting = room_lighting(scene);
+        let light = Buffer::with_data(
+            device,
+            "room light",
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            &[room_lighting(scene)],
+        )?;
         let first_texture = scene.textures.first().map(|_| 0);
         let mut draws = Vec::new();
         for (object, o) in scene.objects.iter().enumerate() {
@@ -77,14 +87,17 @@ impl RoomRenderer {
                 _ => continue, // reflectors and glass have their own passes
             };
             let image = gpu.texture(texture);
-            let set = pipeline.descriptor_set(&[(image.view, gpu.sampler.raw)])?;
+            let set = pipeline.descriptor_set(&[
+                Binding::Image(image.view, gpu.sampler.raw),
+                Binding::Uniform(&light),
+            ])?;
             draws.push(Draw {
                 object,
                 set,
                 push: RoomPush {
                     albedo,
                     emission,
-                    ..lighting
+                    ..RoomPush::default()
                 },
             });
         }
@@ -92,6 +105,7 @@ impl RoomRenderer {
             device: device.clone(),
             pipeline,
             draws,
+            _light: light,
         })
     }
 
@@ -134,9 +148,9 @@ impl RoomRenderer {
 /// The light shared by every room draw: the first area light as a point
 /// emitter at its centre, and an ambient term standing in for the indirect
 /// light (radiance ≈ ρ/(1 − ρ) · light area / room area · L for ρ = ½).
-fn room_lighting(scene: &Scene) -> RoomPush {
+fn room_lighting(scene: &Scene) -> RoomLight {
     let Some(light) = scene.lights.first() else {
-        return RoomPush::default();
+        return RoomLight::default();
     };
     let (lo, hi) = scene.bounds();
     let size = hi - lo;
@@ -146,11 +160,10 @@ fn room_lighting(scene: &Scene) -> RoomPush {
     } else {
         0.0
     };
-    RoomPush {
-        light_center: light.center.extend(light.area()),
-        light_normal: light.normal().extend(ambient),
-        light_radiance: light.radiance.extend(0.0),
-        ..RoomPush::default()
+    RoomLight {
+        center: light.center.extend(light.area()),
+        normal: light.normal().extend(ambient),
+        radiance: light.radiance.extend(0.0),
     }
 }
 

@@ -14,6 +14,9 @@ pub struct Target<'a> {
     pub layer: u32,
     /// Clear both attachments first (else load what earlier passes drew).
     pub clear: bool,
+    /// Winding of front faces as this target's projection sees them: cube
+    /// faces are mirror images (see `cube.rs`), so they flip it.
+    pub front_face: vk::FrontFace,
 }
 
 impl Target<'_> {
@@ -77,6 +80,7 @@ impl Target<'_> {
             device.device.cmd_begin_rendering(cmd, &info);
             device.device.cmd_set_viewport(cmd, 0, &[viewport]);
             device.device.cmd_set_scissor(cmd, 0, &[area]);
+            device.device.cmd_set_front_face(cmd, self.front_face);
         }
         let drawn = draw();
         // SAFETY: matches cmd_begin_rendering above.
