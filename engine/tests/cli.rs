@@ -97,15 +97,19 @@ fn scene_with_obj(dir: &Path, obj: &str) -> std::path::PathBuf {
     let text = std::fs::read_to_string(teapot).expect("teapot.toml");
     std::fs::write(dir.join("mesh.obj"), obj).expect("write obj");
     // Swap the generated teapot for the OBJ next to the scene file.
-    let start = text.find("generator").expect("teapot scene uses the generator");
-    let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
-    let line_end = text[start..].find('\n').map_or(text.len(), |i| start + i);
-    let patched = format!(
-        "{}mesh = {{ obj = \"{}\" }}{}",
-        &text[..line_start],
-        dir.join("mesh.obj").display(),
-        &text[line_end..]
-    );
+    let obj_line = format!("mesh = {{ obj = \"{}\" }}", dir.join("mesh.obj").display());
+    let patched: Vec<String> = text
+        .lines()
+        .map(|l| {
+            if l.starts_with("mesh = { generator") {
+                obj_line.clone()
+            } else {
+                l.to_string()
+            }
+        })
+        .collect();
+    assert!(patched.contains(&obj_line), "teapot scene uses the generator");
+    let patched = patched.join("\n");
     let path = dir.join("scene.toml");
     std::fs::write(&path, patched).expect("write scene");
     path
@@ -116,7 +120,7 @@ fn obj_with_nan_coordinates() {
     let dir = tempfile::tempdir().expect("tempdir");
     let scene = scene_with_obj(dir.path(), "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n");
     let o = engine(&["--scene", scene.to_str().expect("utf-8"), "--frames", "1"], &[]);
-    assert_clean_failure(&o, &["mesh.obj"]);
+    assert_clean_failure(&o, &["mesh.obj", "line 3"]);
 }
 
 #[test]
@@ -124,7 +128,7 @@ fn obj_with_degenerate_triangle() {
     let dir = tempfile::tempdir().expect("tempdir");
     let scene = scene_with_obj(dir.path(), "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
     let o = engine(&["--scene", scene.to_str().expect("utf-8"), "--frames", "1"], &[]);
-    assert_clean_failure(&o, &["mesh.obj", "degenerate"]);
+    assert_clean_failure(&o, &["mesh.obj", "zero-area"]);
 }
 
 #[test]

@@ -3,23 +3,23 @@
 use std::path::PathBuf;
 
 /// Everything a user, a scene file or a mesh file can get wrong. Every variant names the file.
+/// Each message is complete on one line, inner errors included, so they are not also
+/// exposed as `source()` (anyhow's `{:#}` would print them twice).
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {cause}", path.display())]
     Io {
         path: PathBuf,
-        #[source]
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// The scene file does not exist; `available` lists the scenes beside where it was sought.
     #[error("{}: no such scene file (available there: {available})", path.display())]
     NoScene { path: PathBuf, available: String },
     /// TOML syntax or type error; `toml`'s message carries line and column.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {cause}", path.display())]
     Toml {
         path: PathBuf,
-        #[source]
-        source: Box<toml::de::Error>,
+        cause: Box<toml::de::Error>,
     },
     /// A value that parsed but makes no sense; `field` is a path like `objects[0].material`.
     #[error("{}: {field}: {message}", path.display())]
@@ -36,12 +36,11 @@ pub enum SceneError {
         message: String,
     },
     /// An error inside a file the scene refers to, e.g. a mesh.
-    #[error("{}: {field}: {source}", path.display())]
+    #[error("{}: {field}: {cause}", path.display())]
     Nested {
         path: PathBuf,
         field: String,
-        #[source]
-        source: Box<SceneError>,
+        cause: Box<SceneError>,
     },
     #[error("orbit sample {sample} out of range 0..{samples}")]
     OrbitSampleOutOfRange { sample: u32, samples: u32 },
@@ -50,10 +49,10 @@ pub enum SceneError {
 }
 
 impl SceneError {
-    pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+    pub(crate) fn io(path: impl Into<PathBuf>, cause: std::io::Error) -> Self {
         SceneError::Io {
             path: path.into(),
-            source,
+            cause,
         }
     }
 

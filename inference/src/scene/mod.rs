@@ -82,7 +82,7 @@ impl Scene {
     pub fn from_toml(text: &str, path: &Path, cache_dir: &Path) -> Result<Scene, SceneError> {
         let file: file::SceneFile = toml::from_str(text).map_err(|e| SceneError::Toml {
             path: path.to_owned(),
-            source: Box::new(e),
+            cause: Box::new(e),
         })?;
         load::Loader { path, cache_dir }.build(file)
     }

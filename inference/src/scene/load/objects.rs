@@ -55,7 +55,7 @@ impl Loader<'_> {
         let nested = |source: SceneError| SceneError::Nested {
             path: self.path.to_owned(),
             field: field.to_owned(),
-            source: Box::new(source),
+            cause: Box::new(source),
         };
         let obj_path: PathBuf = match (&m.generator, &m.obj) {
             (Some(g), None) => {
