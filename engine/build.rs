@@ -25,7 +25,10 @@ fn main() {
         };
         println!("cargo:rerun-if-changed={}", path.display());
         let source = std::fs::read_to_string(&path).expect("readable shader");
-        let name = path.file_name().and_then(|n| n.to_str()).expect("utf-8 name");
+        let name = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .expect("utf-8 name");
         let mut options = shaderc::CompileOptions::new().expect("shaderc options");
         options.set_target_env(
             shaderc::TargetEnv::Vulkan,

@@ -17,7 +17,10 @@ pub enum CaptureError {
         source: image::ImageError,
     },
     #[error("{path}: EXR encoding failed: {source}")]
-    Exr { path: PathBuf, source: exr::error::Error },
+    Exr {
+        path: PathBuf,
+        source: exr::error::Error,
+    },
     #[error("{path}: expected {expected} pixels ({width}x{height}), got {got}")]
     Size {
         path: PathBuf,
@@ -30,7 +33,11 @@ pub enum CaptureError {
 
 /// The sRGB transfer function of a linear value, clamped to [0, 1].
 pub fn linear_to_srgb(x: f32) -> f32 {
-    let x = if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 };
+    let x = if x.is_finite() {
+        x.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     if x <= 0.003_130_8 {
         12.92 * x
     } else {
@@ -46,7 +53,12 @@ pub fn srgb_to_linear(v: f32) -> f32 {
     }
 }
 
-fn check_size(path: &Path, width: u32, height: u32, pixels: &[[f32; 4]]) -> Result<(), CaptureError> {
+fn check_size(
+    path: &Path,
+    width: u32,
+    height: u32,
+    pixels: &[[f32; 4]],
+) -> Result<(), CaptureError> {
     let expected = width as usize * height as usize;
     if pixels.len() != expected {
         return Err(CaptureError::Size {
@@ -66,7 +78,10 @@ fn atomically<E>(
     write: impl FnOnce(&Path) -> Result<(), E>,
     wrap: impl FnOnce(E) -> CaptureError,
 ) -> Result<(), CaptureError> {
-    let file_name = path.file_name().map(|n| n.to_string_lossy()).unwrap_or_default();
+    let file_name = path
+        .file_name()
+        .map(|n| n.to_string_lossy())
+        .unwrap_or_default();
     let tmp = path.with_file_name(format!(".{file_name}.tmp"));
     if let Err(e) = write(&tmp) {
         let _ = std::fs::remove_file(&tmp);
@@ -82,7 +97,12 @@ fn atomically<E>(
 }
 
 /// 8-bit sRGB PNG of linear RGBA pixels (alpha dropped).
-pub fn write_png(path: &Path, width: u32, height: u32, pixels: &[[f32; 4]]) -> Result<(), CaptureError> {
+pub fn write_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+    pixels: &[[f32; 4]],
+) -> Result<(), CaptureError> {
     check_size(path, width, height, pixels)?;
     let bytes: Vec<u8> = pixels
         .iter()
@@ -92,13 +112,30 @@ pub fn write_png(path: &Path, width: u32, height: u32, pixels: &[[f32; 4]]) -> R
     let owned = path.to_path_buf();
     atomically(
         path,
-        |tmp| image::save_buffer_with_format(tmp, &bytes, width, height, image::ExtendedColorType::Rgb8, image::ImageFormat::Png),
-        |source| CaptureError::Png { path: owned, source },
+        |tmp| {
+            image::save_buffer_with_format(
+                tmp,
+                &bytes,
+                width,
+                height,
+                image::ExtendedColorType::Rgb8,
+                image::ImageFormat::Png,
+            )
+        },
+        |source| CaptureError::Png {
+            path: owned,
+            source,
+        },
     )
 }
 
 /// Linear float RGBA EXR.
-pub fn write_exr(path: &Path, width: u32, height: u32, pixels: &[[f32; 4]]) -> Result<(), CaptureError> {
+pub fn write_exr(
+    path: &Path,
+    width: u32,
+    height: u32,
+    pixels: &[[f32; 4]],
+) -> Result<(), CaptureError> {
     check_size(path, width, height, pixels)?;
     let owned = path.to_path_buf();
     atomically(
@@ -109,7 +146,10 @@ pub fn write_exr(path: &Path, width: u32, height: u32, pixels: &[[f32; 4]]) -> R
                 (p[0], p[1], p[2], p[3])
             })
         },
-        |source| CaptureError::Exr { path: owned, source },
+        |source| CaptureError::Exr {
+            path: owned,
+            source,
+        },
     )
 }
 

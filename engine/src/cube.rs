@@ -52,7 +52,11 @@ pub fn face_coords(d: Vec3) -> (u32, f32, f32) {
     };
     let [sc, tc, ma] = FACE_AXES[face as usize];
     let m = d.dot(ma);
-    (face, 0.5 * (d.dot(sc) / m + 1.0), 0.5 * (d.dot(tc) / m + 1.0))
+    (
+        face,
+        0.5 * (d.dot(sc) / m + 1.0),
+        0.5 * (d.dot(tc) / m + 1.0),
+    )
 }
 
 #[cfg(test)]
@@ -74,7 +78,8 @@ mod tests {
                 continue;
             }
             let (face, s, t) = face_coords(d);
-            let clip = face_view_proj(face, origin, 0.05, 50.0) * Vec4::from((origin + d * 3.0, 1.0));
+            let clip =
+                face_view_proj(face, origin, 0.05, 50.0) * Vec4::from((origin + d * 3.0, 1.0));
             let ndc = clip.truncate() / clip.w;
             assert!(clip.w > 0.0);
             assert!((ndc.x - (2.0 * s - 1.0)).abs() < 1e-4, "face {face} d {d}");

@@ -91,9 +91,13 @@ impl GpuScene {
 }
 
 fn upload_texture(device: &Device, executor: &mut Executor, texture: &Texture) -> GpuResult<Image> {
-    let desc = ImageDesc::new_2d(vk::Format::R16G16B16A16_SFLOAT, texture.width, texture.height)
-        .all_mip_levels()
-        .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST);
+    let desc = ImageDesc::new_2d(
+        vk::Format::R16G16B16A16_SFLOAT,
+        texture.width,
+        texture.height,
+    )
+    .all_mip_levels()
+    .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST);
     let image = Image::new(device, &texture.name, desc)?;
     let levels = mip_chain(texture.width, texture.height, &texture.texels);
     let bytes: Vec<u8> = levels
@@ -144,7 +148,10 @@ mod tests {
     fn mip_chain_reaches_one_texel_and_preserves_mean() {
         let texels: Vec<[f32; 4]> = (0..64).map(|i| [i as f32, 0.0, 1.0, 1.0]).collect();
         let levels = mip_chain(8, 8, &texels);
-        assert_eq!(levels.iter().map(Vec::len).collect::<Vec<_>>(), [64, 16, 4, 1]);
+        assert_eq!(
+            levels.iter().map(Vec::len).collect::<Vec<_>>(),
+            [64, 16, 4, 1]
+        );
         assert!((levels[3][0][0] - 31.5).abs() < 1e-4);
     }
 

@@ -61,15 +61,22 @@ impl PerfLog {
         self.frame_ms.push(frame_ms);
         self.cpu.push(cpu);
         for timing in passes {
-            match self.passes.iter_mut().find(|(name, _)| *name == timing.name) {
+            match self
+                .passes
+                .iter_mut()
+                .find(|(name, _)| *name == timing.name)
+            {
                 Some((_, samples)) => samples.push(timing.clone()),
-                None => self.passes.push((timing.name.clone(), vec![timing.clone()])),
+                None => self
+                    .passes
+                    .push((timing.name.clone(), vec![timing.clone()])),
             }
         }
     }
 
     pub fn report(&self, device: &str, scene: &str, mode: &str, size: [u32; 2]) -> PerfReport {
-        let cpu_median = |f: fn(&CpuTimes) -> f64| median(&self.cpu.iter().map(f).collect::<Vec<_>>());
+        let cpu_median =
+            |f: fn(&CpuTimes) -> f64| median(&self.cpu.iter().map(f).collect::<Vec<_>>());
         PerfReport {
             device: device.into(),
             scene: scene.into(),
@@ -83,14 +90,19 @@ impl PerfLog {
                 .iter()
                 .map(|(name, samples)| {
                     let ms: Vec<f64> = samples.iter().map(|s| s.sample.gpu_ms).collect();
-                    let mut invocations: Vec<u64> =
-                        samples.iter().map(|s| s.sample.fragment_invocations).collect();
+                    let mut invocations: Vec<u64> = samples
+                        .iter()
+                        .map(|s| s.sample.fragment_invocations)
+                        .collect();
                     invocations.sort_unstable();
                     PassReport {
                         name: name.clone(),
                         gpu_ms_median: median(&ms),
                         gpu_ms_max: ms.iter().copied().fold(0.0, f64::max),
-                        fragment_invocations: invocations.get(invocations.len() / 2).copied().unwrap_or(0),
+                        fragment_invocations: invocations
+                            .get(invocations.len() / 2)
+                            .copied()
+                            .unwrap_or(0),
                     }
                 })
                 .collect(),

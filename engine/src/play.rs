@@ -88,7 +88,11 @@ pub fn play(args: &PlayArgs) -> Result<PerfReport> {
         let eye = scene.orbit.eye(frame_angle(&scene, i, frames), 0.0);
         let start = Instant::now();
         let stats = renderer.frame(mode, eye, scene.orbit.view(eye))?;
-        log.record(start.elapsed().as_secs_f64() * 1e3, &stats.passes, stats.cpu);
+        log.record(
+            start.elapsed().as_secs_f64() * 1e3,
+            &stats.passes,
+            stats.cpu,
+        );
         if !args.no_capture && send.send((i, renderer.pixels()?)).is_err() {
             break; // the writer stopped: its error is reported below
         }
@@ -101,11 +105,17 @@ pub fn play(args: &PlayArgs) -> Result<PerfReport> {
         Err(_) => bail!("the frame writer thread panicked"),
     }
 
-    let report = log.report(&device.name, &scene.name, &format!("{:?}", args.mode), [width, height]);
+    let report = log.report(
+        &device.name,
+        &scene.name,
+        &format!("{:?}", args.mode),
+        [width, height],
+    );
     let json = serde_json::to_string_pretty(&report)?;
     let perf_path = out.join("perf.json");
     let tmp = out.join(".perf.json.tmp");
     std::fs::write(&tmp, json).with_context(|| format!("writing {}", tmp.display()))?;
-    std::fs::rename(&tmp, &perf_path).with_context(|| format!("writing {}", perf_path.display()))?;
+    std::fs::rename(&tmp, &perf_path)
+        .with_context(|| format!("writing {}", perf_path.display()))?;
     Ok(report)
 }

@@ -75,8 +75,22 @@ impl Renderer {
         }
         let mut executor = Executor::new(device)?;
         let gpu = GpuScene::upload(device, &mut executor, scene)?;
-        let room = RoomRenderer::new(device, scene, &gpu, RoomStyle::Lit, COLOR_FORMAT, DEPTH_FORMAT)?;
-        let bare = RoomRenderer::new(device, scene, &gpu, RoomStyle::Bare, COLOR_FORMAT, DEPTH_FORMAT)?;
+        let room = RoomRenderer::new(
+            device,
+            scene,
+            &gpu,
+            RoomStyle::Lit,
+            COLOR_FORMAT,
+            DEPTH_FORMAT,
+        )?;
+        let bare = RoomRenderer::new(
+            device,
+            scene,
+            &gpu,
+            RoomStyle::Bare,
+            COLOR_FORMAT,
+            DEPTH_FORMAT,
+        )?;
         let mirror = MirrorRenderer::new(device, &mut executor, COLOR_FORMAT, DEPTH_FORMAT)?;
         let mut reflectors = Vec::new();
         for (index, object) in scene.objects.iter().enumerate() {
@@ -106,9 +120,8 @@ impl Renderer {
         let color = Image::new(
             device,
             "frame colour",
-            ImageDesc::new_2d(COLOR_FORMAT, width, height).usage(
-                vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
-            ),
+            ImageDesc::new_2d(COLOR_FORMAT, width, height)
+                .usage(vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC),
         )?;
         let depth = Image::new(
             device,
@@ -198,19 +211,26 @@ impl Renderer {
         let mut passes: Vec<Box<dyn Pass + '_>> = Vec::new();
         match mode {
             FrameMode::StaticEm => {
-                passes.push(Box::new(self.room.pass("room", &self.gpu, target, view_proj)));
+                passes.push(Box::new(
+                    self.room.pass("room", &self.gpu, target, view_proj),
+                ));
                 if !self.reflectors.is_empty() {
                     passes.push(Box::new(self.mirror.pass(
                         &self.gpu,
                         self.reflectors.iter().map(|r| &r.draw).collect(),
                         self.reflectors.iter().map(|r| &r.cube.color).collect(),
-                        Target { clear: false, ..target },
+                        Target {
+                            clear: false,
+                            ..target
+                        },
                         view_proj,
                     )));
                 }
             }
             FrameMode::Bare => {
-                passes.push(Box::new(self.bare.pass("bare", &self.gpu, target, view_proj)));
+                passes.push(Box::new(
+                    self.bare.pass("bare", &self.gpu, target, view_proj),
+                ));
             }
         }
         passes.push(Box::new(ReadbackPass {

@@ -22,8 +22,18 @@ impl Vertex {
         input_rate: vk::VertexInputRate::VERTEX,
     };
     pub const ATTRIBUTES: [vk::VertexInputAttributeDescription; 3] = [
-        attribute(0, 0, vk::Format::R32G32B32_SFLOAT, offset_of!(Vertex, position)),
-        attribute(1, 0, vk::Format::R32G32B32_SFLOAT, offset_of!(Vertex, normal)),
+        attribute(
+            0,
+            0,
+            vk::Format::R32G32B32_SFLOAT,
+            offset_of!(Vertex, position),
+        ),
+        attribute(
+            1,
+            0,
+            vk::Format::R32G32B32_SFLOAT,
+            offset_of!(Vertex, normal),
+        ),
         attribute(2, 0, vk::Format::R32G32_SFLOAT, offset_of!(Vertex, uv)),
     ];
 }
@@ -36,7 +46,12 @@ pub const TEXGEN_BINDING: vk::VertexInputBindingDescription = vk::VertexInputBin
     input_rate: vk::VertexInputRate::VERTEX,
 };
 pub const MIRROR_ATTRIBUTES: [vk::VertexInputAttributeDescription; 2] = [
-    attribute(0, 0, vk::Format::R32G32B32_SFLOAT, offset_of!(Vertex, position)),
+    attribute(
+        0,
+        0,
+        vk::Format::R32G32B32_SFLOAT,
+        offset_of!(Vertex, position),
+    ),
     attribute(1, 1, vk::Format::R32G32B32A32_SFLOAT, 0),
 ];
 

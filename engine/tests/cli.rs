@@ -38,12 +38,28 @@ fn validated_run_writes_frames_and_perf_json() {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().to_str().expect("utf-8 temp path");
     let o = engine(
-        &["--scene", "teapot", "--frames", "3", "--size", "96x64", "--warmup", "1", "--out", out, "--validate", "--exr"],
+        &[
+            "--scene",
+            "teapot",
+            "--frames",
+            "3",
+            "--size",
+            "96x64",
+            "--warmup",
+            "1",
+            "--out",
+            out,
+            "--validate",
+            "--exr",
+        ],
         &[],
     );
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "stderr:\n{}", stderr(&o));
-    assert!(stdout.lines().any(|l| l == "validation messages: 0"), "{stdout}");
+    assert!(
+        stdout.lines().any(|l| l == "validation messages: 0"),
+        "{stdout}"
+    );
     for i in 0..3 {
         assert!(dir.path().join(format!("frame_{i:04}.png")).is_file());
         assert!(dir.path().join(format!("frame_{i:04}.exr")).is_file());
@@ -62,7 +78,12 @@ fn validated_run_writes_frames_and_perf_json() {
     assert_eq!(names, ["room", "mirror", "readback"]);
     let room = &passes[0];
     // The room covers the whole frame at least once.
-    assert!(room["fragment_invocations"].as_u64().is_some_and(|n| n >= 96 * 64), "{room}");
+    assert!(
+        room["fragment_invocations"]
+            .as_u64()
+            .is_some_and(|n| n >= 96 * 64),
+        "{room}"
+    );
     assert!(room["gpu_ms_median"].as_f64().is_some_and(|v| v > 0.0));
     assert!(room["gpu_ms_max"].as_f64() >= room["gpu_ms_median"].as_f64());
 }
@@ -72,7 +93,15 @@ fn help_documents_every_flag() {
     let o = engine(&["--help"], &[]);
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success());
-    for flag in ["--scene", "--frames", "--size", "--out", "--validate", "--device", "--mode"] {
+    for flag in [
+        "--scene",
+        "--frames",
+        "--size",
+        "--out",
+        "--validate",
+        "--device",
+        "--mode",
+    ] {
         assert!(text.contains(flag), "--help lacks {flag}");
     }
 }
@@ -108,7 +137,10 @@ fn scene_with_obj(dir: &Path, obj: &str) -> std::path::PathBuf {
             }
         })
         .collect();
-    assert!(patched.contains(&obj_line), "teapot scene uses the generator");
+    assert!(
+        patched.contains(&obj_line),
+        "teapot scene uses the generator"
+    );
     let patched = patched.join("\n");
     let path = dir.join("scene.toml");
     std::fs::write(&path, patched).expect("write scene");
@@ -119,7 +151,10 @@ fn scene_with_obj(dir: &Path, obj: &str) -> std::path::PathBuf {
 fn obj_with_nan_coordinates() {
     let dir = tempfile::tempdir().expect("tempdir");
     let scene = scene_with_obj(dir.path(), "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n");
-    let o = engine(&["--scene", scene.to_str().expect("utf-8"), "--frames", "1"], &[]);
+    let o = engine(
+        &["--scene", scene.to_str().expect("utf-8"), "--frames", "1"],
+        &[],
+    );
     assert_clean_failure(&o, &["mesh.obj", "line 3"]);
 }
 
@@ -127,7 +162,10 @@ fn obj_with_nan_coordinates() {
 fn obj_with_degenerate_triangle() {
     let dir = tempfile::tempdir().expect("tempdir");
     let scene = scene_with_obj(dir.path(), "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
-    let o = engine(&["--scene", scene.to_str().expect("utf-8"), "--frames", "1"], &[]);
+    let o = engine(
+        &["--scene", scene.to_str().expect("utf-8"), "--frames", "1"],
+        &[],
+    );
     assert_clean_failure(&o, &["mesh.obj", "zero-area"]);
 }
 
@@ -138,7 +176,10 @@ fn unwritable_output_folder() {
     std::fs::write(&file, b"").expect("write");
     // A folder cannot be made under a regular file (root ignores modes).
     let out = file.join("frames");
-    let o = engine(&["--out", out.to_str().expect("utf-8"), "--frames", "1"], &[]);
+    let o = engine(
+        &["--out", out.to_str().expect("utf-8"), "--frames", "1"],
+        &[],
+    );
     assert_clean_failure(&o, &["output folder", "a-file"]);
 }
 
@@ -146,14 +187,20 @@ fn unwritable_output_folder() {
 fn no_vulkan_driver() {
     let o = engine(
         &["--frames", "1", "--size", "8x8", "--no-capture"],
-        &[("VK_DRIVER_FILES", "/nonexistent/icd.json"), ("VK_ICD_FILENAMES", "/nonexistent/icd.json")],
+        &[
+            ("VK_DRIVER_FILES", "/nonexistent/icd.json"),
+            ("VK_ICD_FILENAMES", "/nonexistent/icd.json"),
+        ],
     );
     assert_clean_failure(&o, &["Vulkan"]);
 }
 
 #[test]
 fn unknown_device_name_lists_available() {
-    let o = engine(&["--device", "no-such-gpu", "--frames", "1", "--no-capture"], &[]);
+    let o = engine(
+        &["--device", "no-such-gpu", "--frames", "1", "--no-capture"],
+        &[],
+    );
     assert_clean_failure(&o, &["no-such-gpu", "llvmpipe"]);
 }
 

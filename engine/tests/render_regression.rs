@@ -25,7 +25,10 @@ fn render(mode: FrameMode, sample: u32) -> Vec<[f32; 4]> {
         .expect("frame");
     assert!(stats.passes.iter().all(|p| p.sample.gpu_ms.is_finite()));
     let pixels = renderer.pixels().expect("read back");
-    assert!(pixels.iter().flatten().all(|c| c.is_finite()), "non-finite pixel");
+    assert!(
+        pixels.iter().flatten().all(|c| c.is_finite()),
+        "non-finite pixel"
+    );
     pixels
 }
 
@@ -55,9 +58,15 @@ fn bare_frame_matches_golden() {
 fn teapot_reflects_something_and_differs_from_bare() {
     let lit = render(FrameMode::StaticEm, 0);
     let bare = render(FrameMode::Bare, 0);
-    assert!(engine::compare::psnr(&lit, &bare) < 30.0, "modes render the same image");
+    assert!(
+        engine::compare::psnr(&lit, &bare) < 30.0,
+        "modes render the same image"
+    );
     // The centre of the frame is the teapot: it must not be black.
     let centre = lit[(H / 2 * W + W / 2) as usize];
-    assert!(centre[0] + centre[1] + centre[2] > 0.01, "teapot centre is black: {centre:?}");
+    assert!(
+        centre[0] + centre[1] + centre[2] > 0.01,
+        "teapot centre is black: {centre:?}"
+    );
     assert_no_validation_messages();
 }

@@ -35,7 +35,9 @@ pub fn sphere_at_infinity(
 ) {
     let eye = Vec3A::from(eye);
     for ((p, n), o) in positions.iter().zip(normals).zip(out.iter_mut()) {
-        let view = (Vec3A::from(*p) - eye).try_normalize().unwrap_or(Vec3A::NEG_Z);
+        let view = (Vec3A::from(*p) - eye)
+            .try_normalize()
+            .unwrap_or(Vec3A::NEG_Z);
         let (r, cos) = reflect_view(view, Vec3A::from(*n));
         *o = [r.x, r.y, r.z, cos];
     }
@@ -49,7 +51,12 @@ mod tests {
     #[test]
     fn head_on_reflects_back_with_cos_one() {
         let mut out = [[0.0; 4]];
-        sphere_at_infinity(Vec3::new(0.0, 0.0, 5.0), &[Vec3::ZERO], &[Vec3::Z], &mut out);
+        sphere_at_infinity(
+            Vec3::new(0.0, 0.0, 5.0),
+            &[Vec3::ZERO],
+            &[Vec3::Z],
+            &mut out,
+        );
         assert_eq!(out[0], [0.0, 0.0, 1.0, 1.0]);
     }
 
@@ -60,7 +67,11 @@ mod tests {
         let n = Vec3::new(1.0, 1.0, 0.0).normalize();
         sphere_at_infinity(Vec3::new(0.0, 10.0, 0.0), &[Vec3::ZERO], &[n], &mut out);
         let [x, y, z, cos] = out[0];
-        assert!((x - 1.0).abs() < 1e-6 && y.abs() < 1e-6 && z.abs() < 1e-6, "{:?}", out[0]);
+        assert!(
+            (x - 1.0).abs() < 1e-6 && y.abs() < 1e-6 && z.abs() < 1e-6,
+            "{:?}",
+            out[0]
+        );
         assert!((cos - std::f32::consts::FRAC_1_SQRT_2).abs() < 1e-6);
     }
 
@@ -86,6 +97,10 @@ mod tests {
         for v in out {
             assert!(v.iter().all(|c| c.is_finite()), "{v:?}");
         }
-        assert!((out[0][3] - 1.0).abs() < 1e-6, "zero normal faces the eye: {:?}", out[0]);
+        assert!(
+            (out[0][3] - 1.0).abs() < 1e-6,
+            "zero normal faces the eye: {:?}",
+            out[0]
+        );
     }
 }

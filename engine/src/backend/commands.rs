@@ -28,8 +28,12 @@ impl Commands {
         let cmd = unsafe { device.device.allocate_command_buffers(&alloc) }
             .vk("vkAllocateCommandBuffers")?[0];
         // SAFETY: valid device; fence destroyed in Drop.
-        let fence = unsafe { device.device.create_fence(&vk::FenceCreateInfo::default(), None) }
-            .vk("vkCreateFence")?;
+        let fence = unsafe {
+            device
+                .device
+                .create_fence(&vk::FenceCreateInfo::default(), None)
+        }
+        .vk("vkCreateFence")?;
         Ok(Self {
             device: device.clone(),
             pool,

@@ -122,7 +122,9 @@ pub fn create_device(options: &DeviceOptions) -> GpuResult<Device> {
     let instance = match unsafe { entry.create_instance(&instance_info, None) } {
         // The loader's answer when no driver (ICD) is installed at all.
         Err(vk::Result::ERROR_INCOMPATIBLE_DRIVER) => {
-            return Err(GpuError::NoDevice(" (the Vulkan loader found no driver)".into()));
+            return Err(GpuError::NoDevice(
+                " (the Vulkan loader found no driver)".into(),
+            ));
         }
         other => other.vk("vkCreateInstance")?,
     };
@@ -139,7 +141,7 @@ pub fn create_device(options: &DeviceOptions) -> GpuResult<Device> {
         None
     };
 
-    match pick_and_create(&entry, &instance, options, has_debug_utils) {
+    match pick_and_create(&instance, options) {
         Ok((physical, device, queue_family, properties, name)) => {
             let allocator = Allocator::new(&AllocatorCreateDesc {
                 instance: instance.clone(),
@@ -184,14 +186,15 @@ pub fn create_device(options: &DeviceOptions) -> GpuResult<Device> {
     }
 }
 
-type Picked = (vk::PhysicalDevice, ash::Device, u32, vk::PhysicalDeviceProperties, String);
+type Picked = (
+    vk::PhysicalDevice,
+    ash::Device,
+    u32,
+    vk::PhysicalDeviceProperties,
+    String,
+);
 
-fn pick_and_create(
-    _entry: &ash::Entry,
-    instance: &ash::Instance,
-    options: &DeviceOptions,
-    _has_debug_utils: bool,
-) -> GpuResult<Picked> {
+fn pick_and_create(instance: &ash::Instance, options: &DeviceOptions) -> GpuResult<Picked> {
     // SAFETY: enumeration on a valid instance.
     let physicals =
         unsafe { instance.enumerate_physical_devices() }.vk("vkEnumeratePhysicalDevices")?;
@@ -231,7 +234,9 @@ fn pick_and_create(
     let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
     let queue_family = families
         .iter()
-        .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS) && f.timestamp_valid_bits > 0)
+        .position(|f| {
+            f.queue_flags.contains(vk::QueueFlags::GRAPHICS) && f.timestamp_valid_bits > 0
+        })
         .ok_or_else(|| missing("a graphics queue with timestamps"))? as u32;
 
     let mut supported13 = vk::PhysicalDeviceVulkan13Features::default();
@@ -266,7 +271,6 @@ fn pick_and_create(
         .enabled_features(&features)
         .push_next(&mut features13);
     // SAFETY: every feature enabled was checked as supported above.
-    let device =
-        unsafe { instance.create_device(physical, &info, None) }.vk("vkCreateDevice")?;
+    let device = unsafe { instance.create_device(physical, &info, None) }.vk("vkCreateDevice")?;
     Ok((physical, device, queue_family, properties, name))
 }

@@ -8,18 +8,25 @@ pub enum GpuError {
         "no Vulkan loader could be opened ({0}); install the Vulkan loader and a driver (ci/setup.sh installs libvulkan1 and mesa-vulkan-drivers)"
     )]
     Loader(#[from] ash::LoadingError),
-    #[error("no Vulkan 1.3 device found{0}; expected lavapipe (mesa-vulkan-drivers) or a GPU driver")]
+    #[error(
+        "no Vulkan 1.3 device found{0}; expected lavapipe (mesa-vulkan-drivers) or a GPU driver"
+    )]
     NoDevice(String),
     #[error("device {device:?} lacks {what}")]
     MissingFeature { device: String, what: String },
-    #[error("the Khronos validation layer was requested (--validate) but is not installed (Debian: vulkan-validationlayers)")]
+    #[error(
+        "the Khronos validation layer was requested (--validate) but is not installed (Debian: vulkan-validationlayers)"
+    )]
     NoValidationLayer,
     #[error("out of {0} memory")]
     OutOfMemory(&'static str),
     #[error("device lost (last pass started: {last_pass})")]
     DeviceLost { last_pass: String },
     #[error("Vulkan call {call} failed: {result}")]
-    Vk { call: &'static str, result: vk::Result },
+    Vk {
+        call: &'static str,
+        result: vk::Result,
+    },
     #[error("GPU memory allocation for {name} failed: {source}")]
     Allocation {
         name: String,

@@ -95,7 +95,10 @@ impl Image {
         let (image_type, flags) = match desc.kind {
             ImageKind::D1 => (vk::ImageType::TYPE_1D, vk::ImageCreateFlags::empty()),
             ImageKind::D2 => (vk::ImageType::TYPE_2D, vk::ImageCreateFlags::empty()),
-            ImageKind::Cube => (vk::ImageType::TYPE_2D, vk::ImageCreateFlags::CUBE_COMPATIBLE),
+            ImageKind::Cube => (
+                vk::ImageType::TYPE_2D,
+                vk::ImageCreateFlags::CUBE_COMPATIBLE,
+            ),
         };
         let info = vk::ImageCreateInfo::default()
             .flags(flags)

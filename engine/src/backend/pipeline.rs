@@ -104,8 +104,7 @@ impl Pipeline {
                 size: desc.push_constant_size,
             }];
             let set_layouts = [pipeline.set_layout];
-            let mut layout_info =
-                vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+            let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
             if desc.push_constant_size > 0 {
                 layout_info = layout_info.push_constant_ranges(&ranges);
             }

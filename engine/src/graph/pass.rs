@@ -17,7 +17,10 @@ pub enum Usage {
 
 impl Usage {
     pub fn writes(self) -> bool {
-        matches!(self, Usage::ColorTarget | Usage::DepthTarget | Usage::TransferDst)
+        matches!(
+            self,
+            Usage::ColorTarget | Usage::DepthTarget | Usage::TransferDst
+        )
     }
 }
 

@@ -3,7 +3,9 @@
 
 use super::target::{Target, draw_mesh};
 use crate::backend::upload::upload_image;
-use crate::backend::{Binding, Buffer, Device, GpuResult, Image, ImageDesc, Pipeline, PipelineDesc, Sampler};
+use crate::backend::{
+    Binding, Buffer, Device, GpuResult, Image, ImageDesc, Pipeline, PipelineDesc, Sampler,
+};
 use crate::gpu_scene::GpuScene;
 use crate::graph::{Access, Executor, Pass, Usage};
 use crate::shader_interface::{MIRROR_ATTRIBUTES, MirrorPush, TEXGEN_BINDING, Vertex, spirv};

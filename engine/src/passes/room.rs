@@ -46,7 +46,11 @@ impl RoomRenderer {
         let pipeline = Pipeline::new(
             device,
             &PipelineDesc {
-                name: if style == RoomStyle::Lit { "room" } else { "bare" },
+                name: if style == RoomStyle::Lit {
+                    "room"
+                } else {
+                    "bare"
+                },
                 vertex_spirv: spirv::ROOM_VERT,
                 fragment_spirv: if style == RoomStyle::Lit {
                     spirv::ROOM_FRAG

@@ -19,7 +19,11 @@ pub fn validated_device() -> Device {
 
 /// Fails the test if any validation message was printed so far.
 pub fn assert_no_validation_messages() {
-    assert_eq!(validation::message_count(), 0, "validation messages (see stderr)");
+    assert_eq!(
+        validation::message_count(),
+        0,
+        "validation messages (see stderr)"
+    );
 }
 
 pub fn golden_dir() -> PathBuf {
@@ -35,7 +39,13 @@ pub fn failure_dir() -> PathBuf {
 /// Compares `pixels` with the committed golden PNG `name` at `min_psnr_db`.
 /// `UPDATE_GOLDEN=1` rewrites the golden instead. On failure writes the
 /// frame and a ×8 diff image into target/golden-failures/.
-pub fn assert_matches_golden(name: &str, width: u32, height: u32, pixels: &[[f32; 4]], min_psnr_db: f64) {
+pub fn assert_matches_golden(
+    name: &str,
+    width: u32,
+    height: u32,
+    pixels: &[[f32; 4]],
+    min_psnr_db: f64,
+) {
     let golden = golden_dir().join(format!("{name}.png"));
     if std::env::var_os("UPDATE_GOLDEN").is_some() {
         capture::write_png(&golden, width, height, pixels).expect("write golden");
@@ -48,14 +58,21 @@ pub fn assert_matches_golden(name: &str, width: u32, height: u32, pixels: &[[f32
     let quantised: Vec<[f32; 4]> = pixels
         .iter()
         .map(|p| {
-            let q = |c: f32| capture::srgb_to_linear((capture::linear_to_srgb(c) * 255.0 + 0.5).floor() / 255.0);
+            let q = |c: f32| {
+                capture::srgb_to_linear((capture::linear_to_srgb(c) * 255.0 + 0.5).floor() / 255.0)
+            };
             [q(p[0]), q(p[1]), q(p[2]), 1.0]
         })
         .collect();
     let psnr = compare::psnr(&reference, &quantised);
     if psnr < min_psnr_db {
         let dir = failure_dir();
-        let _ = capture::write_png(&dir.join(format!("{name}.actual.png")), width, height, pixels);
+        let _ = capture::write_png(
+            &dir.join(format!("{name}.actual.png")),
+            width,
+            height,
+            pixels,
+        );
         let diff = compare::diff_image(&reference, &quantised, 8.0);
         let _ = capture::write_png(&dir.join(format!("{name}.diff.png")), width, height, &diff);
         panic!(
