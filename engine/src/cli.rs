@@ -1,6 +1,6 @@
 //! Command-line interface of the `engine` binary.
 
-use clap::{Args, Parser, ValueEnum};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
 
 #[derive(Parser, Debug)]
@@ -9,9 +9,20 @@ use std::path::PathBuf;
     version,
     about = "Replays ray-traced imagery as parameterized environment maps, headless on Vulkan (lavapipe by default)."
 )]
+#[command(args_conflicts_with_subcommands = true)]
 pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+    /// Without a subcommand: play the scene (the main job).
     #[command(flatten)]
     pub play: PlayArgs,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Measure the static-EM frame against the bare one-texture pass,
+    /// interleaved in one run, and write bench.json.
+    Bench(PlayArgs),
 }
 
 #[derive(Args, Debug, Clone)]

@@ -2,6 +2,7 @@
 //! executor, one module per pass, headless capture and per-pass counters.
 
 pub mod backend;
+pub mod bench;
 pub mod capture;
 pub mod cli;
 pub mod compare;

@@ -1,20 +1,37 @@
 use clap::Parser;
 use engine::backend::validation;
-use engine::cli::Cli;
+use engine::cli::{Cli, Command};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result = engine::play::play(&cli.play);
+    let (result, validate) = match &cli.command {
+        None => (
+            engine::play::play(&cli.play).map(|r| r.table()),
+            cli.play.validate,
+        ),
+        Some(Command::Bench(args)) => (
+            engine::bench::bench(args).map(|r| {
+                format!(
+                    "{}{}static-EM / bare frame: {:.2}x (GPU passes: {:.2}x)\n",
+                    r.static_em.table(),
+                    r.bare.table(),
+                    r.frame_ratio,
+                    r.gpu_ratio
+                )
+            }),
+            args.validate,
+        ),
+    };
     let mut code = ExitCode::SUCCESS;
     match result {
-        Ok(report) => print!("{}", report.table()),
+        Ok(text) => print!("{text}"),
         Err(e) => {
             eprintln!("error: {e:#}");
             code = ExitCode::FAILURE;
         }
     }
-    if cli.play.validate {
+    if validate {
         let n = validation::message_count();
         println!("validation messages: {n}");
         if n > 0 {
