@@ -70,9 +70,12 @@ impl PassQueries {
         // pass list) and the queries were reset this frame.
         unsafe {
             let d = &self.device.device;
+            // ALL_COMMANDS, not TOP_OF_PIPE: lavapipe flushes queued work
+            // only before a timestamp of a later stage, so this keeps the
+            // previous pass's rasterisation out of this pass's scope.
             d.cmd_write_timestamp2(
                 cmd,
-                vk::PipelineStageFlags2::TOP_OF_PIPE,
+                vk::PipelineStageFlags2::ALL_COMMANDS,
                 self.timestamps,
                 2 * pass,
             );
