@@ -58,8 +58,14 @@ pub fn bench(args: &PlayArgs) -> Result<BenchReport> {
     progress.finish_and_clear();
     let size = [width, height];
     let [static_log, bare_log] = logs;
-    let static_em = static_log.report(&device.name, &scene.name, "StaticEm", size);
-    let bare = bare_log.report(&device.name, &scene.name, "Bare", size);
+    let static_em = static_log.report(
+        &device.name,
+        &scene.name,
+        "StaticEm",
+        size,
+        &renderer.setup_timings,
+    );
+    let bare = bare_log.report(&device.name, &scene.name, "Bare", size, &[]);
     let gpu = |r: &PerfReport| r.passes.iter().map(|p| p.gpu_ms_median).sum::<f64>();
     let report = BenchReport {
         frame_ratio: static_em.frame_ms_median / bare.frame_ms_median,

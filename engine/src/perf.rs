@@ -40,6 +40,8 @@ pub struct PerfReport {
     pub frame_ms_max: f64,
     pub passes: Vec<PassReport>,
     pub cpu: CpuReport,
+    /// Passes run once before the first frame (static EM capture, MIPs).
+    pub setup_passes: Vec<PassReport>,
 }
 
 pub fn median(values: &[f64]) -> f64 {
@@ -74,7 +76,14 @@ impl PerfLog {
         }
     }
 
-    pub fn report(&self, device: &str, scene: &str, mode: &str, size: [u32; 2]) -> PerfReport {
+    pub fn report(
+        &self,
+        device: &str,
+        scene: &str,
+        mode: &str,
+        size: [u32; 2],
+        setup: &[PassTiming],
+    ) -> PerfReport {
         let cpu_median =
             |f: fn(&CpuTimes) -> f64| median(&self.cpu.iter().map(f).collect::<Vec<_>>());
         PerfReport {
@@ -104,6 +113,15 @@ impl PerfLog {
                             .copied()
                             .unwrap_or(0),
                     }
+                })
+                .collect(),
+            setup_passes: setup
+                .iter()
+                .map(|t| PassReport {
+                    name: t.name.clone(),
+                    gpu_ms_median: t.sample.gpu_ms,
+                    gpu_ms_max: t.sample.gpu_ms,
+                    fragment_invocations: t.sample.fragment_invocations,
                 })
                 .collect(),
             cpu: CpuReport {
@@ -137,6 +155,15 @@ impl PerfReport {
             out += &format!(
                 "{:<16} {:>12.3} {:>12.3} {:>14}\n",
                 p.name, p.gpu_ms_median, p.gpu_ms_max, p.fragment_invocations
+            );
+        }
+        let setup_ms: f64 = self.setup_passes.iter().map(|p| p.gpu_ms_median).sum();
+        if !self.setup_passes.is_empty() {
+            out += &format!(
+                "{:<16} {:>12.3}   ({} passes, once)\n",
+                "setup",
+                setup_ms,
+                self.setup_passes.len()
             );
         }
         out += &format!(

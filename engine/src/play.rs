@@ -110,6 +110,7 @@ pub fn play(args: &PlayArgs) -> Result<PerfReport> {
         &scene.name,
         &format!("{:?}", args.mode),
         [width, height],
+        &renderer.setup_timings,
     );
     let json = serde_json::to_string_pretty(&report)?;
     let perf_path = out.join("perf.json");

@@ -66,6 +66,8 @@ pub struct Renderer {
     height: u32,
     projection: Mat4,
     texgen_scratch: Vec<inference::texgen::TexgenVertex>,
+    /// What set-up cost on the GPU (static EM capture, MIP chain).
+    pub setup_timings: Vec<PassTiming>,
 }
 
 impl Renderer {
@@ -159,8 +161,9 @@ impl Renderer {
             height,
             projection,
             texgen_scratch: Vec::new(),
+            setup_timings: Vec::new(),
         };
-        renderer.capture_static_ems(scene.camera.near, far)?;
+        renderer.setup_timings = renderer.capture_static_ems(scene.camera.near, far)?;
         Ok(renderer)
     }
 
