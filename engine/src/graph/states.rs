@@ -64,6 +64,12 @@ impl ImageStates {
             .insert(image.raw, vec![state; image.desc.mip_levels as usize]);
     }
 
+    /// Drops what is known of an image about to be destroyed, so a new
+    /// image that reuses its handle starts from UNDEFINED.
+    pub fn forget(&mut self, image: &crate::backend::Image) {
+        self.levels.remove(&image.raw);
+    }
+
     /// The barriers that make `accesses` safe after everything recorded so
     /// far, updating the tracked states.
     pub fn barriers(&mut self, accesses: &[Access]) -> Vec<vk::ImageMemoryBarrier2<'static>> {

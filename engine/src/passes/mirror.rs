@@ -23,6 +23,47 @@ pub fn fresnel_lut() -> Vec<f32> {
         .collect()
 }
 
+/// The mirror pipeline; probe renders build it with this same function.
+pub fn mirror_pipeline(
+    device: &Device,
+    color_format: vk::Format,
+    depth_format: vk::Format,
+) -> GpuResult<Pipeline> {
+    Pipeline::new(
+        device,
+        &PipelineDesc {
+            name: "mirror",
+            vertex_spirv: spirv::MIRROR_VERT,
+            fragment_spirv: spirv::MIRROR_FRAG,
+            vertex_bindings: &[Vertex::BINDING, TEXGEN_BINDING],
+            vertex_attributes: &MIRROR_ATTRIBUTES,
+            color_format,
+            depth_format,
+            cull_mode: vk::CullModeFlags::BACK,
+            push_constant_size: size_of::<MirrorPush>() as u32,
+            bindings: &[vk::DescriptorType::COMBINED_IMAGE_SAMPLER; 2],
+        },
+    )
+}
+
+/// The Fresnel LUT as a 1D R32F image, uploaded and ready to sample.
+pub fn fresnel_lut_image(device: &Device, executor: &mut Executor) -> GpuResult<Image> {
+    let lut = Image::new(
+        device,
+        "fresnel lut",
+        ImageDesc::new_1d(vk::Format::R32_SFLOAT, FRESNEL_LUT_SIZE)
+            .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
+    )?;
+    upload_image(
+        device,
+        executor.commands(),
+        &lut,
+        bytemuck::cast_slice(&fresnel_lut()),
+    )?;
+    executor.states.assume(&lut, Usage::Sampled);
+    Ok(lut)
+}
+
 /// One reflective object: its mesh, F0, its per-frame texgen buffer and
 /// the environment map it samples.
 pub struct MirrorDraw {
@@ -47,34 +88,8 @@ impl MirrorRenderer {
         color_format: vk::Format,
         depth_format: vk::Format,
     ) -> GpuResult<Self> {
-        let pipeline = Pipeline::new(
-            device,
-            &PipelineDesc {
-                name: "mirror",
-                vertex_spirv: spirv::MIRROR_VERT,
-                fragment_spirv: spirv::MIRROR_FRAG,
-                vertex_bindings: &[Vertex::BINDING, TEXGEN_BINDING],
-                vertex_attributes: &MIRROR_ATTRIBUTES,
-                color_format,
-                depth_format,
-                cull_mode: vk::CullModeFlags::BACK,
-                push_constant_size: size_of::<MirrorPush>() as u32,
-                bindings: &[vk::DescriptorType::COMBINED_IMAGE_SAMPLER; 2],
-            },
-        )?;
-        let lut = Image::new(
-            device,
-            "fresnel lut",
-            ImageDesc::new_1d(vk::Format::R32_SFLOAT, FRESNEL_LUT_SIZE)
-                .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
-        )?;
-        upload_image(
-            device,
-            executor.commands(),
-            &lut,
-            bytemuck::cast_slice(&fresnel_lut()),
-        )?;
-        executor.states.assume(&lut, Usage::Sampled);
+        let pipeline = mirror_pipeline(device, color_format, depth_format)?;
+        let lut = fresnel_lut_image(device, executor)?;
         Ok(Self {
             device: device.clone(),
             pipeline,

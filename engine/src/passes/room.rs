@@ -43,32 +43,7 @@ impl RoomRenderer {
         color_format: vk::Format,
         depth_format: vk::Format,
     ) -> GpuResult<Self> {
-        let pipeline = Pipeline::new(
-            device,
-            &PipelineDesc {
-                name: if style == RoomStyle::Lit {
-                    "room"
-                } else {
-                    "bare"
-                },
-                vertex_spirv: spirv::ROOM_VERT,
-                fragment_spirv: if style == RoomStyle::Lit {
-                    spirv::ROOM_FRAG
-                } else {
-                    spirv::BARE_FRAG
-                },
-                vertex_bindings: &[Vertex::BINDING],
-                vertex_attributes: &Vertex::ATTRIBUTES,
-                color_format,
-                depth_format,
-                cull_mode: vk::CullModeFlags::BACK,
-                push_constant_size: size_of::<RoomPush>() as u32,
-                bindings: &[
-                    vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-                    vk::DescriptorType::UNIFORM_BUFFER,
-                ],
-            },
-        )?;
+        let pipeline = room_pipeline(device, style, color_format, depth_format)?;
         let light = Buffer::with_data(
             device,
             "room light",
@@ -147,6 +122,38 @@ impl RoomRenderer {
             view_proj,
         }
     }
+}
+
+/// The room (lit) or bare pipeline. Probe renders build the bare one with
+/// this same function, so they sample exactly as playback does.
+pub fn room_pipeline(
+    device: &Device,
+    style: RoomStyle,
+    color_format: vk::Format,
+    depth_format: vk::Format,
+) -> GpuResult<Pipeline> {
+    let (name, fragment_spirv) = match style {
+        RoomStyle::Lit => ("room", spirv::ROOM_FRAG),
+        RoomStyle::Bare => ("bare", spirv::BARE_FRAG),
+    };
+    Pipeline::new(
+        device,
+        &PipelineDesc {
+            name,
+            vertex_spirv: spirv::ROOM_VERT,
+            fragment_spirv,
+            vertex_bindings: &[Vertex::BINDING],
+            vertex_attributes: &Vertex::ATTRIBUTES,
+            color_format,
+            depth_format,
+            cull_mode: vk::CullModeFlags::BACK,
+            push_constant_size: size_of::<RoomPush>() as u32,
+            bindings: &[
+                vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                vk::DescriptorType::UNIFORM_BUFFER,
+            ],
+        },
+    )
 }
 
 /// The light shared by every room draw: the first area light as a point
