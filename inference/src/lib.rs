@@ -2,6 +2,7 @@
 //! Fresnel, CPU texgen (gold-standard tracer and inference come next).
 //! Pure CPU, no Vulkan.
 
+pub mod em_geometry;
 pub mod fresnel;
 pub mod scene;
 pub mod teapot;
