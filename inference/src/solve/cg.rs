@@ -39,7 +39,7 @@ pub(crate) fn pcg(
             }
         })
         .collect();
-    let mut scratch = vec![0.0; op.rows_scratch()];
+    let mut scratch = op.scratch();
     let (mut r, mut z, mut p, mut q) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let mut iterations = 0u32;
     let target = tolerance * rhs_norm;

@@ -262,51 +262,6 @@ impl CsrMatrix {
         out
     }
 
-    /// `self + s · other` for matrices of equal shape whose rows have
-    /// ascending columns (as everything this module produces does).
-    pub(crate) fn add_scaled(&self, other: &CsrMatrix, s: f32) -> CsrMatrix {
-        debug_assert_eq!((self.rows, self.cols), (other.rows, other.cols));
-        let mut out = CsrMatrix::zeros(0, self.cols);
-        out.rows = self.rows;
-        for r in 0..self.rows {
-            let (mut i, ie) = (self.row_ptr[r], self.row_ptr[r + 1]);
-            let (mut j, je) = (other.row_ptr[r], other.row_ptr[r + 1]);
-            while i < ie || j < je {
-                let ci = if i < ie { self.col_idx[i] } else { u32::MAX };
-                let cj = if j < je { other.col_idx[j] } else { u32::MAX };
-                if i < ie && (j >= je || ci < cj) {
-                    out.col_idx.push(ci);
-                    out.values.push(self.values[i]);
-                    i += 1;
-                } else if j < je && (i >= ie || cj < ci) {
-                    out.col_idx.push(cj);
-                    out.values.push(s * other.values[j]);
-                    j += 1;
-                } else {
-                    out.col_idx.push(ci);
-                    out.values.push(self.values[i] + s * other.values[j]);
-                    i += 1;
-                    j += 1;
-                }
-            }
-            out.row_ptr.push(out.values.len());
-        }
-        out
-    }
-
-    /// Main diagonal (zeros where absent); f64 for the preconditioner.
-    pub(crate) fn diagonal(&self) -> Vec<f64> {
-        let mut d = vec![0.0f64; self.rows.min(self.cols)];
-        for (r, dr) in d.iter_mut().enumerate() {
-            for k in self.row_ptr[r]..self.row_ptr[r + 1] {
-                if self.col_idx[k] as usize == r {
-                    *dr += self.values[k] as f64;
-                }
-            }
-        }
-        d
-    }
-
     /// Squared column norms, i.e. the diagonal of `AᵀA` without forming it.
     pub(crate) fn column_sq_norms(&self) -> Vec<f64> {
         let mut d = vec![0.0f64; self.cols];

@@ -17,24 +17,38 @@ fn barrier(x: &[f64], s: f64) -> f64 {
     x.iter().map(|&v| g(v / s)).sum()
 }
 
+/// Weights and budget of the range-term refinement.
+#[derive(Clone, Copy)]
+pub(crate) struct RangeTerm {
+    /// ε_b (n_s/n_t) / (g(0) − g(½)).
+    pub lambda_b: f64,
+    /// Texel range [0, s].
+    pub s: f64,
+    pub tolerance: f64,
+    pub max_iterations: u32,
+}
+
 /// Continues from `x` (clamped into [0, s]); `iterations_used` CG
 /// iterations were spent before and count against `max_iterations`.
 pub(crate) fn refine(
     op: &Operator,
     rhs: &[f64],
     x: &mut [f64],
-    lambda_b: f64,
-    s: f64,
-    tolerance: f64,
-    max_iterations: u32,
+    term: &RangeTerm,
     iterations_used: u32,
 ) -> CgOutcome {
+    let RangeTerm {
+        lambda_b,
+        s,
+        tolerance,
+        max_iterations,
+    } = *term;
     let n = x.len();
     let rhs_norm = norm(rhs);
     let w = 0.5 * lambda_b;
     for_each_mut(x, |_, v| *v = v.clamp(0.0, s));
     let mut iterations = iterations_used;
-    let mut scratch = vec![0.0; op.rows_scratch()];
+    let mut scratch = op.scratch();
     let (mut mx, mut grad, mut d) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let (mut step, mut mstep, mut trial) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let mut rel = f64::INFINITY;
@@ -82,7 +96,7 @@ pub(crate) fn refine(
         );
         iterations += inner.iterations;
         let slope = dot(&grad, &step);
-        if !(slope < 0.0) {
+        if slope.is_nan() || slope >= 0.0 {
             return out(
                 iterations,
                 false,

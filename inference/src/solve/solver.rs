@@ -8,7 +8,7 @@ use super::cg::pcg;
 use super::csr::CsrMatrix;
 use super::layout::TextureLayout;
 use super::newton;
-use super::operator::{Form, Operator};
+use super::operator::{Form, Operator, Pyramid};
 use super::options::{Solution, SolveOptions};
 use super::pyramid::pyramid_matrix;
 use super::range::calibration;
@@ -64,9 +64,12 @@ impl<'a> Solver<'a> {
                 Form::A
             });
         let reg = (lambda_f > 0.0).then(|| {
-            let mut r = pyramid_matrix(layout).normal_matrix();
-            r.values.iter_mut().for_each(|v| *v *= lambda_f as f32);
-            r
+            let p = pyramid_matrix(layout);
+            Pyramid {
+                lambda: lambda_f,
+                pt: p.transpose(),
+                p,
+            }
         });
         Ok(Self {
             op: Operator::new(a, reg, form),
@@ -133,10 +136,12 @@ impl<'a> Solver<'a> {
                 &self.op,
                 &rhs,
                 &mut x,
-                self.lambda_b,
-                s,
-                tol,
-                max_it,
+                &newton::RangeTerm {
+                    lambda_b: self.lambda_b,
+                    s,
+                    tolerance: tol,
+                    max_iterations: max_it,
+                },
                 out.iterations,
             );
             if out.diagnostic.is_none() && !out.converged {
