@@ -11,8 +11,25 @@ use std::error::Error;
 use std::time::Instant;
 
 use inference::solve::{
-    CsrBuilder, CsrMatrix, Form, SolveOptions, Solver, TextureLayout, TextureShape,
+    CsrBuilder, CsrMatrix, Form, SolveError, SolveOptions, Solver, TextureLayout, TextureShape,
 };
+
+/// User + system CPU seconds of the whole process (all threads), from
+/// /proc/self/stat; the machine is shared, so this is steadier than wall time.
+fn cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    // Fields after the parenthesised command name; utime and stime are 14, 15.
+    let rest = stat.rsplit_once(')').map_or("", |(_, r)| r);
+    let f: Vec<f64> = rest
+        .split_whitespace()
+        .filter_map(|t| t.parse().ok())
+        .collect();
+    // rest starts at field 3 (state, not numeric, is skipped by the parse).
+    match (f.get(10), f.get(11)) {
+        (Some(u), Some(s)) => (u + s) / 100.0,
+        _ => f64::NAN,
+    }
+}
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -119,6 +136,39 @@ fn build_problem(
     Ok((a, b))
 }
 
+struct Run {
+    setup: f64,
+    wall: f64,
+    cpu: f64,
+    iterations: f64,
+    residual: f64,
+}
+
+fn run_once(
+    a: &CsrMatrix,
+    layout: &TextureLayout,
+    options: &SolveOptions,
+    b: &[f32],
+    x0: Option<&[f32]>,
+) -> Result<(Run, Vec<f32>), SolveError> {
+    let t0 = Instant::now();
+    let solver = Solver::new(a, layout, options)?;
+    let (t1, c1) = (Instant::now(), cpu_seconds());
+    let s = solver.solve(b, x0)?;
+    let (t2, c2) = (Instant::now(), cpu_seconds());
+    if !s.converged {
+        println!("  not converged: {:?}", s.diagnostic);
+    }
+    let run = Run {
+        setup: (t1 - t0).as_secs_f64(),
+        wall: (t2 - t1).as_secs_f64(),
+        cpu: c2 - c1,
+        iterations: s.iterations as f64,
+        residual: s.relative_residual as f64,
+    };
+    Ok((run, s.x))
+}
+
 fn main() -> Result<(), Box<dyn Error>> {
     let mut args = std::env::args().skip(1);
     let runs: usize = args
@@ -139,44 +189,53 @@ fn main() -> Result<(), Box<dyn Error>> {
         a.nnz() as f64 / a.rows as f64,
         t.elapsed().as_secs_f64()
     );
-    println!("runs = {runs}; medians; tolerance 1e-4, eps_f = 0.1, cold start");
-    println!("threads form          setup_s  solve_s  iterations  rel_residual");
+    // The neighbouring parameter sample: the same A, b off by ~1%.
+    let b_next: Vec<f32> = b
+        .iter()
+        .enumerate()
+        .map(|(i, v)| v * (1.0 + 0.01 * ((i as f32) * 0.01).sin()))
+        .collect();
+    println!("runs = {runs}; medians; tolerance 1e-4, eps_f = 0.1");
+    println!("threads case               setup_s  solve_s  solve_cpu_s  iterations  rel_residual");
+    let cases: [(&str, Form, f32, bool); 5] = [
+        ("A", Form::A, 0.0, false),
+        ("NormalMatrix", Form::NormalMatrix, 0.0, false),
+        ("A warm", Form::A, 0.0, true),
+        ("NormalMatrix warm", Form::NormalMatrix, 0.0, true),
+        ("A eps_b=1/32", Form::A, 1.0 / 32.0, false),
+    ];
     for threads in [1, 2] {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()?;
-        for form in [Form::A, Form::NormalMatrix] {
+        for (name, form, eps_b, warm) in cases {
             let options = SolveOptions {
                 force_form: Some(form),
+                eps_b,
                 tolerance: 1e-4,
                 max_iterations: 5000,
                 ..SolveOptions::default()
             };
-            let (mut setup, mut solve, mut iters, mut res) = (vec![], vec![], vec![], vec![]);
+            let mut rs = Vec::new();
             for _ in 0..runs {
-                pool.install(|| -> Result<(), inference::solve::SolveError> {
-                    let t0 = Instant::now();
-                    let solver = Solver::new(&a, &layout, &options)?;
-                    let t1 = Instant::now();
-                    let s = solver.solve(&b, None)?;
-                    let t2 = Instant::now();
-                    if !s.converged {
-                        println!("  not converged: {:?}", s.diagnostic);
+                let r = pool.install(|| -> Result<Run, SolveError> {
+                    if warm {
+                        let (_, x_prev) = run_once(&a, &layout, &options, &b, None)?;
+                        Ok(run_once(&a, &layout, &options, &b_next, Some(&x_prev))?.0)
+                    } else {
+                        Ok(run_once(&a, &layout, &options, &b, None)?.0)
                     }
-                    setup.push((t1 - t0).as_secs_f64());
-                    solve.push((t2 - t1).as_secs_f64());
-                    iters.push(s.iterations as f64);
-                    res.push(s.relative_residual as f64);
-                    Ok(())
                 })?;
+                rs.push(r);
             }
+            let m = |f: fn(&Run) -> f64| median(rs.iter().map(f).collect());
             println!(
-                "{threads:>7} {:<13} {:>8.3} {:>8.3} {:>11} {:>13.2e}",
-                format!("{form:?}"),
-                median(setup),
-                median(solve),
-                median(iters),
-                median(res)
+                "{threads:>7} {name:<18} {:>8.3} {:>8.3} {:>12.2} {:>11} {:>13.2e}",
+                m(|r| r.setup),
+                m(|r| r.wall),
+                m(|r| r.cpu),
+                m(|r| r.iterations),
+                m(|r| r.residual)
             );
         }
     }
