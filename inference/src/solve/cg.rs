@@ -6,7 +6,7 @@
 //! drift fooled it. Every loop is bounded by `max_iterations`.
 
 use super::operator::Operator;
-use super::vecops::{axpy, dot, for_each_mut, norm};
+use super::vecops::{cg_update, dot, for_each_mut, norm};
 
 pub(crate) struct CgOutcome {
     pub iterations: u32,
@@ -89,14 +89,11 @@ pub(crate) fn pcg(
                 break;
             }
             let alpha = rz / pq;
-            axpy(alpha, &p, x);
-            axpy(-alpha, &q, &mut r);
+            let (rr, rz_new) = cg_update(alpha, &p, &q, &inv_diag, x, &mut r, &mut z);
             iterations += 1;
-            if norm(&r) <= target {
+            if rr.sqrt() <= target {
                 break;
             }
-            for_each_mut(&mut z, |i, v| *v = r[i] * inv_diag[i]);
-            let rz_new = dot(&r, &z);
             let beta = rz_new / rz;
             rz = rz_new;
             for_each_mut(&mut p, |i, v| *v = z[i] + beta * *v);

@@ -139,25 +139,6 @@ impl CsrMatrix {
         }
     }
 
-    /// `y += A x` (same kernel as [`mul`](Self::mul)).
-    pub(crate) fn mul_acc(&self, x: &[f64], y: &mut [f64]) {
-        assert_eq!((x.len(), y.len()), (self.cols, self.rows), "mul_acc shape");
-        let kernel = |c: usize, ys: &mut [f64]| {
-            for (o, yi) in ys.iter_mut().enumerate() {
-                *yi += self.row_dot(c * ROW_CHUNK + o, x);
-            }
-        };
-        if self.nnz() >= PAR_MIN_NNZ {
-            y.par_chunks_mut(ROW_CHUNK)
-                .enumerate()
-                .for_each(|(c, ys)| kernel(c, ys));
-        } else {
-            y.chunks_mut(ROW_CHUNK)
-                .enumerate()
-                .for_each(|(c, ys)| kernel(c, ys));
-        }
-    }
-
     /// `x = Aᵀ y`, serial scatter (deterministic). For repeated products,
     /// [`transpose`](Self::transpose) once and `mul` in parallel: same bits.
     pub fn mul_transpose<T: Scalar>(&self, y: &[T], x: &mut [T]) {

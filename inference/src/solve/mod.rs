@@ -10,6 +10,7 @@ mod newton;
 mod operator;
 mod options;
 pub mod pyramid;
+mod pyramid_op;
 pub mod range;
 mod row_sums;
 mod solver;

@@ -3,11 +3,12 @@
 //! in either form of thesis §3.5: products with A and Aᵀ (cost ∝ n_s) or
 //! with the precomputed sparse AᵀA (cost ∝ n_t).
 //!
-//! The pyramid term is applied as Pᵀ(P v) in both forms: P has ≤ 5 entries
-//! per row, while PᵀP couples each texel with ~25–50 others (every finer
-//! texel that upsamples from it), so the two thin products are ~3× cheaper.
+//! The pyramid term is applied as Pᵀ(P v) in both forms with matrix-free
+//! stencils: P has ≤ 5 entries per row, while PᵀP couples each texel with
+//! ~25–50 others (every finer texel that upsamples from it).
 
 use super::csr::CsrMatrix;
+use super::pyramid_op::PyramidOperator;
 use super::vecops::for_each_mut;
 
 /// Which products the CG inner loop performs.
@@ -24,11 +25,10 @@ pub(crate) enum Data<'a> {
     Normal { n: CsrMatrix },
 }
 
-/// λ_f, P and Pᵀ of the pyramid term.
+/// λ_f and the (matrix-free) P of the pyramid term.
 pub(crate) struct Pyramid {
     pub lambda: f64,
-    pub p: CsrMatrix,
-    pub pt: CsrMatrix,
+    pub p: PyramidOperator,
 }
 
 pub(crate) struct Operator<'a> {
@@ -92,7 +92,7 @@ impl<'a> Operator<'a> {
             r.p.mul(v, &mut s.pyramid);
             let l = r.lambda;
             for_each_mut(&mut s.pyramid, |_, x| *x *= l);
-            r.pt.mul_acc(&s.pyramid, out);
+            r.p.mul_transpose_acc(&s.pyramid, out);
         }
         if let Some(e) = extra {
             for_each_mut(out, |i, o| *o += e[i] * v[i]);

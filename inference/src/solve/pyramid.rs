@@ -43,7 +43,7 @@ pub fn pyramid_matrix(layout: &TextureLayout) -> CsrMatrix {
 }
 
 /// Bilinear taps on the coarse axis for fine texel `i`: (lo, hi, weight of hi).
-fn taps(i: u32, n: u32, cn: u32) -> (u32, u32, f32) {
+pub(crate) fn taps(i: u32, n: u32, cn: u32) -> (u32, u32, f32) {
     let u = (i as f32 + 0.5) * cn as f32 / n as f32 - 0.5;
     let lo = u.floor();
     let f = u - lo;

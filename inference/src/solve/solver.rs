@@ -10,7 +10,7 @@ use super::layout::TextureLayout;
 use super::newton;
 use super::operator::{Form, Operator, Pyramid};
 use super::options::{Solution, SolveOptions};
-use super::pyramid::pyramid_matrix;
+use super::pyramid_op::PyramidOperator;
 use super::range::calibration;
 
 /// A prepared system for one A: reuse it for every channel (and for any
@@ -63,13 +63,9 @@ impl<'a> Solver<'a> {
             } else {
                 Form::A
             });
-        let reg = (lambda_f > 0.0).then(|| {
-            let p = pyramid_matrix(layout);
-            Pyramid {
-                lambda: lambda_f,
-                pt: p.transpose(),
-                p,
-            }
+        let reg = (lambda_f > 0.0).then(|| Pyramid {
+            lambda: lambda_f,
+            p: PyramidOperator::new(layout),
         });
         Ok(Self {
             op: Operator::new(a, reg, form),

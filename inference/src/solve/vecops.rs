@@ -38,7 +38,48 @@ pub fn for_each_mut(y: &mut [f64], f: impl Fn(usize, &mut f64) + Sync) {
     }
 }
 
-/// y += a x
-pub fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
-    for_each_mut(y, |i, v| *v += a * x[i]);
+/// One fused CG pass: x += αp, r −= αq, z = r ⊙ inv_diag; returns (r·r, r·z).
+/// Chunk partials are summed in order, so the result is thread-count free.
+pub fn cg_update(
+    alpha: f64,
+    p: &[f64],
+    q: &[f64],
+    inv_diag: &[f64],
+    x: &mut [f64],
+    r: &mut [f64],
+    z: &mut [f64],
+) -> (f64, f64) {
+    let chunk = |c: usize, (xs, (rs, zs)): (&mut [f64], (&mut [f64], &mut [f64]))| {
+        let base = c * CHUNK;
+        let (mut rr, mut rz) = (0.0, 0.0);
+        for (o, (xi, (ri, zi))) in xs
+            .iter_mut()
+            .zip(rs.iter_mut().zip(zs.iter_mut()))
+            .enumerate()
+        {
+            let i = base + o;
+            *xi += alpha * p[i];
+            *ri -= alpha * q[i];
+            *zi = *ri * inv_diag[i];
+            rr += *ri * *ri;
+            rz += *ri * *zi;
+        }
+        (rr, rz)
+    };
+    let parts: Vec<(f64, f64)> = if x.len() >= PAR_MIN {
+        x.par_chunks_mut(CHUNK)
+            .zip(r.par_chunks_mut(CHUNK).zip(z.par_chunks_mut(CHUNK)))
+            .enumerate()
+            .map(|(c, t)| chunk(c, t))
+            .collect()
+    } else {
+        x.chunks_mut(CHUNK)
+            .zip(r.chunks_mut(CHUNK).zip(z.chunks_mut(CHUNK)))
+            .enumerate()
+            .map(|(c, t)| chunk(c, t))
+            .collect()
+    };
+    parts
+        .iter()
+        .fold((0.0, 0.0), |(a, b), (c, d)| (a + c, b + d))
 }
