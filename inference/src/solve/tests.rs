@@ -473,3 +473,145 @@ fn k_switch_picks_the_form() {
     );
     assert_eq!(Solver::new(&short, &layout, &o).unwrap().form(), Form::A);
 }
+
+/// ‖Aᵀb − (AᵀA + λ_f PᵀP) x‖ / ‖Aᵀb‖ from the CSR reference matrices.
+fn reference_residual(
+    a: &CsrMatrix,
+    b: &[f32],
+    layout: &TextureLayout,
+    eps_f: f64,
+    x: &[f32],
+) -> f64 {
+    let lambda = eps_f * a.rows as f64 / a.cols as f64;
+    let p = pyramid::pyramid_matrix(layout);
+    let xd: Vec<f64> = x.iter().map(|&v| v as f64).collect();
+    let bd: Vec<f64> = b.iter().map(|&v| v as f64).collect();
+    let (mut ax, mut px) = (vec![0.0; a.rows], vec![0.0; p.rows]);
+    a.mul(&xd, &mut ax);
+    p.mul(&xd, &mut px);
+    let r: Vec<f64> = ax.iter().zip(&bd).map(|(p, q)| q - p).collect();
+    let (mut g, mut rhs, mut ptp) = (vec![0.0; a.cols], vec![0.0; a.cols], vec![0.0; a.cols]);
+    a.mul_transpose(&r, &mut g);
+    a.mul_transpose(&bd, &mut rhs);
+    p.mul_transpose(&px, &mut ptp);
+    let num: f64 = g
+        .iter()
+        .zip(&ptp)
+        .map(|(g, t)| (g - lambda * t).powi(2))
+        .sum();
+    let den: f64 = rhs.iter().map(|v| v * v).sum();
+    (num / den).sqrt()
+}
+
+#[test]
+fn reported_residual_matches_the_reference_operator() {
+    let layout = TextureLayout::full_chain(TextureShape::Cube { size: 8 });
+    let mut rng = Rng(21);
+    let a = well_conditioned(layout.len(), 300, &mut rng);
+    let b: Vec<f32> = (0..a.rows).map(|_| rng.unit()).collect();
+    for form in [Form::A, Form::NormalMatrix] {
+        let s = solve(&a, &b, &layout, None, &opts(0.1, Some(form), 1e-6)).unwrap();
+        assert!(s.converged);
+        let r = reference_residual(&a, &b, &layout, 0.1, &s.x);
+        assert!(r < 3e-6, "{form:?}: reference residual {r}");
+    }
+}
+
+#[test]
+fn unseen_cube_faces_stay_at_their_start_value() {
+    let layout = TextureLayout::full_chain(TextureShape::Cube { size: 4 });
+    let mut bld = CsrBuilder::new(layout.len());
+    for y in 0..4 {
+        for x in 0..4 {
+            bld.push_row(&[(layout.index(0, 0, x, y) as u32, 1.0)])
+                .unwrap();
+        }
+    }
+    let a = bld.finish();
+    let b = vec![0.5; 16];
+    let o = opts(0.1, None, 1e-6);
+    let cold = solve(&a, &b, &layout, None, &o).unwrap();
+    let warm = solve(&a, &b, &layout, Some(&vec![0.25; layout.len()]), &o).unwrap();
+    for (s, unseen) in [(cold, 0.0), (warm, 0.25)] {
+        assert!(s.converged);
+        for i in 0..layout.len() {
+            let (face, ..) = layout.coords(i);
+            let want = if face == 0 { 0.5 } else { unseen };
+            assert!((s.x[i] - want).abs() < 1e-4, "texel {i}: {}", s.x[i]);
+        }
+    }
+}
+
+#[test]
+fn stacked_views_recover_the_texture() {
+    let layout = tex(8, 8);
+    let mut rng = Rng(9);
+    // Each view alone sees only part of the texels; together they see all.
+    let n = layout.len();
+    let view = |lo: usize, hi: usize, rng: &mut Rng| {
+        let mut bld = CsrBuilder::new(n);
+        for i in lo..hi {
+            bld.push_row(&[(i as u32, 0.8), (rng.below(n), 0.2)])
+                .unwrap();
+        }
+        bld.finish()
+    };
+    let (v0, v1) = (view(0, n / 2 + 5, &mut rng), view(n / 2 - 5, n, &mut rng));
+    let a = CsrMatrix::vstack(&[&v0, &v1]).unwrap();
+    let x_true: Vec<f32> = (0..n).map(|_| rng.unit()).collect();
+    let b = mul_f32(&a, &x_true);
+    let s = solve(
+        &a,
+        &b,
+        &layout,
+        None,
+        &opts(0.0, Some(Form::NormalMatrix), 1e-7),
+    )
+    .unwrap();
+    assert!(s.converged && max_abs_diff(&s.x, &x_true) < 1e-3);
+}
+
+#[test]
+fn range_solution_minimizes_the_objective() {
+    let layout = tex(4, 4);
+    let n = layout.len();
+    let mut rng = Rng(17);
+    let a = well_conditioned(n, 30, &mut rng);
+    // Data asking for values outside [0, 1] so the barrier is active.
+    let target: Vec<f32> = (0..n)
+        .map(|i| if i % 3 == 0 { 1.4 } else { rng.unit() - 0.2 })
+        .collect();
+    let b = mul_f32(&a, &target);
+    let (eps_f, eps_b) = (0.1f64, 1.0f64 / 32.0);
+    let o = SolveOptions {
+        eps_f: eps_f as f32,
+        eps_b: eps_b as f32,
+        range_max: Some(1.0),
+        tolerance: 1e-6,
+        ..SolveOptions::default()
+    };
+    let s = solve(&a, &b, &layout, None, &o).unwrap();
+    assert!(s.converged, "{:?}", s.diagnostic);
+    let ratio = a.rows as f64 / n as f64;
+    let objective = |x: &[f32]| {
+        let xd: Vec<f64> = x.iter().map(|&v| v as f64).collect();
+        let mut ax = vec![0.0; a.rows];
+        a.mul(&xd, &mut ax);
+        let data: f64 = ax
+            .iter()
+            .zip(&b)
+            .map(|(p, &q)| (p - q as f64).powi(2))
+            .sum();
+        let barrier: f64 = xd.iter().map(|&v| range::g(v)).sum();
+        data + eps_f * ratio * pyramid::gamma(&layout, x)
+            + eps_b * ratio * range::calibration() * barrier
+    };
+    let f0 = objective(&s.x);
+    assert!(s.x.iter().all(|&v| v > -0.002 && v < 1.002));
+    for k in 0..40 {
+        let mut y = s.x.clone();
+        let i = rng.below(n) as usize;
+        y[i] += if k % 2 == 0 { 1e-3 } else { -1e-3 };
+        assert!(objective(&y) >= f0 - 1e-9, "perturbing texel {i} lowered F");
+    }
+}
