@@ -197,7 +197,8 @@ impl CsrMatrix {
         let starts: Vec<usize> = (0..n).step_by(ROW_CHUNK).collect();
         let blocks: Vec<(Vec<usize>, Vec<u32>, Vec<f32>)> = starts
             .par_iter()
-            .with_min_len(8)
+            // Few big tasks: each allocates two n-long accumulators.
+            .with_min_len((starts.len() / (4 * rayon::current_num_threads())).max(1))
             .map_init(
                 || (vec![0.0f64; n], vec![usize::MAX; n], Vec::<u32>::new()),
                 |(acc, mark, touched), &start| {
