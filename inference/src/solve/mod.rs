@@ -5,7 +5,7 @@
 //! visible pixels, entries = filter weights). [`solve`] minimizes
 //!
 //! ```text
-//! ‖A x − b‖² + ε_f (n_s/n_t) Γ(x) + ε_b (n_s/n_t) / (g(0) − g(½)) Σ g(x_i / s)
+//! ‖A x − b‖² + ε_f (n_s/n_t) Γ(x) + ε_b (n_s/n_t) s² / (g(0) − g(½)) Σ g(x_i / s)
 //! ```
 //!
 //! - Γ ([`pyramid`]): Σ over levels l < last of ‖level_l − bilinear
@@ -18,7 +18,9 @@
 //!   when `2 n_s ≥ K n_t`. Stopping: relative residual of those equations.
 //! - The range barrier g ([`range`], off when ε_b = 0) is non-quadratic:
 //!   damped Newton steps, each solved by the same PCG, from the clamped
-//!   quadratic solution (s = `range_max` or max(b) for HDR layers).
+//!   quadratic solution. s = 1 for [0,1] data; for HDR, s = `range_max` or
+//!   max(b), and the s² factor (1 for LDR, as in the thesis) keeps the
+//!   barrier's weight relative to the data term, so the solve is scale-free.
 //! - Texels no pixel influences are defined by Γ alone. If a whole cube face
 //!   (or, with a truncated chain, a top-level texel's whole footprint) is
 //!   unseen, the operator is singular there and CG keeps that component at

@@ -1,6 +1,6 @@
 //! Range term by damped Newton around PCG: the objective (halved)
-//! F(x) = ½xᵀMx − rhsᵀx + ½λ_b Σ g(x_i/s) is strictly convex on the box
-//! (−δ s, (1+δ) s), so Newton steps (M + diag(½λ_b g″/s²)) Δ = −∇F solved
+//! F(x) = ½xᵀMx − rhsᵀx + ½λ_b s² Σ g(x_i/s) is strictly convex on the box
+//! (−δ s, (1+δ) s), so Newton steps (M + diag(½λ_b g″)) Δ = −∇F solved
 //! inexactly by PCG, with a backtracking line search that stays inside the
 //! box and decreases F, converge to the unique minimizer.
 
@@ -45,7 +45,10 @@ pub(crate) fn refine(
     } = *term;
     let n = x.len();
     let rhs_norm = norm(rhs);
-    let w = 0.5 * lambda_b;
+    // The barrier acts on x/s; weighting it by s² too makes the whole
+    // objective scale by s² when b and the range do, so an HDR layer solved
+    // with s = max(b) gives exactly the LDR answer times s.
+    let w = 0.5 * lambda_b * s * s;
     for_each_mut(x, |_, v| *v = v.clamp(0.0, s));
     let mut iterations = iterations_used;
     let mut scratch = op.scratch();

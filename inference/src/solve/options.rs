@@ -10,8 +10,10 @@ pub struct SolveOptions {
     pub eps_f: f32,
     /// Range regularization weight ε_b (0 = off; thesis figures used 1/32).
     pub eps_b: f32,
-    /// Texel range for the range term: [0, range_max]. `None` = max of b
-    /// (1 if b has no positive value).
+    /// Texel range for the range term: [0, range_max]; the barrier is
+    /// weighted by range_max² so that scaling b and the range together
+    /// scales x. `None` = max of b (1 if b has no positive value); pass
+    /// `Some(1.0)` for the thesis' fixed [0, 1] range.
     pub range_max: Option<f32>,
     /// Use AᵀA when 2 n_s ≥ K n_t (thesis: K = 4).
     pub k_switch: f32,

@@ -615,3 +615,32 @@ fn range_solution_minimizes_the_objective() {
         assert!(objective(&y) >= f0 - 1e-9, "perturbing texel {i} lowered F");
     }
 }
+
+#[test]
+fn hdr_range_scales_with_the_layer_max() {
+    let layout = tex(4, 4);
+    let mut bld = CsrBuilder::new(layout.len());
+    for i in 0..16u32 {
+        bld.push_row(&[(i, 0.5), ((i + 1) % 16, 0.25)]).unwrap();
+    }
+    let a = bld.finish();
+    let b: Vec<f32> = (0..16)
+        .map(|i| if i % 4 == 0 { 0.9 } else { 0.2 })
+        .collect();
+    let hdr: Vec<f32> = b.iter().map(|v| v * 1000.0).collect();
+    let o = SolveOptions {
+        eps_b: 1.0 / 32.0,
+        tolerance: 1e-6,
+        ..SolveOptions::default()
+    };
+    let ldr = solve(&a, &b, &layout, None, &o).unwrap();
+    let big = solve(&a, &hdr, &layout, None, &o).unwrap();
+    assert!(ldr.converged && big.converged, "{:?}", big.diagnostic);
+    let scaled: Vec<f32> = big.x.iter().map(|v| v / 1000.0).collect();
+    assert!(max_abs_diff(&scaled, &ldr.x) < 1e-4);
+    assert!(
+        big.x
+            .iter()
+            .all(|&v| v < 900.0 * (1.0 + range::RANGE_DELTA as f32))
+    );
+}
