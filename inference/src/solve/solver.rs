@@ -21,6 +21,21 @@ pub struct Solver<'a> {
     options: SolveOptions,
     /// ε_b (n_s/n_t) / (g(0) − g(½)).
     lambda_b: f64,
+    /// Cube faces no nonzero of A touches (at any level): the pyramid term
+    /// does not couple faces, so these keep their start value.
+    unseen_faces: Vec<u32>,
+}
+
+/// Faces of `layout` whose texels (all levels) are columns A never uses.
+fn unseen_faces(a: &CsrMatrix, layout: &TextureLayout) -> Vec<u32> {
+    if layout.faces() == 1 {
+        return Vec::new();
+    }
+    let mut seen = vec![false; layout.faces() as usize];
+    for &c in &a.col_idx {
+        seen[layout.coords(c as usize).0 as usize] = true;
+    }
+    (0..layout.faces()).filter(|&f| !seen[f as usize]).collect()
 }
 
 fn check_finite(what: &'static str, v: &[f32]) -> Result<(), SolveError> {
@@ -72,6 +87,7 @@ impl<'a> Solver<'a> {
             a,
             options: options.clone(),
             lambda_b: options.eps_b as f64 * ratio * calibration(),
+            unseen_faces: unseen_faces(a, layout),
         })
     }
 
@@ -144,13 +160,25 @@ impl<'a> Solver<'a> {
                 out.diagnostic = quad_note;
             }
         }
+        let mut diagnostic = out.diagnostic;
+        if !self.unseen_faces.is_empty() {
+            let note = format!(
+                "cube faces {:?} are seen by no pixel: kept at the start value ({})",
+                self.unseen_faces,
+                if x0.is_some() { "x0" } else { "0" }
+            );
+            diagnostic = Some(match diagnostic {
+                Some(d) => format!("{d}; {note}"),
+                None => note,
+            });
+        }
         Ok(Solution {
             x: x.iter().map(|&v| v as f32).collect(),
             iterations: out.iterations,
             relative_residual: out.relative_residual as f32,
             converged: out.converged,
             form,
-            diagnostic: out.diagnostic,
+            diagnostic,
         })
     }
 }

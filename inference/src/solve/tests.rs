@@ -534,6 +534,8 @@ fn unseen_cube_faces_stay_at_their_start_value() {
     let warm = solve(&a, &b, &layout, Some(&vec![0.25; layout.len()]), &o).unwrap();
     for (s, unseen) in [(cold, 0.0), (warm, 0.25)] {
         assert!(s.converged);
+        let note = s.diagnostic.unwrap_or_default();
+        assert!(note.contains("[1, 2, 3, 4, 5]"), "{note}");
         for i in 0..layout.len() {
             let (face, ..) = layout.coords(i);
             let want = if face == 0 { 0.5 } else { unseen };
