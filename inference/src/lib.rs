@@ -9,3 +9,4 @@ pub mod teapot;
 pub mod texgen;
 
 pub use fresnel::schlick_fresnel;
+pub mod solve;
