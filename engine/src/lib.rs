@@ -12,5 +12,6 @@ pub mod graph;
 pub mod passes;
 pub mod perf;
 pub mod play;
+pub mod probe;
 pub mod renderer;
 pub mod shader_interface;

@@ -39,7 +39,7 @@ impl EmGeometry {
                 let t1 = (Vec3A::from(max) - p) * inv;
                 let near = t0.min(t1).max_element();
                 let far = t0.max(t1).min_element();
-                if !(far >= near.max(0.0)) || !far.is_finite() {
+                if far.is_nan() || far < near.max(0.0) || !far.is_finite() {
                     return None;
                 }
                 Some(if near > 0.0 { near } else { far })
@@ -53,7 +53,7 @@ impl EmGeometry {
                 let b = q.dot(e);
                 let c = q.length_squared() - 1.0;
                 let disc = b * b - a * c;
-                if !(disc >= 0.0) || a == 0.0 {
+                if disc.is_nan() || disc < 0.0 || a == 0.0 {
                     return None;
                 }
                 let root = disc.sqrt();

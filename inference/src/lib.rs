@@ -4,9 +4,10 @@
 
 pub mod em_geometry;
 pub mod fresnel;
+pub mod probe;
 pub mod scene;
+pub mod solve;
 pub mod teapot;
 pub mod texgen;
 
 pub use fresnel::schlick_fresnel;
-pub mod solve;

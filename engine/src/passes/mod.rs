@@ -2,6 +2,7 @@
 
 pub mod em_capture;
 pub mod mirror;
+pub mod probe;
 pub mod readback;
 pub mod room;
 pub mod target;

@@ -1,0 +1,310 @@
+//! The engine's side of texture inference: `inference::probe::ProbeRenderer`
+//! on Vulkan, with the playback pipelines and samplers and float (RGBA32F)
+//! textures and targets, so the rendering matrix is exact for this device.
+
+use crate::backend::upload::upload_image;
+use crate::backend::{
+    Binding, Buffer, Device, GpuError, GpuResult, Image, ImageDesc, Pipeline, Sampler,
+};
+use crate::gpu_scene::GpuMesh;
+use crate::graph::{Executor, Pass, Usage};
+use crate::passes::mirror::{fresnel_lut_image, mirror_pipeline};
+use crate::passes::probe::ProbePass;
+use crate::passes::readback::ReadbackPass;
+use crate::passes::room::{RoomStyle, room_pipeline};
+use crate::passes::target::Target;
+use crate::shader_interface::{MirrorPush, RoomPush};
+use ash::vk;
+use glam::{Mat4, Vec4};
+use gpu_allocator::MemoryLocation;
+use inference::probe::{Lookup, ProbeError, ProbeGeometry, ProbeRenderer};
+use inference::scene::Mesh;
+use inference::solve::layout::TextureLayout;
+
+const FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+const DEPTH: vk::Format = vk::Format::D32_SFLOAT;
+
+struct Targets {
+    color: Image,
+    depth: Image,
+    readback: Buffer,
+    width: u32,
+    height: u32,
+}
+
+struct Uploaded {
+    key: u64,
+    mesh: GpuMesh,
+    /// Cube lookups as the mirror pipeline's texgen stream.
+    texgen: Option<Buffer>,
+}
+
+struct ProbeTexture {
+    layout: TextureLayout,
+    image: Image,
+    set: vk::DescriptorSet,
+}
+
+pub struct VulkanProbe {
+    device: Device,
+    executor: Executor,
+    bare: Pipeline,
+    mirror: Pipeline,
+    lut: Image,
+    repeat: Sampler,
+    clamp: Sampler,
+    targets: Option<Targets>,
+    uploaded: Option<Uploaded>,
+    texture: Option<ProbeTexture>,
+    /// Probe renders made so far.
+    pub renders: u32,
+}
+
+impl VulkanProbe {
+    pub fn new(device: &Device) -> GpuResult<Self> {
+        let mut executor = Executor::new(device)?;
+        let lut = fresnel_lut_image(device, &mut executor)?;
+        Ok(Self {
+            device: device.clone(),
+            bare: room_pipeline(device, RoomStyle::Bare, FORMAT, DEPTH)?,
+            mirror: mirror_pipeline(device, FORMAT, DEPTH)?,
+            lut,
+            executor,
+            // The playback samplers: repeat for 2D textures, clamp for cubes.
+            repeat: Sampler::trilinear(device, vk::SamplerAddressMode::REPEAT)?,
+            clamp: Sampler::trilinear(device, vk::SamplerAddressMode::CLAMP_TO_EDGE)?,
+            targets: None,
+            uploaded: None,
+            texture: None,
+            renders: 0,
+        })
+    }
+
+    fn ensure_targets(&mut self, width: u32, height: u32) -> GpuResult<()> {
+        if self
+            .targets
+            .as_ref()
+            .is_some_and(|t| (t.width, t.height) == (width, height))
+        {
+            return Ok(());
+        }
+        if let Some(old) = self.targets.take() {
+            self.executor.states.forget(&old.color);
+            self.executor.states.forget(&old.depth);
+        }
+        let color = Image::new(
+            &self.device,
+            "probe colour",
+            ImageDesc::new_2d(FORMAT, width, height)
+                .usage(vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC),
+        )?;
+        let depth = Image::new(
+            &self.device,
+            "probe depth",
+            ImageDesc::new_2d(DEPTH, width, height)
+                .usage(vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT),
+        )?;
+        let readback = Buffer::new(
+            &self.device,
+            "probe read-back",
+            u64::from(width) * u64::from(height) * 16,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        self.targets = Some(Targets {
+            color,
+            depth,
+            readback,
+            width,
+            height,
+        });
+        Ok(())
+    }
+
+    fn ensure_mesh(&mut self, geometry: &ProbeGeometry) -> GpuResult<()> {
+        if self
+            .uploaded
+            .as_ref()
+            .is_some_and(|u| u.key == geometry.key)
+        {
+            return Ok(());
+        }
+        let n = geometry.positions.len();
+        let uvs = match &geometry.lookup {
+            Lookup::Uv(uvs) => uvs.clone(),
+            Lookup::Cube(_) => vec![glam::Vec2::ZERO; n],
+        };
+        let mesh = Mesh {
+            positions: geometry.positions.clone(),
+            normals: vec![glam::Vec3::Y; n],
+            uvs,
+            indices: geometry.indices.clone(),
+        };
+        let texgen = match &geometry.lookup {
+            // cos θ = 1 reads LUT 0, so Schlick with F0 = 1 is exactly 1.
+            Lookup::Cube(dirs) => {
+                let data: Vec<[f32; 4]> = dirs.iter().map(|d| [d.x, d.y, d.z, 1.0]).collect();
+                Some(Buffer::with_data(
+                    &self.device,
+                    "probe texgen",
+                    vk::BufferUsageFlags::VERTEX_BUFFER,
+                    &data,
+                )?)
+            }
+            Lookup::Uv(_) => None,
+        };
+        self.uploaded = Some(Uploaded {
+            key: geometry.key,
+            mesh: GpuMesh::upload(&self.device, "probe mesh", &mesh)?,
+            texgen,
+        });
+        Ok(())
+    }
+
+    fn upload_texture(
+        &mut self,
+        layout: &TextureLayout,
+        cube: bool,
+        texels: &[[f32; 4]],
+    ) -> GpuResult<()> {
+        if self.texture.as_ref().is_none_or(|t| t.layout != *layout) {
+            if let Some(old) = self.texture.take() {
+                self.executor.states.forget(&old.image);
+            }
+            let (w, h) = layout.level_size(0);
+            let base = if cube {
+                ImageDesc::new_cube(FORMAT, w)
+            } else {
+                ImageDesc::new_2d(FORMAT, w, h)
+            };
+            let desc = ImageDesc {
+                mip_levels: layout.levels(),
+                ..base
+            }
+            .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST);
+            let image = Image::new(&self.device, "probe texture", desc)?;
+            let set = if cube {
+                self.mirror.descriptor_set(&[
+                    Binding::Image(image.view, self.clamp.raw),
+                    Binding::Image(self.lut.view, self.clamp.raw),
+                ])?
+            } else {
+                self.bare
+                    .descriptor_set(&[Binding::Image(image.view, self.repeat.raw)])?
+            };
+            self.texture = Some(ProbeTexture {
+                layout: layout.clone(),
+                image,
+                set,
+            });
+        }
+        let Some(texture) = &self.texture else {
+            return Err(GpuError::Invalid("probe texture missing".into()));
+        };
+        // Layout order (level-major, then face, then rows) is the upload order.
+        upload_image(
+            &self.device,
+            self.executor.commands(),
+            &texture.image,
+            bytemuck::cast_slice(texels),
+        )?;
+        self.executor.states.assume(&texture.image, Usage::Sampled);
+        Ok(())
+    }
+
+    fn render_gpu(
+        &mut self,
+        geometry: &ProbeGeometry,
+        layout: &TextureLayout,
+        texels: &[[f32; 4]],
+    ) -> GpuResult<Vec<[f32; 4]>> {
+        if texels.len() != layout.len() {
+            return Err(GpuError::Invalid(format!(
+                "probe texture: {} texels for a layout of {}",
+                texels.len(),
+                layout.len()
+            )));
+        }
+        let cube = matches!(geometry.lookup, Lookup::Cube(_));
+        if cube != (layout.faces() == 6) {
+            return Err(GpuError::Invalid(
+                "cube lookups need a cube layout and uv lookups a 2D one".into(),
+            ));
+        }
+        self.ensure_targets(geometry.width, geometry.height)?;
+        self.ensure_mesh(geometry)?;
+        self.upload_texture(layout, cube, texels)?;
+        let (Some(targets), Some(uploaded), Some(texture)) =
+            (&self.targets, &self.uploaded, &self.texture)
+        else {
+            return Err(GpuError::Invalid("probe resources missing".into()));
+        };
+        let view_proj: Mat4 = geometry.view_proj;
+        let push_bare = move |p: &Pipeline, cmd| {
+            p.bind(
+                cmd,
+                Some(texture.set),
+                &RoomPush {
+                    view_proj,
+                    albedo: Vec4::ONE,
+                    emission: Vec4::ZERO,
+                },
+            )
+        };
+        let push_mirror = move |p: &Pipeline, cmd| {
+            p.bind(
+                cmd,
+                Some(texture.set),
+                &MirrorPush {
+                    view_proj,
+                    f0: Vec4::ONE,
+                },
+            )
+        };
+        let target = Target {
+            color: &targets.color,
+            depth: &targets.depth,
+            level: 0,
+            layer: 0,
+            clear: true,
+            front_face: vk::FrontFace::COUNTER_CLOCKWISE,
+        };
+        let probe = ProbePass {
+            device: &self.device,
+            pipeline: if cube { &self.mirror } else { &self.bare },
+            set: texture.set,
+            push: if cube { &push_mirror } else { &push_bare },
+            mesh: &uploaded.mesh,
+            per_vertex: uploaded.texgen.as_ref(),
+            target,
+            sampled: if cube {
+                vec![&texture.image, &self.lut]
+            } else {
+                vec![&texture.image]
+            },
+        };
+        let readback = ReadbackPass {
+            device: &self.device,
+            image: &targets.color,
+            buffer: &targets.readback,
+        };
+        let passes: [&dyn Pass; 2] = [&probe, &readback];
+        self.executor.run(&passes)?;
+        self.renders += 1;
+        let texel_count = (targets.width * targets.height) as usize;
+        let bytes = targets.readback.mapped()?;
+        Ok(bytemuck::cast_slice::<u8, [f32; 4]>(&bytes[..texel_count * 16]).to_vec())
+    }
+}
+
+impl ProbeRenderer for VulkanProbe {
+    fn render(
+        &mut self,
+        geometry: &ProbeGeometry,
+        layout: &TextureLayout,
+        texels: &[[f32; 4]],
+    ) -> Result<Vec<[f32; 4]>, ProbeError> {
+        self.render_gpu(geometry, layout, texels)
+            .map_err(|e| ProbeError::Render(e.to_string()))
+    }
+}
