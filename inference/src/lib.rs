@@ -4,6 +4,7 @@
 
 pub mod em_geometry;
 pub mod fresnel;
+pub mod infer;
 pub mod probe;
 pub mod scene;
 pub mod solve;

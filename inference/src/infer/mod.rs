@@ -1,0 +1,5 @@
+//! Texture and environment-map inference: targets from the tracer, the
+//! rendering matrix from probe renders, the regularized solve, and the
+//! forward-mapping baseline it is measured against.
+
+pub mod forward;
