@@ -8,19 +8,23 @@
 //! `TextureInfo::stagger`), so different objects cross block boundaries on
 //! different frames and the misses spread out.
 //!
-//! The final sum, the MIP reconstruction and the inverse colour/gamma
-//! transform are fused into one pass that writes the caller's slice (the
-//! engine's mapped staging buffer) directly.
+//! What is cached for a node is the *prefix sum* of the levels from the
+//! root down to that node (its decoded leaf-so-far), not the node's detail
+//! alone: a leaf then costs one image addition (its own level) instead of
+//! one per level, with the same per-level lifetimes. The MIP reconstruction
+//! and the inverse colour/gamma transform are fused into one pass that
+//! writes the caller's slice (the engine's mapped staging buffer) directly.
 
 use std::collections::HashMap;
 use std::sync::Arc;
 
 use half::f16;
+use half::slice::HalfFloatSliceExt;
 
 use crate::coefs::{Contexts, decode_image_add, step_of};
 use crate::container::{BlockView, Container, TextureInfo};
 use crate::dct::Dct8;
-use crate::domain::{Gamma, from_domain};
+use crate::domain::Gamma;
 use crate::entropy::Reader;
 use crate::error::{CodecError, Result};
 use crate::planes::box_down;
@@ -28,18 +32,20 @@ use crate::pyramid::Plan;
 
 /// A texel component type the decoder can write: `f32` or `half::f16`.
 pub trait OutTexel: Copy + Send {
-    fn from_f32(v: f32) -> Self;
+    /// Converts `src` into `dst` (same length).
+    fn convert(src: &[f32], dst: &mut [Self]);
 }
 impl OutTexel for f32 {
     #[inline]
-    fn from_f32(v: f32) -> Self {
-        v
+    fn convert(src: &[f32], dst: &mut [Self]) {
+        dst.copy_from_slice(src);
     }
 }
 impl OutTexel for f16 {
     #[inline]
-    fn from_f32(v: f32) -> Self {
-        f16::from_f32(v)
+    fn convert(src: &[f32], dst: &mut [Self]) {
+        // SIMD (F16C) when the CPU has it.
+        dst.convert_from_f32_slice(src);
     }
 }
 
@@ -62,6 +68,9 @@ impl Lifetimes {
         self.a.saturating_mul(self.b.saturating_pow(l as u32))
     }
 }
+
+/// Evicted image buffers kept for reuse (avoids page-faulting fresh ones).
+const POOL_MAX: usize = 8;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 struct ImageKey {
@@ -94,7 +103,8 @@ pub struct CacheStats {
     pub resident_bytes: usize,
 }
 
-/// Decoded-image cache for one container. Not thread-safe by design (one
+/// Decoded-image cache for one container (keys do not name the container:
+/// use one cache per container). Not thread-safe by design (one
 /// per decode thread); call [`DecodeCache::end_frame`] once per frame.
 pub struct DecodeCache {
     life: Lifetimes,
@@ -102,7 +112,7 @@ pub struct DecodeCache {
     images: HashMap<ImageKey, Entry>,
     blocks: HashMap<usize, CachedBlock>,
     dct: Dct8,
-    scratch: Vec<f32>,
+    pool: Vec<Vec<f32>>,
     pred: Vec<f32>,
     pred_next: Vec<f32>,
     stats: CacheStats,
@@ -122,7 +132,7 @@ impl DecodeCache {
             images: HashMap::new(),
             blocks: HashMap::new(),
             dct: Dct8::default(),
-            scratch: Vec::new(),
+            pool: Vec::new(),
             pred: Vec::new(),
             pred_next: Vec::new(),
             stats: CacheStats::default(),
@@ -134,7 +144,14 @@ impl DecodeCache {
         self.frame += 1;
         let now = self.frame;
         let before = self.images.len();
-        self.images.retain(|_, e| now - e.last_used <= e.lifetime);
+        let pool = &mut self.pool;
+        self.images.retain(|_, e| {
+            let keep = now - e.last_used <= e.lifetime;
+            if !keep && pool.len() < POOL_MAX {
+                pool.push(std::mem::take(&mut e.data));
+            }
+            keep
+        });
         self.blocks.retain(|_, b| now - b.last_used <= b.lifetime);
         self.stats.evictions += (before - self.images.len()) as u64;
     }
@@ -237,8 +254,8 @@ impl DecodeCache {
         )
     }
 
-    /// Sums the pyramid for one face up to `last_mip` and writes the MIP
-    /// levels for which `dest` gives a range of `out`.
+    /// Finds or decodes the leaf prefix sum for one face, then writes the
+    /// MIP levels for which `dest` gives a range of `out`.
     #[allow(clippy::too_many_arguments)]
     fn decode_face<T: OutTexel>(
         &mut self,
@@ -275,7 +292,8 @@ impl DecodeCache {
             }
         };
         let lb = tex.log2b();
-        let keys: Vec<ImageKey> = (0..plan.levels.len())
+        let n_levels = plan.levels.len();
+        let path: Vec<ImageKey> = (0..n_levels)
             .map(|level| ImageKey {
                 block,
                 level: level as u8,
@@ -283,24 +301,43 @@ impl DecodeCache {
                 face: face as u8,
             })
             .collect();
-        let missing: Vec<ImageKey> = keys
-            .iter()
-            .filter(|k| !self.images.contains_key(k))
-            .copied()
-            .collect();
-        self.stats.hits += (keys.len() - missing.len()) as u64;
-        if !missing.is_empty() {
-            self.stats.misses += missing.len() as u64;
+        // Deepest cached prefix on the path; touching it touches its ancestors.
+        let deepest = (0..n_levels)
+            .rev()
+            .find(|&l| self.images.contains_key(&path[l]));
+        for k in &path[..deepest.map_or(0, |d| d + 1)] {
+            if let Some(e) = self.images.get_mut(k) {
+                e.last_used = frame;
+            }
+        }
+        let start = deepest.map_or(0, |d| d + 1);
+        self.stats.hits += deepest.map_or(0, |d| d as u64 + 1);
+        self.stats.misses += (n_levels - start) as u64;
+        if start < n_levels {
+            let l = &tex.layout;
+            let len: usize = (0..l.mips)
+                .map(|m| l.face_texels(m) * l.channels as usize)
+                .sum();
+            let mut cur = self.take_buffer(len);
+            match deepest.and_then(|d| self.images.get(&path[d])) {
+                Some(e) => cur.copy_from_slice(&e.data),
+                None => cur.iter_mut().for_each(|v| *v = 0.0),
+            }
             let bytes = match block_bytes {
                 Some(b) => b,
                 None => c.block_bytes(block)?,
             };
             let view = BlockView::parse(&bytes, tex, block)?;
-            for k in missing {
-                let data = self.decode_stream(tex, &view, block, k)?;
-                let up = plan.levels.len() - 1 - k.level as usize;
+            for (level, key) in path.iter().enumerate().skip(start) {
+                self.decode_stream_add(tex, &view, block, *key, &mut cur)?;
+                let data = if level + 1 < n_levels {
+                    cur.clone()
+                } else {
+                    std::mem::take(&mut cur)
+                };
+                let up = n_levels - 1 - level;
                 self.images.insert(
-                    k,
+                    *key,
                     Entry {
                         data,
                         last_used: frame,
@@ -309,59 +346,75 @@ impl DecodeCache {
                 );
             }
         }
-        // Sum the levels (planar, coding domain) into scratch.
-        let l = &tex.layout;
-        let ch = l.channels as usize;
-        let face_len: usize = (0..=last_mip).map(|m| l.face_texels(m) * ch).sum();
-        self.scratch.clear();
-        self.scratch.resize(face_len, 0.0);
-        for k in &keys {
-            let e = self.images.get_mut(k).ok_or(CodecError::BadBlock {
+        let leaf = self
+            .images
+            .get(&path[n_levels - 1])
+            .ok_or(CodecError::BadBlock {
                 block,
                 what: "decoded image vanished from the cache".into(),
             })?;
-            e.last_used = self.frame;
-            for (s, v) in self.scratch.iter_mut().zip(&e.data) {
-                *s += v;
-            }
-        }
         // MIP 0 is the sum itself; MIP m adds the decimated finest level.
+        let l = &tex.layout;
+        let ch = l.channels as usize;
         let gamma = Gamma(c.gamma);
         let mut off = 0;
         for mip in 0..=last_mip {
             let (w, h) = l.mip_size(mip);
             let n = w * h;
-            let img = &mut self.scratch[off..off + n * ch];
-            if mip == 0 {
-                self.pred.clear();
-                self.pred.extend_from_slice(img);
-            } else {
+            let img = leaf
+                .data
+                .get(off..off + n * ch)
+                .ok_or(CodecError::OutputSize {
+                    got: leaf.data.len(),
+                    expected: off + n * ch,
+                })?;
+            if mip == 1 {
+                let (pw, ph) = l.mip_size(0);
+                self.pred.resize(n * ch, 0.0);
+                box_down(&leaf.data[..pw * ph * ch], pw, ph, ch, &mut self.pred);
+            } else if mip > 1 {
                 let (pw, ph) = l.mip_size(mip - 1);
-                self.pred_next.clear();
                 self.pred_next.resize(n * ch, 0.0);
                 box_down(&self.pred, pw, ph, ch, &mut self.pred_next);
                 std::mem::swap(&mut self.pred, &mut self.pred_next);
-                img.iter_mut().zip(&self.pred).for_each(|(v, p)| *v += p);
             }
             if let Some(r) = dest(mip) {
                 let o = out.get_mut(r).ok_or(CodecError::OutputSize {
                     got: 0,
                     expected: n * 4,
                 })?;
-                write_rgba(gamma, img, n, ch, o);
+                let pred = if mip > 0 {
+                    Some(&self.pred[..n * ch])
+                } else {
+                    None
+                };
+                write_rgba(gamma, img, pred, n, ch, o);
             }
             off += n * ch;
         }
         Ok(())
     }
 
-    fn decode_stream(
+    /// A buffer of `len` floats from the pool of evicted images (contents
+    /// unspecified), or a new one.
+    fn take_buffer(&mut self, len: usize) -> Vec<f32> {
+        let mut v = match self.pool.iter().position(|b| b.capacity() >= len) {
+            Some(i) => self.pool.swap_remove(i),
+            None => Vec::with_capacity(len),
+        };
+        v.resize(len, 0.0);
+        v
+    }
+
+    /// Decodes stream `k` and adds it into `acc` (one face, all MIPs, planar).
+    fn decode_stream_add(
         &mut self,
         tex: &TextureInfo,
         view: &BlockView,
         block: usize,
         k: ImageKey,
-    ) -> Result<Vec<f32>> {
+        acc: &mut [f32],
+    ) -> Result<()> {
         let l = &tex.layout;
         let ch = l.channels as usize;
         let si = BlockView::stream_index(
@@ -380,10 +433,8 @@ impl DecodeCache {
             .streams
             .get(si)
             .ok_or(corrupt("stream index out of range"))?;
-        let total: usize = (0..l.mips).map(|m| l.face_texels(m) * ch).sum();
-        let mut data = vec![0.0f32; total];
         if steps.iter().all(|&s| s == 0) {
-            return Ok(data);
+            return Ok(());
         }
         let mut r = Reader::new(bytes).ok_or(corrupt("stream is not whole words"))?;
         let mut ctx = Contexts::default();
@@ -392,37 +443,74 @@ impl DecodeCache {
             let (w, h) = l.mip_size(mip);
             let n = w * h * ch;
             let idx = *steps.get(mip as usize).ok_or(corrupt("missing step"))?;
+            let dst = acc
+                .get_mut(off..off + n)
+                .ok_or(corrupt("image larger than its buffer"))?;
             if idx != 0 {
-                decode_image_add(
-                    &mut r,
-                    &mut ctx,
-                    &mut self.dct,
-                    w,
-                    h,
-                    ch,
-                    step_of(idx),
-                    &mut data[off..off + n],
-                )
-                .map_err(corrupt)?;
+                decode_image_add(&mut r, &mut ctx, &mut self.dct, w, h, ch, step_of(idx), dst)
+                    .map_err(corrupt)?;
             }
             off += n;
         }
-        Ok(data)
+        Ok(())
     }
 }
 
-/// Planar coding-domain image → interleaved linear RGBA.
-fn write_rgba<T: OutTexel>(g: Gamma, img: &[f32], n: usize, ch: usize, out: &mut [T]) {
-    let (y, rest) = img.split_at(n);
-    let (co, rest) = rest.split_at(n);
-    let (cg, alpha) = rest.split_at(n);
-    for (i, px) in out.chunks_exact_mut(4).enumerate().take(n) {
-        let a = if ch == 4 { alpha[i] } else { 1.0 };
-        let rgba = from_domain(g, y[i], co[i], cg[i], a);
-        px[0] = T::from_f32(rgba[0]);
-        px[1] = T::from_f32(rgba[1]);
-        px[2] = T::from_f32(rgba[2]);
-        px[3] = T::from_f32(rgba[3]);
+/// Planar coding-domain image (+ optional MIP prediction) → interleaved
+/// linear RGBA, converted to `T` in bulk.
+fn write_rgba<T: OutTexel>(
+    g: Gamma,
+    img: &[f32],
+    pred: Option<&[f32]>,
+    n: usize,
+    ch: usize,
+    out: &mut [T],
+) {
+    if g.0 == 2.0 {
+        write_rgba_with(|v: f32| v * v.abs(), img, pred, n, ch, out)
+    } else {
+        write_rgba_with(|v: f32| g.inverse(v), img, pred, n, ch, out)
+    }
+}
+
+#[inline(always)]
+fn write_rgba_with<T: OutTexel>(
+    inv: impl Fn(f32) -> f32,
+    img: &[f32],
+    pred: Option<&[f32]>,
+    n: usize,
+    ch: usize,
+    out: &mut [T],
+) {
+    const CHUNK: usize = 1024;
+    let mut tmp = [0.0f32; CHUNK * 4];
+    let mut sum = [[0.0f32; CHUNK]; 4];
+    for (chunk_i, dst) in out[..n * 4].chunks_mut(CHUNK * 4).enumerate() {
+        let base = chunk_i * CHUNK;
+        let m = dst.len() / 4;
+        // Planes (+ prediction) for this chunk, then the colour transform.
+        for (c, s) in sum.iter_mut().enumerate() {
+            let s = &mut s[..m];
+            if c >= ch {
+                s.fill(1.0);
+                continue;
+            }
+            s.copy_from_slice(&img[c * n + base..][..m]);
+            if let Some(p) = pred {
+                s.iter_mut()
+                    .zip(&p[c * n + base..][..m])
+                    .for_each(|(a, b)| *a += b);
+            }
+        }
+        let [y, co, cg, a] = &sum;
+        for (j, px) in tmp[..m * 4].chunks_exact_mut(4).enumerate() {
+            let t = y[j] - cg[j];
+            px[0] = inv(t + co[j]);
+            px[1] = inv(y[j] + cg[j]);
+            px[2] = inv(t - co[j]);
+            px[3] = a[j];
+        }
+        T::convert(&tmp[..m * 4], dst);
     }
 }
 

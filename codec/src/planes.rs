@@ -18,6 +18,24 @@ pub fn image_offset(l: &LeafLayout, face: u32, mip: u32) -> usize {
 /// with itself) from `w × h` to `max(1, w/2) × max(1, h/2)`.
 pub fn box_down(src: &[f32], w: usize, h: usize, channels: usize, dst: &mut [f32]) {
     let (w2, h2) = ((w / 2).max(1), (h / 2).max(1));
+    if w % 2 == 0 && h % 2 == 0 {
+        // Common case, written so the compiler can vectorise it.
+        for c in 0..channels {
+            let s = &src[c * w * h..][..w * h];
+            let d = &mut dst[c * w2 * h2..][..w2 * h2];
+            for (drow, rows) in d.chunks_exact_mut(w2).zip(s.chunks_exact(2 * w)) {
+                let (r0, r1) = rows.split_at(w);
+                for ((o, a), b) in drow
+                    .iter_mut()
+                    .zip(r0.chunks_exact(2))
+                    .zip(r1.chunks_exact(2))
+                {
+                    *o = 0.25 * ((a[0] + a[1]) + (b[0] + b[1]));
+                }
+            }
+        }
+        return;
+    }
     for c in 0..channels {
         let s = &src[c * w * h..][..w * h];
         let d = &mut dst[c * w2 * h2..][..w2 * h2];
