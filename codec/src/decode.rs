@@ -87,7 +87,10 @@ struct Entry {
     lifetime: u64,
 }
 
+/// A block's verified bytes (compressed, small) and plan, kept with the
+/// lifetime of its top level so faces and neighbours don't re-read it.
 struct CachedBlock {
+    bytes: Vec<u8>,
     plan: Plan,
     last_used: u64,
     lifetime: u64,
@@ -269,28 +272,26 @@ impl DecodeCache {
     ) -> Result<()> {
         let (block, local) = tex.locate(sample)?;
         let frame = self.frame;
-        let cached = self.blocks.get_mut(&block).map(|b| {
-            b.last_used = frame;
-            b.plan.clone()
-        });
-        let mut block_bytes = None;
-        let plan = match cached {
-            Some(p) => p,
-            None => {
-                let bytes = c.block_bytes(block)?;
-                let plan = BlockView::parse(&bytes, tex, block)?.plan;
-                self.blocks.insert(
-                    block,
-                    CachedBlock {
-                        plan: plan.clone(),
-                        last_used: frame,
-                        lifetime: self.life.frames(plan.levels.len()),
-                    },
-                );
-                block_bytes = Some(bytes);
-                plan
-            }
-        };
+        if !self.blocks.contains_key(&block) {
+            let bytes = c.block_bytes(block)?.into_owned();
+            let plan = BlockView::parse(&bytes, tex, block)?.plan;
+            let lifetime = self.life.frames(plan.levels.len());
+            self.blocks.insert(
+                block,
+                CachedBlock {
+                    bytes,
+                    plan,
+                    last_used: frame,
+                    lifetime,
+                },
+            );
+        }
+        let cb = self.blocks.get_mut(&block).ok_or(CodecError::BadBlock {
+            block,
+            what: "block vanished from the cache".into(),
+        })?;
+        cb.last_used = frame;
+        let plan = cb.plan.clone();
         let lb = tex.log2b();
         let n_levels = plan.levels.len();
         let path: Vec<ImageKey> = (0..n_levels)
@@ -323,28 +324,17 @@ impl DecodeCache {
                 Some(e) => cur.copy_from_slice(&e.data),
                 None => cur.iter_mut().for_each(|v| *v = 0.0),
             }
-            let bytes = match block_bytes {
-                Some(b) => b,
-                None => c.block_bytes(block)?,
-            };
-            let view = BlockView::parse(&bytes, tex, block)?;
-            for (level, key) in path.iter().enumerate().skip(start) {
-                self.decode_stream_add(tex, &view, block, *key, &mut cur)?;
-                let data = if level + 1 < n_levels {
-                    cur.clone()
-                } else {
-                    std::mem::take(&mut cur)
-                };
-                let up = n_levels - 1 - level;
-                self.images.insert(
-                    *key,
-                    Entry {
-                        data,
-                        last_used: frame,
-                        lifetime: self.life.frames(up),
-                    },
-                );
+            // Take the bytes out while decoding (the decoder borrows self).
+            let bytes = self
+                .blocks
+                .get_mut(&block)
+                .map(|b| std::mem::take(&mut b.bytes))
+                .unwrap_or_default();
+            let result = self.decode_path(tex, &bytes, block, &path, start, cur);
+            if let Some(b) = self.blocks.get_mut(&block) {
+                b.bytes = bytes;
             }
+            result?;
         }
         let leaf = self
             .images
@@ -391,6 +381,40 @@ impl DecodeCache {
                 write_rgba(gamma, img, pred, n, ch, o);
             }
             off += n * ch;
+        }
+        Ok(())
+    }
+
+    /// Decodes levels `start..` of `path` on top of `cur` (the prefix sum
+    /// above them), caching each prefix.
+    fn decode_path(
+        &mut self,
+        tex: &TextureInfo,
+        bytes: &[u8],
+        block: usize,
+        path: &[ImageKey],
+        start: usize,
+        mut cur: Vec<f32>,
+    ) -> Result<()> {
+        let view = BlockView::parse(bytes, tex, block)?;
+        let n_levels = path.len();
+        let frame = self.frame;
+        for (level, key) in path.iter().enumerate().skip(start) {
+            self.decode_stream_add(tex, &view, block, *key, &mut cur)?;
+            let data = if level + 1 < n_levels {
+                cur.clone()
+            } else {
+                std::mem::take(&mut cur)
+            };
+            let up = n_levels - 1 - level;
+            self.images.insert(
+                *key,
+                Entry {
+                    data,
+                    last_used: frame,
+                    lifetime: self.life.frames(up),
+                },
+            );
         }
         Ok(())
     }

@@ -136,29 +136,42 @@ pub fn allocate(atoms: &[AtomRd], w: &[TexWeight], budget_bits: f64, alpha: f64)
     let mut caps = vec![f64::INFINITY; w.len()];
     let (mut lambda, mut choice, mut bits) = solve(atoms, w, budget_bits, &caps);
     if alpha.is_finite() && w.len() > 1 {
-        for _ in 0..4 {
+        let n = w.len() as f64;
+        let mut capped = vec![false; w.len()];
+        for _ in 0..12 {
             let mse = texture_mse(atoms, w, &choice);
-            let mean = mse.iter().sum::<f64>() / mse.len() as f64;
-            let limit = alpha * mean;
+            let mean = mse.iter().sum::<f64>() / n;
             let over: Vec<usize> = (0..w.len())
-                .filter(|&t| mse[t] > limit * (1.0 + 1e-9))
+                .filter(|&t| mse[t] > alpha * mean * (1.0 + 1e-3))
                 .collect();
             if over.is_empty() {
                 break;
             }
-            for t in over {
-                caps[t] = caps[t].min(cap_for(atoms, w, t, limit));
+            over.iter().for_each(|&t| capped[t] = true);
+            // Fixed point of M = α·mean when the capped textures sit at M:
+            // M = α·Σ(uncapped MSE) / (n − α·|capped|).
+            let k = capped.iter().filter(|&&c| c).count() as f64;
+            let rest: f64 = (0..w.len()).filter(|&t| !capped[t]).map(|t| mse[t]).sum();
+            let limit = if n - alpha * k > 0.0 {
+                alpha * rest / (n - alpha * k)
+            } else {
+                alpha * mean
+            };
+            for t in (0..w.len()).filter(|&t| capped[t]) {
+                caps[t] = cap_for(atoms, w, t, limit);
+            }
+            if std::env::var_os("CODEC_DEBUG_RATE").is_some() {
+                eprintln!("alpha pass: mse {mse:?} limit {limit} caps {caps:?} lambda {lambda}");
             }
             // Caps the budget cannot afford are relaxed until it can.
             loop {
-                let (l, c, b) = solve(atoms, w, budget_bits, &caps);
-                (lambda, choice, bits) = (l, c, b);
+                (lambda, choice, bits) = solve(atoms, w, budget_bits, &caps);
                 if bits <= budget_bits || caps.iter().all(|c| !c.is_finite()) {
                     break;
                 }
                 caps.iter_mut()
                     .filter(|c| c.is_finite())
-                    .for_each(|c| *c *= 4.0);
+                    .for_each(|c| *c *= 2.0);
                 if caps.iter().all(|&c| c > 10f64.powf(HI)) {
                     caps.iter_mut().for_each(|c| *c = f64::INFINITY);
                 }
