@@ -197,8 +197,7 @@ pub fn encode_image<S: BitSink>(
 }
 
 fn encode_block<S: BitSink>(sink: &mut S, cc: &mut ClassCtx, q: &[i32; NN], last: usize) {
-    for i in 0..=last {
-        let v = q[i];
+    for (i, &v) in q.iter().enumerate().take(last + 1) {
         if i < NN - 1 {
             sink.bit(&mut cc.sig[i], v != 0);
         }
@@ -343,7 +342,7 @@ fn decode_block(
     q: &mut [i32; NN],
 ) -> Result<bool, &'static str> {
     let mut any_ac = false;
-    for i in 0..NN {
+    for (i, qi) in q.iter_mut().enumerate() {
         let sig = if i < NN - 1 {
             r.bit(&mut cc.sig[i])
         } else {
@@ -354,7 +353,7 @@ fn decode_block(
         }
         let m = decode_mag(r, cc, i.min(1))? + 1;
         let m = i32::try_from(m).map_err(|_| "magnitude overflow")?;
-        q[i] = if r.bypass() { -m } else { m };
+        *qi = if r.bypass() { -m } else { m };
         any_ac |= i > 0;
         if i == NN - 1 || r.bit(&mut cc.last[i]) {
             break;

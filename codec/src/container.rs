@@ -690,3 +690,40 @@ pub fn header_bytes(n_textures: usize, n_blocks: usize) -> u64 {
 pub fn block_table_bytes(tex: &TextureInfo, plan: &Plan) -> u64 {
     (1 + 2 * plan.levels.len() + tex.stream_count(plan) * (4 + tex.layout.mips as usize)) as u64
 }
+
+/// Recomputes the header checksum and every in-range block checksum in
+/// place. For fuzzing and tests only: lets mutated files reach the
+/// structural checks and the entropy decoder behind the checksums.
+pub fn reseal_checksums(bytes: &mut [u8]) {
+    let rd = |b: &[u8], at: usize| -> Option<u64> {
+        let s = b.get(at..at + 4)?;
+        Some(u32::from_le_bytes([s[0], s[1], s[2], s[3]]) as u64)
+    };
+    let (Some(header_len), Some(nt), Some(nb)) = (rd(bytes, 8), rd(bytes, 12), rd(bytes, 16))
+    else {
+        return;
+    };
+    let index = FIXED_HEADER as u64 + TEX_RECORD as u64 * nt;
+    let len = bytes.len() as u64;
+    for i in 0..nb {
+        let at = index + BLOCK_ENTRY as u64 * i;
+        if at + BLOCK_ENTRY as u64 > len.min(header_len) {
+            break;
+        }
+        let at = at as usize;
+        let (Some(lo), Some(hi), Some(bl)) = (rd(bytes, at), rd(bytes, at + 4), rd(bytes, at + 8))
+        else {
+            break;
+        };
+        let off = lo | (hi << 32);
+        if let Some(end) = off.checked_add(bl).filter(|&e| e <= len) {
+            let crc = crc32fast::hash(&bytes[off as usize..end as usize]);
+            bytes[at + 12..at + 16].copy_from_slice(&crc.to_le_bytes());
+        }
+    }
+    if header_len >= 4 && header_len <= len {
+        let h = header_len as usize;
+        let crc = crc32fast::hash(&bytes[..h - 4]);
+        bytes[h - 4..h].copy_from_slice(&crc.to_le_bytes());
+    }
+}

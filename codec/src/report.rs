@@ -200,9 +200,9 @@ fn from_atlas(t: &ParamTexture, peak: f32, rgb: &[u8], alpha: Option<&[u8]>, out
                 for x in 0..w {
                     let d = (y0 + y) * aw + f * w + x;
                     let px = &mut out[o + (y * w + x) * 4..][..4];
-                    for c in 0..3 {
+                    for (c, p) in px[..3].iter_mut().enumerate() {
                         let v = rgb.get(d * 3 + c).copied().unwrap_or(0) as f32 / 255.0 * peak;
-                        px[c] = v * v;
+                        *p = v * v;
                     }
                     px[3] = alpha
                         .and_then(|a| a.get(d))
