@@ -302,48 +302,49 @@ impl DecodeCache {
                 face: face as u8,
             })
             .collect();
-        // Deepest cached prefix on the path; touching it touches its ancestors.
-        let deepest = (0..n_levels)
+        let leaf_key = path[n_levels - 1];
+        // Deepest cached prefix above the leaf; touching it touches its ancestors.
+        let deepest = (0..n_levels - 1)
             .rev()
             .find(|&l| self.images.contains_key(&path[l]));
-        for k in &path[..deepest.map_or(0, |d| d + 1)] {
+        for k in path
+            .iter()
+            .take(deepest.map_or(0, |d| d + 1))
+            .chain([&leaf_key])
+        {
             if let Some(e) = self.images.get_mut(k) {
                 e.last_used = frame;
             }
         }
         let start = deepest.map_or(0, |d| d + 1);
-        self.stats.hits += deepest.map_or(0, |d| d as u64 + 1);
-        self.stats.misses += (n_levels - start) as u64;
-        if start < n_levels {
-            let l = &tex.layout;
-            let len: usize = (0..l.mips)
-                .map(|m| l.face_texels(m) * l.channels as usize)
-                .sum();
-            let mut cur = self.take_buffer(len);
-            match deepest.and_then(|d| self.images.get(&path[d])) {
-                Some(e) => cur.copy_from_slice(&e.data),
-                None => cur.iter_mut().for_each(|v| *v = 0.0),
-            }
+        let leaf_cached = self.images.contains_key(&leaf_key);
+        self.stats.hits += deepest.map_or(0, |d| d as u64 + 1) + leaf_cached as u64;
+        self.stats.misses += (n_levels - 1 - start) as u64 + !leaf_cached as u64;
+        if start < n_levels - 1 || !leaf_cached {
             // Take the bytes out while decoding (the decoder borrows self).
             let bytes = self
                 .blocks
                 .get_mut(&block)
                 .map(|b| std::mem::take(&mut b.bytes))
                 .unwrap_or_default();
-            let result = self.decode_path(tex, &bytes, block, &path, start, cur);
+            let result = self.decode_path(tex, &bytes, block, &path, deepest, leaf_cached);
             if let Some(b) = self.blocks.get_mut(&block) {
                 b.bytes = bytes;
             }
             result?;
         }
-        let leaf = self
+        let missing = || CodecError::BadBlock {
+            block,
+            what: "decoded image vanished from the cache".into(),
+        };
+        let parent = &self
             .images
-            .get(&path[n_levels - 1])
-            .ok_or(CodecError::BadBlock {
-                block,
-                what: "decoded image vanished from the cache".into(),
-            })?;
-        // MIP 0 is the sum itself; MIP m adds the decimated finest level.
+            .get(&path[n_levels - 2])
+            .ok_or_else(missing)?
+            .data;
+        let detail = &self.images.get(&leaf_key).ok_or_else(missing)?.data;
+        // Leaf = parent prefix + leaf detail; MIP m also adds the decimated
+        // finest level (box is linear: box(p + d) = box(p) + box(d)).
         let l = &tex.layout;
         let ch = l.channels as usize;
         let gamma = Gamma(c.gamma);
@@ -351,17 +352,21 @@ impl DecodeCache {
         for mip in 0..=last_mip {
             let (w, h) = l.mip_size(mip);
             let n = w * h;
-            let img = leaf
-                .data
-                .get(off..off + n * ch)
-                .ok_or(CodecError::OutputSize {
-                    got: leaf.data.len(),
-                    expected: off + n * ch,
-                })?;
+            let range = off..off + n * ch;
+            let (Some(p), Some(d)) = (parent.get(range.clone()), detail.get(range)) else {
+                return Err(missing());
+            };
             if mip == 1 {
                 let (pw, ph) = l.mip_size(0);
+                let m0 = pw * ph * ch;
                 self.pred.resize(n * ch, 0.0);
-                box_down(&leaf.data[..pw * ph * ch], pw, ph, ch, &mut self.pred);
+                self.pred_next.resize(n * ch, 0.0);
+                box_down(&parent[..m0], pw, ph, ch, &mut self.pred);
+                box_down(&detail[..m0], pw, ph, ch, &mut self.pred_next);
+                self.pred
+                    .iter_mut()
+                    .zip(&self.pred_next)
+                    .for_each(|(a, b)| *a += b);
             } else if mip > 1 {
                 let (pw, ph) = l.mip_size(mip - 1);
                 self.pred_next.resize(n * ch, 0.0);
@@ -378,45 +383,67 @@ impl DecodeCache {
                 } else {
                     None
                 };
-                write_rgba(gamma, img, pred, n, ch, o);
+                write_rgba(gamma, [p, d], pred, n, ch, o);
             }
             off += n * ch;
         }
         Ok(())
     }
 
-    /// Decodes levels `start..` of `path` on top of `cur` (the prefix sum
-    /// above them), caching each prefix.
+    /// Decodes the prefix sums below level `deepest` (cached) down to the
+    /// leaf's parent, caching each, and the leaf's own detail image unless
+    /// `leaf_cached`.
     fn decode_path(
         &mut self,
         tex: &TextureInfo,
         bytes: &[u8],
         block: usize,
         path: &[ImageKey],
-        start: usize,
-        mut cur: Vec<f32>,
+        deepest: Option<usize>,
+        leaf_cached: bool,
     ) -> Result<()> {
         let view = BlockView::parse(bytes, tex, block)?;
         let n_levels = path.len();
         let frame = self.frame;
-        for (level, key) in path.iter().enumerate().skip(start) {
-            self.decode_stream_add(tex, &view, block, *key, &mut cur)?;
-            let data = if level + 1 < n_levels {
-                cur.clone()
-            } else {
-                std::mem::take(&mut cur)
-            };
-            let up = n_levels - 1 - level;
-            self.images.insert(
-                *key,
-                Entry {
-                    data,
-                    last_used: frame,
-                    lifetime: self.life.frames(up),
-                },
-            );
+        let l = &tex.layout;
+        let len: usize = (0..l.mips)
+            .map(|m| l.face_texels(m) * l.channels as usize)
+            .sum();
+        let start = deepest.map_or(0, |d| d + 1);
+        if start < n_levels - 1 {
+            let mut cur = self.take_buffer(len);
+            match deepest.and_then(|d| self.images.get(&path[d])) {
+                Some(e) => cur.copy_from_slice(&e.data),
+                None => cur.fill(0.0),
+            }
+            for (level, key) in path.iter().enumerate().take(n_levels - 1).skip(start) {
+                self.decode_stream_add(tex, &view, block, *key, &mut cur)?;
+                let data = if level + 2 < n_levels {
+                    cur.clone()
+                } else {
+                    std::mem::take(&mut cur)
+                };
+                self.insert(*key, data, n_levels - 1 - level, frame);
+            }
+        }
+        if !leaf_cached {
+            let mut detail = self.take_buffer(len);
+            detail.fill(0.0);
+            self.decode_stream_add(tex, &view, block, path[n_levels - 1], &mut detail)?;
+            self.insert(path[n_levels - 1], detail, 0, frame);
         }
         Ok(())
+    }
+
+    fn insert(&mut self, key: ImageKey, data: Vec<f32>, up: usize, frame: u64) {
+        self.images.insert(
+            key,
+            Entry {
+                data,
+                last_used: frame,
+                lifetime: self.life.frames(up),
+            },
+        );
     }
 
     /// A buffer of `len` floats from the pool of evicted images (contents
@@ -480,11 +507,11 @@ impl DecodeCache {
     }
 }
 
-/// Planar coding-domain image (+ optional MIP prediction) → interleaved
-/// linear RGBA, converted to `T` in bulk.
+/// Planar coding-domain image (parent prefix + leaf detail, + optional
+/// MIP prediction) → interleaved linear RGBA, converted to `T` in bulk.
 fn write_rgba<T: OutTexel>(
     g: Gamma,
-    img: &[f32],
+    img: [&[f32]; 2],
     pred: Option<&[f32]>,
     n: usize,
     ch: usize,
@@ -500,7 +527,7 @@ fn write_rgba<T: OutTexel>(
 #[inline(always)]
 fn write_rgba_with<T: OutTexel>(
     inv: impl Fn(f32) -> f32,
-    img: &[f32],
+    img: [&[f32]; 2],
     pred: Option<&[f32]>,
     n: usize,
     ch: usize,
@@ -519,7 +546,10 @@ fn write_rgba_with<T: OutTexel>(
                 s.fill(1.0);
                 continue;
             }
-            s.copy_from_slice(&img[c * n + base..][..m]);
+            let (a, b) = (&img[0][c * n + base..][..m], &img[1][c * n + base..][..m]);
+            s.iter_mut()
+                .zip(a.iter().zip(b))
+                .for_each(|(o, (x, y))| *o = x + y);
             if let Some(p) = pred {
                 s.iter_mut()
                     .zip(&p[c * n + base..][..m])
