@@ -118,6 +118,7 @@ pub struct DecodeCache {
     pool: Vec<Vec<f32>>,
     pred: Vec<f32>,
     pred_next: Vec<f32>,
+    sum0: Vec<f32>,
     stats: CacheStats,
 }
 
@@ -138,6 +139,7 @@ impl DecodeCache {
             pool: Vec::new(),
             pred: Vec::new(),
             pred_next: Vec::new(),
+            sum0: Vec::new(),
             stats: CacheStats::default(),
         }
     }
@@ -358,15 +360,8 @@ impl DecodeCache {
             };
             if mip == 1 {
                 let (pw, ph) = l.mip_size(0);
-                let m0 = pw * ph * ch;
                 self.pred.resize(n * ch, 0.0);
-                self.pred_next.resize(n * ch, 0.0);
-                box_down(&parent[..m0], pw, ph, ch, &mut self.pred);
-                box_down(&detail[..m0], pw, ph, ch, &mut self.pred_next);
-                self.pred
-                    .iter_mut()
-                    .zip(&self.pred_next)
-                    .for_each(|(a, b)| *a += b);
+                box_down(&self.sum0, pw, ph, ch, &mut self.pred);
             } else if mip > 1 {
                 let (pw, ph) = l.mip_size(mip - 1);
                 self.pred_next.resize(n * ch, 0.0);
@@ -383,7 +378,11 @@ impl DecodeCache {
                 } else {
                     None
                 };
-                write_rgba(gamma, [p, d], pred, n, ch, o);
+                let keep = (mip == 0 && last_mip > 0).then_some(&mut self.sum0);
+                write_rgba(gamma, [p, d], pred, n, ch, o, keep);
+            } else if mip == 0 && last_mip > 0 {
+                self.sum0.clear();
+                self.sum0.extend(p.iter().zip(d).map(|(a, b)| a + b));
             }
             off += n * ch;
         }
@@ -509,6 +508,9 @@ impl DecodeCache {
 
 /// Planar coding-domain image (parent prefix + leaf detail, + optional
 /// MIP prediction) → interleaved linear RGBA, converted to `T` in bulk.
+/// With `keep`, the planar sums (before the colour transform) are stored
+/// there too: the next MIP level's prediction is decimated from them.
+#[allow(clippy::too_many_arguments)]
 fn write_rgba<T: OutTexel>(
     g: Gamma,
     img: [&[f32]; 2],
@@ -516,15 +518,22 @@ fn write_rgba<T: OutTexel>(
     n: usize,
     ch: usize,
     out: &mut [T],
+    keep: Option<&mut Vec<f32>>,
 ) {
+    let keep = keep.map(|k| {
+        k.clear();
+        k.resize(n * ch, 0.0);
+        &mut k[..]
+    });
     if g.0 == 2.0 {
-        write_rgba_with(|v: f32| v * v.abs(), img, pred, n, ch, out)
+        write_rgba_with(|v: f32| v * v.abs(), img, pred, n, ch, out, keep)
     } else {
-        write_rgba_with(|v: f32| g.inverse(v), img, pred, n, ch, out)
+        write_rgba_with(|v: f32| g.inverse(v), img, pred, n, ch, out, keep)
     }
 }
 
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn write_rgba_with<T: OutTexel>(
     inv: impl Fn(f32) -> f32,
     img: [&[f32]; 2],
@@ -532,6 +541,7 @@ fn write_rgba_with<T: OutTexel>(
     n: usize,
     ch: usize,
     out: &mut [T],
+    mut keep: Option<&mut [f32]>,
 ) {
     const CHUNK: usize = 1024;
     let mut tmp = [0.0f32; CHUNK * 4];
@@ -555,14 +565,22 @@ fn write_rgba_with<T: OutTexel>(
                     .zip(&p[c * n + base..][..m])
                     .for_each(|(a, b)| *a += b);
             }
+            if let Some(k) = keep.as_deref_mut() {
+                k[c * n + base..][..m].copy_from_slice(s);
+            }
         }
-        let [y, co, cg, a] = &sum;
-        for (j, px) in tmp[..m * 4].chunks_exact_mut(4).enumerate() {
-            let t = y[j] - cg[j];
-            px[0] = inv(t + co[j]);
-            px[1] = inv(y[j] + cg[j]);
-            px[2] = inv(t - co[j]);
-            px[3] = a[j];
+        // Colour transform in place (planar, vectorisable), then interleave.
+        let [y, co, cg, a] = &mut sum;
+        for ((y, co), cg) in y[..m].iter_mut().zip(&mut co[..m]).zip(&mut cg[..m]) {
+            let t = *y - *cg;
+            let (r, g, b) = (inv(t + *co), inv(*y + *cg), inv(t - *co));
+            (*y, *co, *cg) = (r, g, b);
+        }
+        for (px, ((r, g), (b, a))) in tmp[..m * 4]
+            .chunks_exact_mut(4)
+            .zip(y[..m].iter().zip(&co[..m]).zip(cg[..m].iter().zip(&a[..m])))
+        {
+            px.copy_from_slice(&[*r, *g, *b, *a]);
         }
         T::convert(&tmp[..m * 4], dst);
     }
