@@ -7,7 +7,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (bytes, _) = encode(&input, Target::Ratio(384.0), &EncodeOptions::default())?;
     let c = Container::from_bytes(bytes)?;
     let mut out = vec![half::f16::ZERO; input.textures[0].layout.texels() * 4];
-    let mut cache = DecodeCache::new(Lifetimes { a: 1, b: 1000 });
+    let a: u64 = std::env::args()
+        .nth(2)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1);
+    let mut cache = DecodeCache::new(Lifetimes { a, b: 1000 });
     let t = std::time::Instant::now();
     let n: u32 = std::env::args()
         .nth(1)

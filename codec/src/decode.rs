@@ -69,8 +69,10 @@ impl Lifetimes {
     }
 }
 
-/// Evicted image buffers kept for reuse (avoids page-faulting fresh ones).
-const POOL_MAX: usize = 8;
+/// Evicted image buffers kept for reuse: fresh ones page-fault on first
+/// touch, which costs more than decoding (notably in VMs). Bounded by what
+/// was resident anyway.
+const POOL_MAX: usize = 256;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 struct ImageKey {
@@ -159,6 +161,17 @@ impl DecodeCache {
         });
         self.blocks.retain(|_, b| now - b.last_used <= b.lifetime);
         self.stats.evictions += (before - self.images.len()) as u64;
+    }
+
+    /// Drops every cached image into the buffer pool (kept for reuse).
+    pub fn clear(&mut self) {
+        let pool = &mut self.pool;
+        for (_, mut e) in self.images.drain() {
+            if pool.len() < POOL_MAX {
+                pool.push(std::mem::take(&mut e.data));
+            }
+        }
+        self.blocks.clear();
     }
 
     pub fn stats(&self) -> CacheStats {

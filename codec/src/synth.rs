@@ -1,5 +1,5 @@
 //! Synthetic parameterized environment maps for tests and benchmarks:
-//! smooth, view-dependent cube maps with an HDR highlight (range about
+//! view-dependent cube maps, smooth plus fine detail, with an HDR highlight (range about
 //! 1e-3..1e3) and a coverage alpha that move along the parameter, and MIP
 //! levels that are not exact filtered versions of each other (like
 //! inferred ones).
@@ -61,11 +61,18 @@ fn radiance(d: [f32; 3], p: [f32; 2], seed: f32) -> [f32; 4] {
     } else {
         0.0
     };
-    let base = if d[1] >= 0.0 {
-        sky * (0.6 + 0.4 * pattern)
-    } else {
-        ground
-    };
+    // Fine detail (about 20 cycles per face) that slides with the parameter,
+    // like reflected scene texture.
+    let detail = 1.0
+        + 0.25
+            * (60.0 * d[0] + 37.0 * d[1] + 3.0 * p[0]).sin()
+            * (53.0 * d[2] - 29.0 * d[1] + 2.0 * p[1]).sin();
+    let base = detail
+        * if d[1] >= 0.0 {
+            sky * (0.6 + 0.4 * pattern)
+        } else {
+            ground
+        };
     let cov = 1.0 / (1.0 + (-(8.0 * (d[2] - 0.6 * (a * 0.5).sin()))).exp());
     [
         base * 0.8 + sun,
