@@ -431,7 +431,10 @@ impl DecodeCache {
             for (level, key) in path.iter().enumerate().take(n_levels - 1).skip(start) {
                 self.decode_stream_add(tex, &view, block, *key, &mut cur)?;
                 let data = if level + 2 < n_levels {
-                    cur.clone()
+                    // A pooled buffer, not a fresh allocation (first touch faults).
+                    let mut copy = self.take_buffer(len);
+                    copy.copy_from_slice(&cur);
+                    copy
                 } else {
                     std::mem::take(&mut cur)
                 };

@@ -50,7 +50,11 @@ pub struct CodecReport {
     pub ratio: f64,
     /// The same against 8 bits per channel, the thesis's reference.
     pub ratio_vs_8bit: f64,
+    /// Texture PSNR (see [`PSNR_DEFINITION`]).
     pub psnr_db: f64,
+    /// PSNR of rendered frames against the gold standard: filled in by the
+    /// engine, which renders them; `None` here.
+    pub frames_psnr_db: Option<f64>,
     pub bytes: u64,
     pub raw_bytes: u64,
     /// Median wall time to decode one leaf (all faces and MIPs) into an f16
@@ -147,6 +151,7 @@ pub fn report(c: &Container, reference: &EncodeInput, opts: &ReportOptions) -> R
         ratio: raw as f64 / bytes as f64,
         ratio_vs_8bit: raw as f64 / 4.0 / bytes as f64,
         psnr_db: total.psnr_db(),
+        frames_psnr_db: None,
         bytes,
         raw_bytes: raw,
         decode_ms_median: median,
@@ -193,6 +198,62 @@ fn atlas(t: &ParamTexture, s: usize, peak: f32) -> (u32, u32, Vec<u8>, Vec<u8>) 
         y0 += h;
     }
     (aw as u32, ah as u32, rgb, alpha)
+}
+
+/// The atlas of [`atlas`] at 16 bits per channel (`rgb48le` bytes),
+/// recomputed from the sample (the 8-bit one only gives the geometry).
+fn widen(t: &ParamTexture, s: usize, peak: f32, rgb8: &[u8]) -> Vec<u8> {
+    let l = &t.layout;
+    let ch = l.channels as usize;
+    let aw = l.width as usize * l.faces as usize;
+    let mut out = vec![0u8; rgb8.len() * 2];
+    let sample = t.sample(s);
+    let mut y0 = 0;
+    for m in 0..l.mips {
+        let (w, h) = l.mip_size(m);
+        for f in 0..l.faces as usize {
+            let o = l.texel_offset(f as u32, m) * ch;
+            for y in 0..h {
+                for x in 0..w {
+                    let px = &sample[o + (y * w + x) * ch..][..ch];
+                    let d = (y0 + y) * aw + f * w + x;
+                    for c in 0..3 {
+                        let v = (q(px[c]) / peak * 65535.0).round().clamp(0.0, 65535.0) as u16;
+                        out[(d * 3 + c) * 2..][..2].copy_from_slice(&v.to_le_bytes());
+                    }
+                }
+            }
+        }
+        y0 += h;
+    }
+    out
+}
+
+/// Inverse of [`widen`] into RGBA f32 (alpha left as is).
+fn from_atlas16(t: &ParamTexture, peak: f32, rgb16: &[u8], out: &mut [f32]) {
+    let l = &t.layout;
+    let aw = l.width as usize * l.faces as usize;
+    let mut y0 = 0;
+    for m in 0..l.mips {
+        let (w, h) = l.mip_size(m);
+        for f in 0..l.faces as usize {
+            let o = l.texel_offset(f as u32, m) * 4;
+            for y in 0..h {
+                for x in 0..w {
+                    let d = (y0 + y) * aw + f * w + x;
+                    let px = &mut out[o + (y * w + x) * 4..][..4];
+                    for (c, p) in px[..3].iter_mut().enumerate() {
+                        let b = rgb16
+                            .get((d * 3 + c) * 2..(d * 3 + c) * 2 + 2)
+                            .unwrap_or(&[0, 0]);
+                        let v = u16::from_le_bytes([b[0], b[1]]) as f32 / 65535.0 * peak;
+                        *p = v * v;
+                    }
+                }
+            }
+        }
+        y0 += h;
+    }
 }
 
 /// Inverse of [`atlas`] for decoded 8-bit images into RGBA f32.
@@ -338,8 +399,9 @@ pub fn ffmpeg_available() -> bool {
         .is_ok_and(|s| s.success())
 }
 
-/// Encodes 8-bit RGB frames with ffmpeg/libx264 (yuv444p, constant rate
-/// factor `crf`, an I-frame every `gop` frames) and decodes them back.
+/// Encodes 16-bit RGB frames (`rgb48le`) with ffmpeg/libx264 at 10 bits
+/// (yuv444p10le, constant rate factor `crf`, an I-frame every `gop`
+/// frames) and decodes them back.
 /// Returns (decoded frames, bytes). Used for MPEG-texture here and
 /// MPEG-view by the engine.
 pub fn ffmpeg_round_trip(
@@ -365,7 +427,7 @@ pub fn ffmpeg_round_trip(
             "-f",
             "rawvideo",
             "-pix_fmt",
-            "rgb24",
+            "rgb48le",
             "-s",
             &size,
             "-r",
@@ -379,7 +441,7 @@ pub fn ffmpeg_round_trip(
             "-preset",
             "slow",
             "-pix_fmt",
-            "yuv444p",
+            "yuv444p10le",
             "-crf",
             &crf.to_string(),
             "-g",
@@ -407,7 +469,7 @@ pub fn ffmpeg_round_trip(
     let mut dec = Command::new("ffmpeg")
         .args(["-loglevel", "error", "-i"])
         .arg(&mp4)
-        .args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"])
+        .args(["-f", "rawvideo", "-pix_fmt", "rgb48le", "-"])
         .stdout(Stdio::piped())
         .spawn()
         .map_err(|e| err(e.to_string()))?;
@@ -419,7 +481,7 @@ pub fn ffmpeg_round_trip(
         .map_err(|e| err(e.to_string()))?;
     dec.wait().map_err(|e| err(e.to_string()))?;
     let _ = std::fs::remove_dir_all(&dir);
-    let fsz = (w * h * 3) as usize;
+    let fsz = (w * h * 6) as usize;
     if raw.len() < fsz * frames.len() {
         return Err(err(format!(
             "decoded {} bytes, expected {}",
@@ -457,6 +519,8 @@ fn mpeg_texture_baseline(reference: &EncodeInput, target: u64) -> Result<Baselin
         let (mut w, mut h) = (0, 0);
         for &s in &order {
             let (aw, ah, rgb, _) = atlas(t, s, peak);
+            // 16-bit input: the 8-bit atlas would cap the baseline near 59 dB.
+            let rgb = widen(t, s, peak, &rgb);
             (w, h) = (aw, ah);
             frames.push(rgb);
         }
@@ -470,7 +534,7 @@ fn mpeg_texture_baseline(reference: &EncodeInput, target: u64) -> Result<Baselin
             bytes += b;
             let mut out = vec![0.0f32; t.layout.texels() * 4];
             for (&s, f) in order.iter().zip(&decoded) {
-                from_atlas(t, *peak, f, None, &mut out);
+                from_atlas16(t, *peak, f, &mut out);
                 if t.layout.channels == 4 {
                     for (o, r) in out.chunks_exact_mut(4).zip(t.sample(s).chunks_exact(4)) {
                         o[3] = r[3];
@@ -504,7 +568,7 @@ fn mpeg_texture_baseline(reference: &EncodeInput, target: u64) -> Result<Baselin
         psnr_db: best.1,
         bytes: best.0,
         note: Some(format!(
-            "libx264 yuv444p 8-bit, crf {best_crf}, GOP 8, one stream per texture, alpha not coded{}",
+            "libx264 yuv444p10le (10-bit), crf {best_crf}, GOP 8, one stream per texture, alpha not coded{}",
             if best.0 > target {
                 "; cannot reach the codec's bytes"
             } else {
