@@ -1,0 +1,120 @@
+//! One error enum for the crate. Every variant names what was wrong and
+//! where, so a bad file or a bad input can be diagnosed from the message.
+
+use thiserror::Error;
+
+/// Everything the encoder, the container parser and the decoder can reject.
+#[derive(Debug, Error)]
+pub enum CodecError {
+    /// An input texture holds a NaN or an infinity.
+    #[error(
+        "texture (object {object}, layer {layer}): non-finite value {value} at sample {sample}, element {element}"
+    )]
+    NonFinite {
+        object: u32,
+        layer: u32,
+        sample: usize,
+        element: usize,
+        value: f32,
+    },
+    /// An input texture's description is inconsistent.
+    #[error("texture (object {object}, layer {layer}): {what}")]
+    BadInput {
+        object: u32,
+        layer: u32,
+        what: String,
+    },
+    /// The encode input as a whole is unusable (empty, duplicate ids, bad target).
+    #[error("encode input: {0}")]
+    BadRequest(String),
+    /// The byte budget cannot hold even the container's fixed structure.
+    #[error("byte budget {budget} is below the container's minimum of {minimum} bytes")]
+    BudgetTooSmall { budget: u64, minimum: u64 },
+
+    /// The file ended before a field could be read.
+    #[error("truncated container: {field} needs {needed} bytes at offset {offset}, file has {len}")]
+    Truncated {
+        field: &'static str,
+        offset: u64,
+        needed: u64,
+        len: u64,
+    },
+    /// The first four bytes are not the container's magic.
+    #[error("not a codec container: magic {got:02x?}, expected {expected:02x?}")]
+    BadMagic { got: [u8; 4], expected: [u8; 4] },
+    /// The container was written by another format version.
+    #[error(
+        "container format version {got} is not supported (this decoder reads version {expected}); re-encode the scene"
+    )]
+    VersionMismatch { got: u32, expected: u32 },
+    /// A header field holds a value outside its allowed range.
+    #[error("container header: field {field} = {got}, expected {expected}")]
+    BadField {
+        field: &'static str,
+        got: u64,
+        expected: String,
+    },
+    /// The header checksum does not match its bytes.
+    #[error("container header checksum mismatch: stored {stored:08x}, computed {computed:08x}")]
+    HeaderChecksum { stored: u32, computed: u32 },
+    /// A block index entry points outside the file or overlaps the header.
+    #[error("block {block}: range {offset}..{end} lies outside the payload area {start}..{len}")]
+    BlockOutOfRange {
+        block: usize,
+        offset: u64,
+        end: u64,
+        start: u64,
+        len: u64,
+    },
+    /// A block's bytes do not match its checksum.
+    #[error("block {block}: checksum mismatch, stored {stored:08x}, computed {computed:08x}")]
+    BlockChecksum {
+        block: usize,
+        stored: u32,
+        computed: u32,
+    },
+    /// A block's own structure is inconsistent.
+    #[error("block {block}: {what}")]
+    BadBlock { block: usize, what: String },
+    /// The entropy-coded data of one image is corrupt.
+    #[error("block {block}, stream {stream}: corrupt entropy-coded data ({what})")]
+    CorruptStream {
+        block: usize,
+        stream: usize,
+        what: &'static str,
+    },
+    /// The declared uncompressed size is implausibly large for the file.
+    #[error(
+        "container declares {declared} raw bytes from a {file_len}-byte file (more than {max_ratio}:1)"
+    )]
+    ImplausibleSize {
+        declared: u64,
+        file_len: u64,
+        max_ratio: u64,
+    },
+
+    /// The caller asked for something the container does not hold.
+    #[error("no texture for object {object}, layer {layer}")]
+    NoSuchTexture { object: u32, layer: u32 },
+    /// A sample, face or MIP index is out of range.
+    #[error("{what} index {got} out of range 0..{limit}")]
+    IndexOutOfRange {
+        what: &'static str,
+        got: u64,
+        limit: u64,
+    },
+    /// The caller's output slice has the wrong length.
+    #[error("output slice holds {got} elements, expected {expected}")]
+    OutputSize { got: usize, expected: usize },
+
+    #[error("i/o error on {path}: {source}")]
+    Io {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("baseline {name}: {what}")]
+    Baseline { name: &'static str, what: String },
+}
+
+pub type Result<T> = std::result::Result<T, CodecError>;
