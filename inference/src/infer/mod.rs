@@ -3,3 +3,6 @@
 //! forward-mapping baseline it is measured against.
 
 pub mod forward;
+pub mod layer;
+
+pub use layer::{InferError, LayerResult, Target, infer_layer};

@@ -1,0 +1,185 @@
+//! Infers one map (a cube EM layer or a 2D texture) for one view: probe
+//! renders build A, the regularized solve fits the target, and the engine's
+//! actual render of the result is compared with the target beside the
+//! forward-mapping baseline.
+
+use super::forward::forward_map;
+use crate::probe::{ProbeError, ProbeGeometry, ProbeRenderer, RenderingMatrix, build_matrix, verify_matrix};
+use crate::solve::layout::{TextureLayout, TextureShape};
+use crate::solve::{SolveOptions, solve_channels};
+use std::time::{Duration, Instant};
+
+/// What the map must reproduce: `channels` (3 or 4) of `pixels`.
+pub struct Target<'a> {
+    pub name: &'a str,
+    pub pixels: &'a [[f32; 4]],
+    pub channels: usize,
+}
+
+pub struct LayerResult {
+    pub name: String,
+    pub layout: TextureLayout,
+    /// Least-squares map, one Vec per channel, layout order.
+    pub map: Vec<Vec<f32>>,
+    pub forward: Vec<Vec<f32>>,
+    pub probe_renders: u32,
+    pub a_vs_render_psnr_db: f64,
+    pub psnr_least_squares_db: f64,
+    pub psnr_forward_db: f64,
+    pub rows: usize,
+    pub nnz: usize,
+    pub iterations: Vec<u32>,
+    pub diagnostics: Vec<String>,
+    pub probe_time: Duration,
+    pub assembly_time: Duration,
+    pub solve_time: Duration,
+}
+
+/// Times the renderer so probe renders and matrix assembly can be told apart.
+struct Timed<'a> {
+    inner: &'a mut dyn ProbeRenderer,
+    spent: Duration,
+}
+
+impl ProbeRenderer for Timed<'_> {
+    fn render(&mut self, g: &ProbeGeometry, l: &TextureLayout, t: &[[f32; 4]]) -> Result<Vec<[f32; 4]>, ProbeError> {
+        let start = Instant::now();
+        let image = self.inner.render(g, l, t);
+        self.spent += start.elapsed();
+        image
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum InferError {
+    #[error(transparent)]
+    Probe(#[from] ProbeError),
+    #[error(transparent)]
+    Solve(#[from] crate::solve::SolveError),
+    #[error("layer {layer}: non-finite value at pixel {pixel} channel {channel} (expected finite floats)")]
+    NonFinite { layer: String, pixel: usize, channel: usize },
+    #[error("layer {layer}: {got} pixels, the view has {expected}")]
+    Size { layer: String, got: usize, expected: usize },
+}
+
+/// Interleaves per-channel maps into RGBA texels (alpha 1 when absent).
+pub fn texels(map: &[Vec<f32>], len: usize) -> Vec<[f32; 4]> {
+    (0..len)
+        .map(|i| std::array::from_fn(|c| map.get(c).map_or(1.0, |m| m[i])))
+        .collect()
+}
+
+/// PSNR over the rows' pixels and the target's channels; peak = the
+/// target's largest value there (HDR-safe), ∞ when identical.
+pub fn psnr_over_rows(image: &[[f32; 4]], target: &Target, pixels: &[u32]) -> f64 {
+    let mut peak = 0.0f64;
+    let mut sum = 0.0f64;
+    let mut n = 0usize;
+    for &p in pixels {
+        for c in 0..target.channels {
+            let t = f64::from(target.pixels[p as usize][c]);
+            let d = f64::from(image[p as usize][c]) - t;
+            peak = peak.max(t.abs());
+            sum += d * d;
+            n += 1;
+        }
+    }
+    if n == 0 {
+        return f64::NAN;
+    }
+    let mse = sum / n as f64;
+    if mse == 0.0 {
+        f64::INFINITY
+    } else if peak == 0.0 {
+        f64::NEG_INFINITY
+    } else {
+        10.0 * (peak * peak / mse).log10()
+    }
+}
+
+pub fn infer_layer(
+    renderer: &mut dyn ProbeRenderer,
+    geometry: &ProbeGeometry,
+    shape: TextureShape,
+    target: &Target,
+    warm_start: Option<&[Vec<f32>]>,
+    options: &SolveOptions,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<LayerResult, InferError> {
+    let expected = geometry.width as usize * geometry.height as usize;
+    if target.pixels.len() != expected {
+        return Err(InferError::Size {
+            layer: target.name.into(),
+            got: target.pixels.len(),
+            expected,
+        });
+    }
+    if let Some((pixel, channel)) = target
+        .pixels
+        .iter()
+        .enumerate()
+        .find_map(|(p, v)| v.iter().position(|c| !c.is_finite()).map(|c| (p, c)))
+    {
+        return Err(InferError::NonFinite {
+            layer: target.name.into(),
+            pixel,
+            channel,
+        });
+    }
+    let layout = TextureLayout::full_chain(shape);
+    let mut timed = Timed {
+        inner: renderer,
+        spent: Duration::ZERO,
+    };
+    let start = Instant::now();
+    let matrix: RenderingMatrix = build_matrix(&mut timed, geometry, &layout, shape, progress)?;
+    let build_time = start.elapsed();
+    let probe_time = timed.spent;
+    let verify = verify_matrix(&mut timed, geometry, &layout, &matrix, 1)?;
+
+    let bs: Vec<Vec<f32>> = (0..target.channels)
+        .map(|c| matrix.pixels.iter().map(|&p| target.pixels[p as usize][c]).collect())
+        .collect();
+    let b_refs: Vec<&[f32]> = bs.iter().map(Vec::as_slice).collect();
+    let warm: Option<Vec<&[f32]>> = warm_start
+        .filter(|w| w.len() == target.channels && w.iter().all(|m| m.len() == layout.len()))
+        .map(|w| w.iter().map(Vec::as_slice).collect());
+    let start = Instant::now();
+    let solutions = solve_channels(&matrix.a, &b_refs, &layout, warm.as_deref(), options)?;
+    let solve_time = start.elapsed();
+
+    let width = geometry.width;
+    let object: Vec<bool> = {
+        let mut mask = vec![false; expected];
+        for &p in &matrix.pixels {
+            mask[p as usize] = true;
+        }
+        mask
+    };
+    let forward: Vec<Vec<f32>> = (0..target.channels)
+        .map(|c| {
+            let channel: Vec<f32> = target.pixels.iter().map(|v| v[c]).collect();
+            forward_map(&matrix.a, &matrix.pixels, &layout, width, &channel, &object)
+        })
+        .collect();
+    let map: Vec<Vec<f32>> = solutions.iter().map(|s| s.x.clone()).collect();
+    let rendered_ls = timed.render(geometry, &layout, &texels(&map, layout.len()))?;
+    let rendered_fm = timed.render(geometry, &layout, &texels(&forward, layout.len()))?;
+    Ok(LayerResult {
+        name: target.name.into(),
+        psnr_least_squares_db: psnr_over_rows(&rendered_ls, target, &matrix.pixels),
+        psnr_forward_db: psnr_over_rows(&rendered_fm, target, &matrix.pixels),
+        a_vs_render_psnr_db: verify.psnr_db,
+        probe_renders: matrix.probe_renders,
+        rows: matrix.pixels.len(),
+        nnz: matrix.a.nnz(),
+        iterations: solutions.iter().map(|s| s.iterations).collect(),
+        diagnostics: solutions.iter().filter_map(|s| s.diagnostic.clone()).collect(),
+        probe_time,
+        assembly_time: build_time.saturating_sub(probe_time),
+        solve_time,
+        layout,
+        map,
+        forward,
+    })
+}
