@@ -11,6 +11,7 @@
 use std::error::Error;
 use std::time::Instant;
 
+use inference::solve::seams::cube_face_uv;
 use inference::solve::{
     CsrBuilder, CsrMatrix, Form, SolveError, SolveOptions, Solver, TextureLayout, TextureShape,
 };
@@ -35,30 +36,6 @@ fn cpu_seconds() -> f64 {
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
-}
-
-/// Cube face and [0,1]² coordinates of direction `d` (Vulkan face order).
-fn cube_uv(d: [f64; 3]) -> (u32, f64, f64) {
-    let [x, y, z] = d;
-    let (ax, ay, az) = (x.abs(), y.abs(), z.abs());
-    let (face, sc, tc, ma) = if ax >= ay && ax >= az {
-        if x > 0.0 {
-            (0, -z, -y, ax)
-        } else {
-            (1, z, -y, ax)
-        }
-    } else if ay >= az {
-        if y > 0.0 {
-            (2, x, z, ay)
-        } else {
-            (3, x, -z, ay)
-        }
-    } else if z > 0.0 {
-        (4, x, -y, az)
-    } else {
-        (5, -x, -y, az)
-    };
-    (face, 0.5 * (sc / ma + 1.0), 0.5 * (tc / ma + 1.0))
 }
 
 /// Reflection of the view ray off a unit sphere seen orthographically.
@@ -98,10 +75,10 @@ fn build_problem(
             ) else {
                 continue;
             };
-            let (face, u, v) = cube_uv(d);
+            let (face, u, v) = cube_face_uv(d);
             // LOD from the footprint of one pixel (approximate at face seams).
-            let (_, ux, vx) = cube_uv(dx);
-            let (_, uy, vy) = cube_uv(dy);
+            let (_, ux, vx) = cube_face_uv(dx);
+            let (_, uy, vy) = cube_face_uv(dy);
             let fp = ((ux - u).hypot(vx - v)).max((uy - u).hypot(vy - v)) * size as f64;
             let lod = fp.max(1e-9).log2().clamp(0.0, last as f64);
             let l0 = (lod.floor() as u32).min(last);
