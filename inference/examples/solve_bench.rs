@@ -174,6 +174,15 @@ fn main() -> Result<(), Box<dyn Error>> {
         a.nnz() as f64 / a.rows as f64,
         t.elapsed().as_secs_f64()
     );
+    let ata = a.normal_matrix();
+    println!(
+        "AᵀA: nnz = {} ({:.2} per texel, {:.2}× nnz(A)); K-switch picks {:?}",
+        ata.nnz(),
+        ata.nnz() as f64 / a.cols as f64,
+        ata.nnz() as f64 / a.nnz() as f64,
+        Solver::new(&a, &layout, &SolveOptions::default())?.form()
+    );
+    drop(ata);
     // The neighbouring parameter sample: the same A, b off by ~1%.
     let b_next: Vec<f32> = b
         .iter()
