@@ -156,6 +156,17 @@ impl CsrMatrix {
         }
     }
 
+    /// `x += s · Aᵀ y`, serial scatter: for short matrices (seam rows) where
+    /// a transposed copy would be mostly empty rows.
+    pub(crate) fn mul_transpose_acc(&self, y: &[f64], s: f64, x: &mut [f64]) {
+        assert_eq!((y.len(), x.len()), (self.rows, self.cols), "Aᵀ y shape");
+        for (r, &yr) in y.iter().enumerate() {
+            for k in self.row_ptr[r]..self.row_ptr[r + 1] {
+                x[self.col_idx[k] as usize] += s * self.values[k] as f64 * yr;
+            }
+        }
+    }
+
     /// `Aᵀ` with each row's columns ascending (counting sort, O(nnz)).
     pub fn transpose(&self) -> CsrMatrix {
         let mut row_ptr = vec![0usize; self.cols + 1];

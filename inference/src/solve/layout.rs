@@ -67,7 +67,16 @@ impl TextureLayout {
         for l in 0..levels {
             level_offset.push(total);
             let (lw, lh) = (((w >> l).max(1)) as usize, ((h >> l).max(1)) as usize);
-            total += faces * lw * lh;
+            total = faces
+                .checked_mul(lw)
+                .and_then(|v| v.checked_mul(lh))
+                .and_then(|v| v.checked_add(total))
+                .filter(|&t| t <= u32::MAX as usize + 1)
+                .ok_or_else(|| SolveError::InvalidLayout {
+                    reason: format!(
+                        "{shape:?} has more texels than u32 column indices can address"
+                    ),
+                })?;
         }
         level_offset.push(total);
         Ok(Self {
@@ -77,8 +86,9 @@ impl TextureLayout {
         })
     }
 
-    /// All levels down to 1×1. Shapes with a zero dimension get an empty
-    /// layout (`len() == 0`) rather than a panic.
+    /// All levels down to 1×1. Shapes [`new`](Self::new) rejects (a zero
+    /// dimension, more than 2³² texels) get an empty layout (`len() == 0`)
+    /// rather than a panic.
     pub fn full_chain(shape: TextureShape) -> Self {
         let levels = shape.full_levels();
         Self::new(shape, levels).unwrap_or(Self {
@@ -203,5 +213,10 @@ mod tests {
         assert!(TextureLayout::new(s, 3).is_ok());
         assert!(TextureLayout::new(TextureShape::Cube { size: 0 }, 1).is_err());
         assert!(TextureLayout::full_chain(TextureShape::Cube { size: 0 }).is_empty());
+        let huge = TextureShape::Cube { size: 1 << 30 };
+        assert!(matches!(
+            TextureLayout::new(huge, 1),
+            Err(SolveError::InvalidLayout { .. })
+        ));
     }
 }

@@ -11,7 +11,9 @@
 //! - Γ ([`pyramid`]): Σ over levels l < last of ‖level_l − bilinear
 //!   upsample(level_{l+1})‖², per face, clamped at face edges (cube faces
 //!   are not coupled across seams). Quadratic: folded into the CG operator
-//!   as matrix-free stencils.
+//!   as matrix-free stencils. Optional, not in the thesis: a seam term
+//!   `ε_seam (n_s/n_t) Σ (x_i − x_j)²` over texels adjacent across cube face
+//!   edges ([`seams`], off by default).
 //! - The quadratic part is solved by Jacobi-preconditioned CG on the normal
 //!   equations `(AᵀA + λ_f PᵀP) x = Aᵀb`, using products with A and Aᵀ
 //!   ([`Form::A`]) or the stored sparse AᵀA ([`Form::NormalMatrix`]); AᵀA
@@ -21,10 +23,11 @@
 //!   quadratic solution. s = 1 for [0,1] data; for HDR, s = `range_max` or
 //!   max(b), and the s² factor (1 for LDR, as in the thesis) keeps the
 //!   barrier's weight relative to the data term, so the solve is scale-free.
-//! - Texels no pixel influences are defined by Γ alone. If a whole cube face
-//!   (or, with a truncated chain, a top-level texel's whole footprint) is
-//!   unseen, the operator is singular there and CG keeps that component at
-//!   the start value: 0 cold, the neighbour's value when warm-started.
+//! - Texels no pixel influences are defined by Γ alone. Without the seam
+//!   term, if a whole cube face (or, with a truncated chain, a top-level
+//!   texel's whole footprint) is unseen, the operator is singular there and
+//!   CG keeps that component at the start value: 0 cold, the neighbour's
+//!   value when warm-started (the solution's diagnostic names such faces).
 //! - All products and reductions sum in a fixed order: results are
 //!   bit-identical for any rayon thread count.
 
@@ -39,6 +42,7 @@ pub mod pyramid;
 mod pyramid_op;
 pub mod range;
 mod row_sums;
+pub mod seams;
 mod solver;
 mod vecops;
 

@@ -31,9 +31,16 @@ pub(crate) struct Pyramid {
     pub p: PyramidOperator,
 }
 
+/// λ_seam and the seam-difference matrix S (cube maps, optional).
+pub(crate) struct Seams {
+    pub lambda: f64,
+    pub s: CsrMatrix,
+}
+
 pub(crate) struct Operator<'a> {
     data: Data<'a>,
     reg: Option<Pyramid>,
+    seams: Option<Seams>,
     /// diag(M), the Jacobi preconditioner's base.
     pub diag: Vec<f64>,
 }
@@ -42,15 +49,21 @@ pub(crate) struct Operator<'a> {
 pub(crate) struct Scratch {
     screen: Vec<f64>,
     pyramid: Vec<f64>,
+    seam: Vec<f64>,
 }
 
 impl<'a> Operator<'a> {
-    pub fn new(a: &'a CsrMatrix, reg: Option<Pyramid>, form: Form) -> Self {
+    pub fn new(a: &'a CsrMatrix, reg: Option<Pyramid>, seams: Option<Seams>, form: Form) -> Self {
         let at = a.transpose();
         let mut diag = a.column_sq_norms();
         if let Some(r) = &reg {
             for (d, pd) in diag.iter_mut().zip(r.p.column_sq_norms()) {
                 *d += r.lambda * pd;
+            }
+        }
+        if let Some(sm) = &seams {
+            for (d, sd) in diag.iter_mut().zip(sm.s.column_sq_norms()) {
+                *d += sm.lambda * sd;
             }
         }
         let data = match form {
@@ -59,7 +72,12 @@ impl<'a> Operator<'a> {
                 n: a.gram_with_transpose(&at),
             },
         };
-        Self { data, reg, diag }
+        Self {
+            data,
+            reg,
+            seams,
+            diag,
+        }
     }
 
     pub fn form(&self) -> Form {
@@ -76,6 +94,7 @@ impl<'a> Operator<'a> {
                 Data::Normal { .. } => Vec::new(),
             },
             pyramid: vec![0.0; self.reg.as_ref().map_or(0, |r| r.p.rows)],
+            seam: vec![0.0; self.seams.as_ref().map_or(0, |sm| sm.s.rows)],
         }
     }
 
@@ -93,6 +112,10 @@ impl<'a> Operator<'a> {
             let l = r.lambda;
             for_each_mut(&mut s.pyramid, |_, x| *x *= l);
             r.p.mul_transpose_acc(&s.pyramid, out);
+        }
+        if let Some(sm) = &self.seams {
+            sm.s.mul(v, &mut s.seam);
+            sm.s.mul_transpose_acc(&s.seam, sm.lambda, out);
         }
         if let Some(e) = extra {
             for_each_mut(out, |i, o| *o += e[i] * v[i]);

@@ -8,6 +8,11 @@ pub use super::operator::Form;
 pub struct SolveOptions {
     /// Pyramidal regularization weight ε_f (thesis: 0.1).
     pub eps_f: f32,
+    /// Cube maps only: weight of the seam term Σ (x_i − x_j)² over texels
+    /// adjacent across face edges, scaled by n_s/n_t like ε_f. Not in the
+    /// thesis; 0 (default) leaves faces independent. > 0 fills unseen faces
+    /// from their neighbours and makes the system SPD once any texel is seen.
+    pub eps_seam: f32,
     /// Range regularization weight ε_b (0 = off; thesis figures used 1/32).
     pub eps_b: f32,
     /// Texel range for the range term: [0, range_max]; the barrier is
@@ -30,6 +35,7 @@ impl Default for SolveOptions {
     fn default() -> Self {
         Self {
             eps_f: 0.1,
+            eps_seam: 0.0,
             eps_b: 0.0,
             range_max: None,
             k_switch: 4.0,

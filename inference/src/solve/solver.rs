@@ -8,10 +8,11 @@ use super::cg::pcg;
 use super::csr::CsrMatrix;
 use super::layout::TextureLayout;
 use super::newton;
-use super::operator::{Form, Operator, Pyramid};
+use super::operator::{Form, Operator, Pyramid, Seams};
 use super::options::{Solution, SolveOptions};
 use super::pyramid_op::PyramidOperator;
 use super::range::calibration;
+use super::seams::seam_matrix;
 
 /// A prepared system for one A: reuse it for every channel (and for any
 /// number of right-hand sides) of that A.
@@ -21,8 +22,8 @@ pub struct Solver<'a> {
     options: SolveOptions,
     /// ε_b (n_s/n_t) / (g(0) − g(½)).
     lambda_b: f64,
-    /// Cube faces no nonzero of A touches (at any level): the pyramid term
-    /// does not couple faces, so these keep their start value.
+    /// Cube faces no nonzero of A touches (at any level): without the seam
+    /// term nothing couples faces, so these keep their start value.
     unseen_faces: Vec<u32>,
 }
 
@@ -82,12 +83,22 @@ impl<'a> Solver<'a> {
             lambda: lambda_f,
             p: PyramidOperator::new(layout),
         });
+        let lambda_seam = options.eps_seam as f64 * ratio;
+        let seams = (lambda_seam > 0.0 && layout.faces() == 6).then(|| Seams {
+            lambda: lambda_seam,
+            s: seam_matrix(layout),
+        });
+        let unseen = if seams.is_some() {
+            Vec::new()
+        } else {
+            unseen_faces(a, layout)
+        };
         Ok(Self {
-            op: Operator::new(a, reg, form),
+            op: Operator::new(a, reg, seams, form),
             a,
             options: options.clone(),
             lambda_b: options.eps_b as f64 * ratio * calibration(),
-            unseen_faces: unseen_faces(a, layout),
+            unseen_faces: unseen,
         })
     }
 

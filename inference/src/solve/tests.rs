@@ -646,3 +646,49 @@ fn hdr_range_scales_with_the_layer_max() {
             .all(|&v| v < 900.0 * (1.0 + range::RANGE_DELTA as f32))
     );
 }
+
+#[test]
+fn seam_term_fills_unseen_faces_from_their_neighbours() {
+    let layout = TextureLayout::full_chain(TextureShape::Cube { size: 8 });
+    let mut bld = CsrBuilder::new(layout.len());
+    let mut b = Vec::new();
+    for y in 0..8 {
+        for x in 0..8 {
+            bld.push_row(&[(layout.index(0, 0, x, y) as u32, 1.0)])
+                .unwrap();
+            b.push(0.5 + 0.02 * x as f32);
+        }
+    }
+    let a = bld.finish();
+    let o = SolveOptions {
+        eps_seam: 0.1,
+        ..opts(0.1, None, 1e-6)
+    };
+    for form in [Form::A, Form::NormalMatrix] {
+        let s = solve(
+            &a,
+            &b,
+            &layout,
+            None,
+            &SolveOptions {
+                force_form: Some(form),
+                ..o.clone()
+            },
+        )
+        .unwrap();
+        assert!(s.converged && s.diagnostic.is_none(), "{:?}", s.diagnostic);
+        // Every face is filled near the seen face's values, none left at 0.
+        for i in 0..layout.len() {
+            assert!(
+                (0.4..0.7).contains(&s.x[i]),
+                "texel {:?} = {}",
+                layout.coords(i),
+                s.x[i]
+            );
+        }
+    }
+    // Constant data: the constant cube satisfies every term exactly.
+    let flat = vec![0.5; b.len()];
+    let s = solve(&a, &flat, &layout, None, &o).unwrap();
+    assert!(max_abs_diff(&s.x, &vec![0.5; layout.len()]) < 1e-4);
+}
