@@ -14,3 +14,4 @@ pub mod perf;
 pub mod play;
 pub mod renderer;
 pub mod shader_interface;
+pub mod trace_cmd;
