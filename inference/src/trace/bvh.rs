@@ -67,7 +67,7 @@ impl SceneBvh {
         }
         let bvh = build_cwbvh_from_tris(
             &tris,
-            BvhBuildParams::medium_build(),
+            BvhBuildParams::slow_build(),
             &mut Duration::default(),
         );
         // Lay primitives out in BVH order (spatial splits may reference one twice).

@@ -91,10 +91,15 @@ impl TileBuffer {
         let x_hi = ((bx - 0.5 + RADIUS).floor().max(0.0) as u32).min(self.stride - 1);
         let y_lo = (by - 0.5 - RADIUS).ceil().max(0.0) as u32;
         let y_hi = ((by - 0.5 + RADIUS).floor().max(0.0) as u32).min(self.rows - 1);
+        // At most 4 columns fall within the 1.5 px radius: weigh them once.
+        let mut wx = [0.0f32; 4];
+        for (i, px) in (x_lo..=x_hi).take(4).enumerate() {
+            wx[i] = gauss(px as f32 + 0.5 - bx);
+        }
         for py in y_lo..=y_hi {
             let wy = gauss(py as f32 + 0.5 - by);
-            for px in x_lo..=x_hi {
-                let w = wy * gauss(px as f32 + 0.5 - bx);
+            for (i, px) in (x_lo..=x_hi).take(4).enumerate() {
+                let w = wy * wx[i];
                 if w <= 0.0 {
                     continue;
                 }
