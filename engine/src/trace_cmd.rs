@@ -41,7 +41,7 @@ pub fn trace(args: &TraceArgs) -> Result<String> {
     } else {
         let angle = args.view_angle.unwrap_or(scene.orbit.start_deg);
         let eye = scene.orbit.eye(angle, args.elevation);
-        let name = format!("view_{angle:+08.3}_{:+07.3}", args.elevation);
+        let name = format!("view_az{angle:+.3}_el{:+.3}", args.elevation);
         vec![(name.into(), eye)]
     };
     let out = output_dir(args, &scene);

@@ -230,3 +230,31 @@ fn all_skips_samples_traced_with_the_same_inputs() {
     let changed = run("2");
     assert_eq!(changed.matches(".exr:").count(), 3, "{changed}");
 }
+
+#[test]
+fn free_view_keeps_its_angles_in_the_file_name() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("trace");
+    let o = engine(&[
+        "trace",
+        "--view-angle",
+        "-12.5",
+        "--elevation",
+        "20",
+        "--size",
+        "8x6",
+        "--spp",
+        "1",
+        "--out",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        files(&out),
+        [
+            "view_az-12.500_el+20.000.exr",
+            "view_az-12.500_el+20.000.key",
+            "view_az-12.500_el+20.000.png"
+        ]
+    );
+}

@@ -124,15 +124,15 @@ pub fn key(scene: &Scene, eye: Vec3, settings: &TraceSettings) -> u64 {
 
 /// The file beside `<stem>.exr` that records the key it was traced with.
 pub fn key_path(stem: &Path) -> PathBuf {
-    stem.with_extension("key")
+    super::output::with_suffix(stem, ".key")
 }
 
 /// True when `<stem>.exr` and `<stem>.png` exist and were traced with `key`.
 pub fn is_fresh(stem: &Path, key: u64) -> bool {
     let recorded = std::fs::read_to_string(key_path(stem)).ok();
     recorded.is_some_and(|r| r.trim() == format!("{key:016x}"))
-        && stem.with_extension("exr").is_file()
-        && stem.with_extension("png").is_file()
+        && super::output::with_suffix(stem, ".exr").is_file()
+        && super::output::with_suffix(stem, ".png").is_file()
 }
 
 /// Records `key` for `<stem>` (atomically, after the images are in place).

@@ -14,8 +14,8 @@ use super::error::TraceError;
 
 /// Writes `<stem>.exr` and `<stem>.png`; returns their paths.
 pub fn write_image(stem: &Path, image: &TraceImage) -> Result<(PathBuf, PathBuf), TraceError> {
-    let exr_path = stem.with_extension("exr");
-    let png_path = stem.with_extension("png");
+    let exr_path = with_suffix(stem, ".exr");
+    let png_path = with_suffix(stem, ".png");
     let exr_tmp = temp_name(&exr_path);
     let png_tmp = temp_name(&png_path);
     let result = write_exr(&exr_tmp, image)
@@ -28,6 +28,14 @@ pub fn write_image(stem: &Path, image: &TraceImage) -> Result<(PathBuf, PathBuf)
         }
     }
     result.map(|()| (exr_path, png_path))
+}
+
+/// `stem` + `suffix`, keeping dots inside the stem (`view_-12.5` + `.exr`), unlike
+/// `Path::with_extension`.
+pub fn with_suffix(stem: &Path, suffix: &str) -> PathBuf {
+    let mut s = stem.as_os_str().to_owned();
+    s.push(suffix);
+    PathBuf::from(s)
 }
 
 /// `dir/.name.tmp`: same folder (rename stays atomic), hidden, distinct per target.
@@ -114,7 +122,7 @@ pub fn read_exr(path: &Path) -> Result<Vec<ExrLayer>, TraceError> {
 }
 
 /// Narkowicz's ACES fit, then the sRGB curve: keeps highlights from clipping hard.
-fn tone_map(x: f32) -> u8 {
+pub fn tone_map(x: f32) -> u8 {
     let x = if x.is_finite() { x.max(0.0) } else { 0.0 };
     let t = ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0);
     let s = if t <= 0.003_130_8 {
