@@ -13,16 +13,20 @@ pub struct CameraRays {
     height: f64,
 }
 
-/// The projection the engine uses for a `width`×`height` frame (see `engine::renderer`):
-/// far = max(scene diagonal, camera far) so the whole room is inside the frustum.
-pub fn projection(scene: &Scene, width: u32, height: u32) -> Mat4 {
+/// Far plane of every view: max(scene diagonal, camera far), so the whole room is inside
+/// the frustum from anywhere in it.
+pub fn far_plane(scene: &Scene) -> f32 {
     let (lo, hi) = scene.bounds();
-    let far = (hi - lo).length().max(scene.camera.far);
+    (hi - lo).length().max(scene.camera.far)
+}
+
+/// The projection of a `width`×`height` frame; the engine's renderer uses this function.
+pub fn projection(scene: &Scene, width: u32, height: u32) -> Mat4 {
     glam::camera::rh::proj::vulkan::perspective(
         scene.camera.fov_y_deg.to_radians(),
         width as f32 / height as f32,
         scene.camera.near,
-        far,
+        far_plane(scene),
     )
 }
 

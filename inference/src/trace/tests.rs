@@ -545,3 +545,73 @@ fn axis_aligned_rays_hit_even_with_negative_zero_components() {
         }
     }
 }
+
+/// Mean of `layer` channel `c` over pixels fully covered by object `object`.
+fn covered_mean(image: &TraceImage, object: &str, layer: &str, c: usize) -> f32 {
+    let l = image.layer(layer).expect("layer");
+    let (mean, n) = mean_over(image, &format!("{object}.mask"), 1.0, |x, y| {
+        l.get(image.width, x, y, c)
+    });
+    assert!(n > 50, "{object} covers the frame centre ({n} pixels)");
+    mean
+}
+
+#[test]
+fn lossless_specular_materials_conserve_a_uniform_environment() {
+    // In a white furnace, F0 = 1 glossy and clear glass neither gain nor lose energy.
+    for material in [
+        Material::Glossy {
+            f0: Vec3::ONE,
+            roughness: 0.5,
+        },
+        Material::Glass {
+            ior: 1.5,
+            absorption: Vec3::ZERO,
+        },
+    ] {
+        let s = scene(vec![(
+            "ball",
+            sphere(Vec3::ZERO, 0.5, 48, 96),
+            material.clone(),
+        )]);
+        let tracer = Tracer::new(&s).expect("valid");
+        let mut settings = small(8);
+        settings.transport.background = Vec3::ONE;
+        let image = tracer
+            .render(s.orbit.eye(0.0, 0.0), &settings)
+            .expect("render");
+        let b = covered_mean(&image, "ball", "beauty", 1);
+        assert!((b - 1.0).abs() < 0.02, "{material:?}: {b}");
+    }
+}
+
+#[test]
+fn glass_absorbs_per_channel_and_its_layers_recombine() {
+    let s = scene(vec![(
+        "ball",
+        sphere(Vec3::ZERO, 0.5, 48, 96),
+        Material::Glass {
+            ior: 1.5,
+            absorption: Vec3::new(0.0, 1.0, 4.0),
+        },
+    )]);
+    let tracer = Tracer::new(&s).expect("valid");
+    let names = tracer.layer_names();
+    assert!(names.iter().any(|n| n == "ball.transmission"), "{names:?}");
+    let mut settings = small(8);
+    settings.transport.background = Vec3::ONE;
+    let image = tracer
+        .render(s.orbit.eye(0.0, 0.0), &settings)
+        .expect("render");
+    let [r, g, b] = [0, 1, 2].map(|c| covered_mean(&image, "ball", "beauty", c));
+    assert!(r > 0.97 && g < r && b < g, "{r} {g} {b}");
+    // A sphere never reflects itself: beauty = F·distant + transmission per pixel.
+    let get = |l: &str, x, y, c| image.layer(l).expect(l).get(32, x, y, c);
+    let (err, _) = mean_over(&image, "ball.mask", 1.0, |x, y| {
+        assert_eq!(get("ball.specular_local", x, y, 3), 0.0);
+        let recombined = get("ball.fresnel", x, y, 2) * get("ball.specular_distant", x, y, 2)
+            + get("ball.transmission", x, y, 2);
+        (recombined - get("beauty", x, y, 2)).abs()
+    });
+    assert!(err < 1e-3, "{err}");
+}
