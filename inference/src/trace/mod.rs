@@ -66,7 +66,8 @@ use rng::Rng;
 pub const DEFAULT_SPP: u32 = 16;
 /// Output size when none is given: the thesis's 640×480.
 pub const DEFAULT_SIZE: (u32, u32) = (640, 480);
-const MAX_SIZE: u32 = 16384;
+/// As the CLI (`parse_size`): the film needs ~4 · channels bytes per pixel twice over.
+const MAX_SIZE: u32 = 8192;
 const MAX_SPP: u32 = 1 << 16;
 
 /// Everything besides scene and view that decides an image (plus how to run).
