@@ -29,6 +29,7 @@ pub fn trace(args: &TraceArgs) -> Result<String> {
         ..TraceSettings::default()
     };
     // Everything the user can get wrong is checked before the first file is touched.
+    settings.validate()?;
     let jobs: Vec<(PathBuf, glam::Vec3)> = if args.all {
         (0..scene.orbit.samples)
             .map(|k| Ok((format!("sample_{k:04}"), tracer.sample_eye(k)?)))

@@ -258,3 +258,23 @@ fn free_view_keeps_its_angles_in_the_file_name() {
         ]
     );
 }
+
+#[test]
+fn zero_samples_per_pixel_is_rejected_before_any_output() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("trace");
+    let o = engine(&[
+        "trace",
+        "--sample",
+        "0",
+        "--spp",
+        "0",
+        "--out",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert_clean_failure(&o, &["spp", "got 0"]);
+    assert!(
+        !out.exists(),
+        "no output folder for a run that cannot start"
+    );
+}

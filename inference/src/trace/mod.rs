@@ -162,7 +162,7 @@ impl<'a> Tracer<'a> {
 
     /// Traces the view from `eye` (looking at the orbit centre, as the engine does).
     pub fn render(&self, eye: Vec3, settings: &TraceSettings) -> Result<TraceImage, TraceError> {
-        check_settings(settings)?;
+        settings.validate()?;
         if !eye.is_finite() {
             return Err(TraceError::Settings {
                 field: "eye",
@@ -254,6 +254,13 @@ impl<'a> Tracer<'a> {
             }
         }
         (buffer, rays)
+    }
+}
+
+impl TraceSettings {
+    /// An error naming the first setting out of range (also checked by [`Tracer::render`]).
+    pub fn validate(&self) -> Result<(), TraceError> {
+        check_settings(self)
     }
 }
 
