@@ -23,6 +23,49 @@ pub enum Command {
     /// Measure the static-EM frame against the bare one-texture pass,
     /// interleaved in one run, and write bench.json.
     Bench(PlayArgs),
+    /// Ray-trace the gold-standard layers of one parameter sample, a free view or all samples
+    /// (CPU, no Vulkan): one multi-layer EXR and a tone-mapped PNG per image.
+    Trace(TraceArgs),
+}
+
+#[derive(Args, Debug, Clone)]
+#[command(group(clap::ArgGroup::new("what").required(true).args(["sample", "all", "view_angle"])))]
+pub struct TraceArgs {
+    /// Scene name (a file in assets/scenes/) or path to a scene file.
+    #[arg(long, default_value = "teapot")]
+    pub scene: String,
+    /// Orbit sample to trace (0-based).
+    #[arg(long)]
+    pub sample: Option<u32>,
+    /// Trace every orbit sample, skipping those already traced with the same inputs.
+    #[arg(long)]
+    pub all: bool,
+    /// Trace a free view at this orbit azimuth in degrees (off the sample grid).
+    #[arg(long, allow_hyphen_values = true)]
+    pub view_angle: Option<f32>,
+    /// With --view-angle: elevation above the orbit in degrees.
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        allow_hyphen_values = true,
+        requires = "view_angle"
+    )]
+    pub elevation: f32,
+    /// Samples per pixel [default: 16].
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Image size as WIDTHxHEIGHT.
+    #[arg(long, default_value = "640x480", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Output folder [default: out/<scene>/trace].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Random seed; the same seed gives bit-identical images.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Worker threads [default: all cores]; does not change the images.
+    #[arg(long)]
+    pub threads: Option<usize>,
 }
 
 #[derive(Args, Debug, Clone)]

@@ -15,3 +15,4 @@ pub mod play;
 pub mod probe;
 pub mod renderer;
 pub mod shader_interface;
+pub mod trace_cmd;

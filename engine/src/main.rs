@@ -22,6 +22,7 @@ fn main() -> ExitCode {
             }),
             args.validate,
         ),
+        Some(Command::Trace(args)) => (engine::trace_cmd::trace(args), false),
     };
     let mut code = ExitCode::SUCCESS;
     match result {

@@ -138,14 +138,9 @@ impl Renderer {
             vk::BufferUsageFlags::TRANSFER_DST,
             gpu_allocator::MemoryLocation::GpuToCpu,
         )?;
-        let (lo, hi) = scene.bounds();
-        let far = (hi - lo).length().max(scene.camera.far);
-        let projection = glam::camera::rh::proj::vulkan::perspective(
-            scene.camera.fov_y_deg.to_radians(),
-            width as f32 / height as f32,
-            scene.camera.near,
-            far,
-        );
+        // Shared with the tracer so traced and rasterised pixels line up exactly.
+        let far = inference::trace::camera::far_plane(scene);
+        let projection = inference::trace::camera::projection(scene, width, height);
         let mut renderer = Self {
             device: device.clone(),
             executor,

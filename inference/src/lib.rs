@@ -1,5 +1,6 @@
 //! Offline side and the math shared with the runtime: scene, teapot,
-//! Fresnel, CPU texgen (gold-standard tracer and inference come next).
+//! Fresnel, CPU texgen and EM geometry, the gold-standard tracer, probe
+//! renders, the least-squares solver and texture/EM inference.
 //! Pure CPU, no Vulkan.
 
 pub mod em_geometry;
@@ -10,5 +11,6 @@ pub mod scene;
 pub mod solve;
 pub mod teapot;
 pub mod texgen;
+pub mod trace;
 
 pub use fresnel::schlick_fresnel;

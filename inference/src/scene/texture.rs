@@ -109,11 +109,25 @@ impl Texture {
         if !p.is_finite() {
             return self.texel(0, 0);
         }
+        let (w, h) = (self.width as i64, self.height as i64);
+        if w == 0 || h == 0 {
+            return Vec4::ZERO;
+        }
         let f = p.floor();
         let t = p - f;
-        let (x, y) = (f.x as i64, f.y as i64);
-        let top = self.texel(x, y).lerp(self.texel(x + 1, y), t.x);
-        let bottom = self.texel(x, y + 1).lerp(self.texel(x + 1, y + 1), t.x);
+        // Wrap once per axis (the tracer calls this per shading point; `%` is slow).
+        let x0 = (f.x as i64).rem_euclid(w) as usize;
+        let y0 = (f.y as i64).rem_euclid(h) as usize;
+        let x1 = if x0 + 1 == w as usize { 0 } else { x0 + 1 };
+        let y1 = if y0 + 1 == h as usize { 0 } else { y0 + 1 };
+        let at = |x: usize, y: usize| {
+            self.texels
+                .get(y * w as usize + x)
+                .copied()
+                .map_or(Vec4::ZERO, Vec4::from_array)
+        };
+        let top = at(x0, y0).lerp(at(x1, y0), t.x);
+        let bottom = at(x0, y1).lerp(at(x1, y1), t.x);
         top.lerp(bottom, t.y)
     }
 }

@@ -1,0 +1,173 @@
+//! Files: one multi-part EXR per image (one part per layer, f32, never clipped) and a
+//! tone-mapped PNG of `beauty`. Both are written to temporary names and renamed into place
+//! only when both succeeded, so a failed run leaves no partial files.
+
+use std::path::{Path, PathBuf};
+
+use exr::prelude::{
+    AnyChannel, AnyChannels, Encoding, FlatSamples, Image, ImageAttributes, IntegerBounds, Layer,
+    LayerAttributes, ReadChannels, ReadLayers, SmallVec, Text, Vec2, WritableImage, read,
+};
+
+use super::TraceImage;
+use super::error::TraceError;
+
+/// Writes `<stem>.exr` and `<stem>.png`; returns their paths.
+pub fn write_image(stem: &Path, image: &TraceImage) -> Result<(PathBuf, PathBuf), TraceError> {
+    let exr_path = with_suffix(stem, ".exr");
+    let png_path = with_suffix(stem, ".png");
+    let exr_tmp = temp_name(&exr_path);
+    let png_tmp = temp_name(&png_path);
+    let result = write_exr(&exr_tmp, image)
+        .and_then(|()| write_png(&png_tmp, image))
+        .and_then(|()| rename(&exr_tmp, &exr_path))
+        .and_then(|()| rename(&png_tmp, &png_path));
+    if result.is_err() {
+        for p in [&exr_tmp, &png_tmp] {
+            let _ = std::fs::remove_file(p);
+        }
+    }
+    result.map(|()| (exr_path, png_path))
+}
+
+/// `stem` + `suffix`, keeping dots inside the stem (`view_-12.5` + `.exr`), unlike
+/// `Path::with_extension`.
+pub fn with_suffix(stem: &Path, suffix: &str) -> PathBuf {
+    let mut s = stem.as_os_str().to_owned();
+    s.push(suffix);
+    PathBuf::from(s)
+}
+
+/// `dir/.name.tmp`: same folder (rename stays atomic), hidden, distinct per target.
+pub fn temp_name(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+    path.with_file_name(format!(".{name}.tmp"))
+}
+
+fn rename(from: &Path, to: &Path) -> Result<(), TraceError> {
+    std::fs::rename(from, to).map_err(|e| TraceError::io(to, e))
+}
+
+/// All layers of `image` as parts of one EXR at `path` (exact layer names, f32 samples).
+pub fn write_exr(path: &Path, image: &TraceImage) -> Result<(), TraceError> {
+    let size = Vec2(image.width as usize, image.height as usize);
+    let layers: Vec<Layer<AnyChannels<FlatSamples>>> = image
+        .layers
+        .iter()
+        .map(|layer| {
+            let n = layer.channels.len();
+            let channels: SmallVec<[AnyChannel<FlatSamples>; 4]> = layer
+                .channels
+                .iter()
+                .enumerate()
+                .map(|(c, name)| {
+                    let samples = layer.pixels.iter().skip(c).step_by(n).copied().collect();
+                    AnyChannel::new(*name, FlatSamples::F32(samples))
+                })
+                .collect();
+            Layer::new(
+                size,
+                LayerAttributes::named(layer.name.as_str()),
+                Encoding::FAST_LOSSLESS,
+                AnyChannels::sort(channels),
+            )
+        })
+        .collect();
+    let attributes = ImageAttributes::new(IntegerBounds::from_dimensions(size));
+    Image::from_layers(attributes, layers)
+        .write()
+        .to_file(path)
+        .map_err(|cause| TraceError::Exr {
+            path: path.to_owned(),
+            cause,
+        })
+}
+
+/// A layer read back: its name and `(channel name, samples)` pairs.
+pub type ExrLayer = (String, Vec<(String, Vec<f32>)>);
+
+/// Layer names and channel names of an EXR written by [`write_exr`], with the samples.
+pub fn read_exr(path: &Path) -> Result<Vec<ExrLayer>, TraceError> {
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|cause| TraceError::Exr {
+            path: path.to_owned(),
+            cause,
+        })?;
+    Ok(image
+        .layer_data
+        .iter()
+        .map(|layer| {
+            let name = layer
+                .attributes
+                .layer_name
+                .as_ref()
+                .map_or_else(String::new, Text::to_string);
+            let channels = layer
+                .channel_data
+                .list
+                .iter()
+                .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+                .collect();
+            (name, channels)
+        })
+        .collect())
+}
+
+/// Narkowicz's ACES fit, then the sRGB curve: keeps highlights from clipping hard.
+pub fn tone_map(x: f32) -> u8 {
+    let x = if x.is_finite() { x.max(0.0) } else { 0.0 };
+    let t = ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0);
+    let s = if t <= 0.003_130_8 {
+        12.92 * t
+    } else {
+        1.055 * t.powf(1.0 / 2.4) - 0.055
+    };
+    (s * 255.0 + 0.5) as u8
+}
+
+/// Tone-mapped 8-bit PNG of the `beauty` layer.
+pub fn write_png(path: &Path, image: &TraceImage) -> Result<(), TraceError> {
+    let bytes: Vec<u8> = image
+        .layer("beauty")
+        .map(|l| l.pixels.iter().map(|&v| tone_map(v)).collect())
+        .unwrap_or_default();
+    image::save_buffer_with_format(
+        path,
+        &bytes,
+        image.width,
+        image.height,
+        image::ColorType::Rgb8,
+        image::ImageFormat::Png,
+    )
+    .map_err(|cause| TraceError::Png {
+        path: path.to_owned(),
+        cause,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tone_map_is_monotone_and_safe() {
+        assert_eq!(tone_map(0.0), 0);
+        assert_eq!(tone_map(f32::NAN), 0);
+        assert_eq!(tone_map(f32::INFINITY), 0);
+        assert_eq!(tone_map(1e6), 255);
+        let mut prev = 0;
+        for i in 0..100 {
+            let v = tone_map(i as f32 * 0.05);
+            assert!(v >= prev);
+            prev = v;
+        }
+    }
+}

@@ -1,0 +1,488 @@
+//! Materials and light transport: a distribution ray tracer with next-event estimation.
+//!
+//! - Lambertian: one area-light sample per hit (soft shadows) plus cosine-sampled indirect
+//!   bounces, at most `max_diffuse_bounces` per path. Light reached by an indirect bounce
+//!   is not counted again (the light sample already did), so emitters add their radiance
+//!   only to paths without a diffuse bounce: camera rays and pure specular chains.
+//!   Caustics (light → specular → diffuse) are therefore left out, as in a classic
+//!   distribution ray tracer and as the runtime's layers cannot show them anyway.
+//! - Mirror: the exact reflection, weighted by `schlick_fresnel(f0, n·v)`: the runtime's
+//!   formula at the shading normal.
+//! - Glossy: the same Fresnel weight, direction drawn from a normalised Phong lobe around
+//!   the mirror direction (exponent `2/roughness⁴ − 2`, the Beckmann-equivalent).
+//! - Glass: Schlick Fresnel from `f0 = ((ior − 1)/(ior + 1))²` (at the transmitted angle
+//!   when leaving the denser side, 1 under total internal reflection), reflection or
+//!   refraction chosen with probability F, Beer–Lambert absorption inside.
+//!
+//! Surfaces are two-sided except emitters, which emit on their front (winding) side only.
+
+use glam::{Vec2, Vec3};
+use std::f32::consts::PI;
+
+use super::bvh::{Hit, SceneBvh};
+use super::rng::{Rng, cosine_hemisphere, phong_lobe};
+use crate::fresnel::schlick_fresnel;
+use crate::scene::{AreaLight, Material, Scene};
+
+/// Path limits and the radiance of rays that leave the scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transport {
+    /// Radiance of rays that hit nothing (a uniform environment; zero in a closed room).
+    pub background: Vec3,
+    pub max_diffuse_bounces: u32,
+    /// Mirror, glossy and glass bounces per path.
+    pub max_specular_bounces: u32,
+}
+
+impl Default for Transport {
+    fn default() -> Self {
+        Transport {
+            background: Vec3::ZERO,
+            max_diffuse_bounces: 2,
+            max_specular_bounces: 8,
+        }
+    }
+}
+
+/// What the camera ray of one film sample saw, split the way the layers need it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// Full radiance along the camera ray.
+    pub beauty: Vec3,
+    /// Object of the first hit.
+    pub object: Option<u32>,
+    pub terms: Terms,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Terms {
+    /// Background or emitter: beauty only.
+    None,
+    /// A Lambertian first hit: all of `beauty`.
+    Diffuse(Vec3),
+    /// A reflective first hit: `beauty = fresnel × (local if self-hit else distant)
+    /// + transmission`.
+    Specular {
+        fresnel: Vec3,
+        /// Radiance along the reflected ray with the object itself transparent.
+        distant: Vec3,
+        /// Radiance along the reflected ray when its first hit is the object itself.
+        local: Option<Vec3>,
+        /// Glass only: `(1 − F) ×` radiance along the refracted ray.
+        transmission: Vec3,
+    },
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+struct PathState {
+    diffuse: u32,
+    specular: u32,
+    /// Emitters count on this segment (no diffuse bounce so far).
+    count_emission: bool,
+    /// Absorption per metre of the medium the current segment travels through.
+    medium: Option<Vec3>,
+}
+
+/// A hit point, normals facing the incoming ray.
+struct Surface {
+    p: Vec3,
+    /// Geometric normal on the side the ray came from.
+    ng: Vec3,
+    /// Interpolated normal on the same side (the geometric one where interpolation fails).
+    ns: Vec3,
+    uv: Vec2,
+    /// The ray hit the side the triangle winding faces.
+    front: bool,
+}
+
+pub struct Integrator<'a> {
+    scene: &'a Scene,
+    bvh: &'a SceneBvh,
+    transport: Transport,
+}
+
+/// Offset along the normal that clears f32 rounding at `p`'s magnitude (metre-scale scenes).
+fn offset(p: Vec3, n: Vec3) -> Vec3 {
+    p + n * (1e-4 * p.abs().max_element().max(1.0))
+}
+
+fn reflect(d: Vec3, n: Vec3) -> Vec3 {
+    d - 2.0 * d.dot(n) * n
+}
+
+/// Keeps a direction drawn around a shading normal above the geometric surface.
+fn above(dir: Vec3, ng: Vec3) -> Vec3 {
+    let c = dir.dot(ng);
+    if c > 1e-6 {
+        dir
+    } else {
+        (dir - 2.0 * c * ng).normalize_or(ng)
+    }
+}
+
+/// Phong exponent equivalent to roughness `r` (Beckmann α = r²), kept in a finite range.
+pub fn phong_exponent(roughness: f32) -> f32 {
+    let a = (roughness * roughness).clamp(1e-3, 1.0);
+    (2.0 / (a * a) - 2.0).clamp(1.0, 1e6)
+}
+
+/// Dielectric Fresnel for a ray hitting from the `front` side: `(F, cos_t)`, F = 1 under
+/// total internal reflection. Uses the runtime's Schlick formula.
+fn dielectric(ior: f32, cos_i: f32, front: bool) -> (f32, Option<f32>) {
+    let ior = if ior.is_finite() && ior > 0.0 {
+        ior
+    } else {
+        1.0
+    };
+    let f0 = ((ior - 1.0) / (ior + 1.0)).powi(2);
+    let eta = if front { 1.0 / ior } else { ior };
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
+    if sin2_t >= 1.0 {
+        return (1.0, None);
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    // Schlick is defined on the rarer side's angle.
+    let c = if eta > 1.0 { cos_t } else { cos_i };
+    (schlick_fresnel(Vec3::splat(f0), c).x, Some(cos_t))
+}
+
+#[cfg(test)]
+pub(crate) fn dielectric_for_tests(ior: f32, cos_i: f32, front: bool) -> (f32, Option<f32>) {
+    dielectric(ior, cos_i, front)
+}
+
+impl<'a> Integrator<'a> {
+    pub fn new(scene: &'a Scene, bvh: &'a SceneBvh, transport: Transport) -> Self {
+        Integrator {
+            scene,
+            bvh,
+            transport,
+        }
+    }
+
+    fn material(&self, object: u32) -> &Material {
+        &self.scene.materials[self.scene.objects[object as usize].material]
+    }
+
+    fn surface(&self, hit: &Hit, dir: Vec3) -> Surface {
+        let mesh = &self.scene.objects[hit.prim.object as usize].mesh;
+        let t = hit.prim.triangle as usize;
+        let idx = [
+            mesh.indices[3 * t] as usize,
+            mesh.indices[3 * t + 1] as usize,
+            mesh.indices[3 * t + 2] as usize,
+        ];
+        let [a, b, c] = mesh.triangle(t);
+        let w = [1.0 - hit.bary.x - hit.bary.y, hit.bary.x, hit.bary.y];
+        let p = a * w[0] + b * w[1] + c * w[2];
+        let ng_wound = (b - a).cross(c - a).normalize_or(-dir);
+        let front = ng_wound.dot(dir) < 0.0;
+        let side = if front { 1.0 } else { -1.0 };
+        let ng = ng_wound * side;
+        let ns = match idx.map(|i| mesh.normals.get(i)) {
+            [Some(&na), Some(&nb), Some(&nc)] => {
+                (na * w[0] + nb * w[1] + nc * w[2]).normalize_or(ng_wound) * side
+            }
+            _ => ng,
+        };
+        // An interpolated normal facing away from the viewer would reflect into the surface.
+        let ns = if ns.dot(-dir) > 0.0 && ns.dot(ng) > 0.0 {
+            ns
+        } else {
+            ng
+        };
+        let uv = match idx.map(|i| mesh.uvs.get(i)) {
+            [Some(&ua), Some(&ub), Some(&uc)] => ua * w[0] + ub * w[1] + uc * w[2],
+            _ => Vec2::ZERO,
+        };
+        Surface {
+            p,
+            ng,
+            ns,
+            uv,
+            front,
+        }
+    }
+
+    fn albedo(&self, albedo: Vec3, texture: Option<usize>, uv: Vec2) -> Vec3 {
+        match texture.and_then(|t| self.scene.textures.get(t)) {
+            Some(tex) => albedo * tex.sample_bilinear(uv).truncate(),
+            None => albedo,
+        }
+    }
+
+    /// One area-light sample: radiance reflected by a white Lambertian surface (albedo 1).
+    fn direct(&self, s: &Surface, rng: &mut Rng, rays: &mut u64) -> Vec3 {
+        let lights = &self.scene.lights;
+        let n = lights.len();
+        let pick = ((rng.next_f32() * n as f32) as usize).min(n.saturating_sub(1));
+        let (u1, u2) = (rng.next_f32(), rng.next_f32());
+        let Some(light) = lights.get(pick) else {
+            return Vec3::ZERO;
+        };
+        light_sample(light, s, u1, u2, n as f32, |o, d, tmax| {
+            *rays += 1;
+            self.bvh.occluded(o, d, 0.0, tmax)
+        })
+    }
+
+    /// Radiance along a ray; also returns its first hit. `skip` makes one object transparent
+    /// for this segment only (the distant layer's reflected ray).
+    fn radiance(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        skip: Option<u32>,
+        rng: &mut Rng,
+        state: PathState,
+        rays: &mut u64,
+    ) -> (Vec3, Option<Hit>) {
+        *rays += 1;
+        match self.bvh.closest(origin, dir, 0.0, f32::INFINITY, skip) {
+            None => (self.transport.background, None),
+            Some(hit) => (self.shade(hit, dir, rng, state, rays), Some(hit)),
+        }
+    }
+
+    /// Radiance leaving `hit` towards the origin of the ray `dir` that found it.
+    fn shade(
+        &self,
+        mut hit: Hit,
+        mut dir: Vec3,
+        rng: &mut Rng,
+        mut state: PathState,
+        rays: &mut u64,
+    ) -> Vec3 {
+        let tr = self.transport;
+        let mut l = Vec3::ZERO;
+        let mut beta = Vec3::ONE;
+        loop {
+            if let Some(sigma) = state.medium {
+                beta *= (-sigma * hit.t).exp();
+            }
+            let s = self.surface(&hit, dir);
+            let next = match *self.material(hit.prim.object) {
+                Material::Emissive { radiance } => {
+                    if state.count_emission && s.front {
+                        l += beta * radiance;
+                    }
+                    None
+                }
+                Material::Diffuse { albedo, texture } => {
+                    let albedo = self.albedo(albedo, texture, s.uv);
+                    l += beta * albedo * self.direct(&s, rng, rays);
+                    if state.diffuse >= tr.max_diffuse_bounces {
+                        None
+                    } else {
+                        state.diffuse += 1;
+                        state.count_emission = false;
+                        state.medium = None;
+                        beta *= albedo;
+                        let d = cosine_hemisphere(s.ns, rng.next_f32(), rng.next_f32());
+                        Some((offset(s.p, s.ng), above(d, s.ng)))
+                    }
+                }
+                Material::Mirror { .. } | Material::Glossy { .. } => {
+                    if state.specular >= tr.max_specular_bounces {
+                        None
+                    } else {
+                        state.specular += 1;
+                        state.medium = None;
+                        let (f, r) = self.specular(&s, dir, self.material(hit.prim.object), rng);
+                        beta *= f;
+                        Some((offset(s.p, s.ng), r))
+                    }
+                }
+                Material::Glass { ior, absorption } => {
+                    if state.specular >= tr.max_specular_bounces {
+                        None
+                    } else {
+                        state.specular += 1;
+                        let cos_i = s.ns.dot(-dir).clamp(0.0, 1.0);
+                        let (f, cos_t) = dielectric(ior, cos_i, s.front);
+                        match cos_t {
+                            Some(cos_t) if rng.next_f32() >= f => {
+                                state.medium = s.front.then_some(absorption);
+                                let t = refract(dir, s.ns, ior, s.front, cos_i, cos_t);
+                                Some((offset(s.p, -s.ng), t))
+                            }
+                            _ => Some((offset(s.p, s.ng), reflect(dir, s.ns))),
+                        }
+                    }
+                }
+            };
+            let Some((o, d)) = next else { break };
+            if beta.max_element() <= 0.0 {
+                break;
+            }
+            *rays += 1;
+            match self.bvh.closest(o, d, 0.0, f32::INFINITY, None) {
+                None => {
+                    l += beta * tr.background;
+                    break;
+                }
+                Some(h) => {
+                    hit = h;
+                    dir = d;
+                }
+            }
+        }
+        l
+    }
+
+    /// Fresnel weight and reflected direction of a mirror or glossy surface.
+    fn specular(&self, s: &Surface, dir: Vec3, material: &Material, rng: &mut Rng) -> (Vec3, Vec3) {
+        let cos = s.ns.dot(-dir);
+        let mirror = reflect(dir, s.ns).normalize_or(s.ng);
+        match *material {
+            Material::Mirror { f0 } => (schlick_fresnel(f0, cos), above(mirror, s.ng)),
+            Material::Glossy { f0, roughness } => {
+                let d = phong_lobe(
+                    mirror,
+                    phong_exponent(roughness),
+                    rng.next_f32(),
+                    rng.next_f32(),
+                );
+                (schlick_fresnel(f0, cos), above(d, s.ng))
+            }
+            _ => (Vec3::ZERO, mirror),
+        }
+    }
+
+    /// First hit point of a ray and the mirror direction there (shading normal): the
+    /// geometry every reflective layer is built on, exposed for checks.
+    pub fn reflect_once(&self, origin: Vec3, dir: Vec3) -> Option<(Vec3, Vec3)> {
+        let hit = self.bvh.closest(origin, dir, 0.0, f32::INFINITY, None)?;
+        let s = self.surface(&hit, dir);
+        Some((s.p, above(reflect(dir, s.ns).normalize_or(s.ng), s.ng)))
+    }
+
+    /// The camera ray of one film sample. `distant_rng` drives the extra distant-layer ray
+    /// so that the beauty path's random numbers do not depend on whether it is traced.
+    pub fn sample(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        rng: &mut Rng,
+        distant_rng: &mut Rng,
+        rays: &mut u64,
+    ) -> Sample {
+        *rays += 1;
+        let Some(hit) = self.bvh.closest(origin, dir, 0.0, f32::INFINITY, None) else {
+            return Sample {
+                beauty: self.transport.background,
+                object: None,
+                terms: Terms::None,
+            };
+        };
+        let object = hit.prim.object;
+        let camera = PathState {
+            count_emission: true,
+            ..PathState::default()
+        };
+        let material = self.material(object);
+        if matches!(
+            material,
+            Material::Diffuse { .. } | Material::Emissive { .. }
+        ) {
+            let l = self.shade(hit, dir, rng, camera, rays);
+            let terms = match material {
+                Material::Diffuse { .. } => Terms::Diffuse(l),
+                _ => Terms::None,
+            };
+            return Sample {
+                beauty: l,
+                object: Some(object),
+                terms,
+            };
+        }
+
+        let s = self.surface(&hit, dir);
+        let after = PathState {
+            specular: 1,
+            ..camera
+        };
+        let (fresnel, r, transmission) = match *material {
+            Material::Glass { ior, absorption } => {
+                let cos_i = s.ns.dot(-dir).clamp(0.0, 1.0);
+                let (f, cos_t) = dielectric(ior, cos_i, s.front);
+                let transmission = match cos_t {
+                    Some(cos_t) if f < 1.0 => {
+                        let t = refract(dir, s.ns, ior, s.front, cos_i, cos_t);
+                        let inside = PathState {
+                            medium: s.front.then_some(absorption),
+                            ..after
+                        };
+                        let (l_t, _) =
+                            self.radiance(offset(s.p, -s.ng), t, None, rng, inside, rays);
+                        (1.0 - f) * l_t
+                    }
+                    _ => Vec3::ZERO,
+                };
+                (Vec3::splat(f), reflect(dir, s.ns), transmission)
+            }
+            _ => {
+                let (f, r) = self.specular(&s, dir, material, rng);
+                (f, r, Vec3::ZERO)
+            }
+        };
+        let o = offset(s.p, s.ng);
+        let (l_r, first) = self.radiance(o, r, None, rng, after, rays);
+        let self_hit = first.is_some_and(|h| h.prim.object == object);
+        // Where the reflected ray misses the object, "passing through it" changes nothing.
+        let distant = if self_hit {
+            self.radiance(o, r, Some(object), distant_rng, after, rays)
+                .0
+        } else {
+            l_r
+        };
+        Sample {
+            beauty: fresnel * l_r + transmission,
+            object: Some(object),
+            terms: Terms::Specular {
+                fresnel,
+                distant,
+                local: self_hit.then_some(l_r),
+                transmission,
+            },
+        }
+    }
+}
+
+/// Refracted direction through a surface with shading normal `n` (facing the incoming ray).
+fn refract(d: Vec3, n: Vec3, ior: f32, front: bool, cos_i: f32, cos_t: f32) -> Vec3 {
+    let eta = if front { 1.0 / ior } else { ior };
+    (eta * d + (eta * cos_i - cos_t) * n).normalize_or(-n)
+}
+
+/// Radiance from a uniform point `(u1, u2)` on `light` reaching Lambertian surface `s` with
+/// albedo 1, divided by the light-choice probability `1/n_lights`; `occluded(origin, dir,
+/// tmax)` is the shadow test.
+fn light_sample(
+    light: &AreaLight,
+    s: &Surface,
+    u1: f32,
+    u2: f32,
+    n_lights: f32,
+    occluded: impl FnOnce(Vec3, Vec3, f32) -> bool,
+) -> Vec3 {
+    let q = light.center + (u1 - 0.5) * light.edge_u + (u2 - 0.5) * light.edge_v;
+    let o = offset(s.p, s.ng);
+    let to = q - o;
+    let d2 = to.length_squared();
+    if d2.is_nan() || d2 <= 1e-12 {
+        return Vec3::ZERO;
+    }
+    let d = d2.sqrt();
+    let wi = to / d;
+    let cos_s = s.ns.dot(wi);
+    let cos_l = -light.normal().dot(wi);
+    if cos_s <= 0.0 || cos_l <= 0.0 || s.ng.dot(wi) <= 0.0 {
+        return Vec3::ZERO;
+    }
+    // Stop short of the light's own quad.
+    if occluded(o, wi, d * (1.0 - 1e-4)) {
+        return Vec3::ZERO;
+    }
+    light.radiance * (cos_s * cos_l * light.area() * n_lights / (d2 * PI))
+}
