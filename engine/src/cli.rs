@@ -23,6 +23,10 @@ pub enum Command {
     /// Measure the static-EM frame against the bare one-texture pass,
     /// interleaved in one run, and write bench.json.
     Bench(PlayArgs),
+    /// Infer each reflector's layered environment maps for orbit samples by
+    /// least squares against the traced layers (tracing them if missing),
+    /// beside the forward-mapping baseline; writes maps and report.json.
+    Infer(InferArgs),
     /// Ray-trace the gold-standard layers of one parameter sample, a free view or all samples
     /// (CPU, no Vulkan): one multi-layer EXR and a tone-mapped PNG per image.
     Trace(TraceArgs),
@@ -66,6 +70,44 @@ pub struct TraceArgs {
     /// Worker threads [default: all cores]; does not change the images.
     #[arg(long)]
     pub threads: Option<usize>,
+}
+
+#[derive(Args, Debug, Clone)]
+#[command(group(clap::ArgGroup::new("which").required(true).args(["sample", "all"])))]
+pub struct InferArgs {
+    /// Scene name (a file in assets/scenes/) or path to a scene file.
+    #[arg(long, default_value = "teapot")]
+    pub scene: String,
+    /// Orbit sample to infer (0-based).
+    #[arg(long)]
+    pub sample: Option<u32>,
+    /// Every orbit sample, skipping those already inferred from the same inputs.
+    #[arg(long)]
+    pub all: bool,
+    /// Output folder [default: out/<scene>/infer].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Where traced targets are read from and written to [default: out/<scene>/trace].
+    #[arg(long)]
+    pub trace_dir: Option<PathBuf>,
+    /// Image size of the targets and probe renders, as WIDTHxHEIGHT.
+    #[arg(long, default_value = "640x480", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Cube-map size for every EM [default: the scene's [objects.em] resolution].
+    #[arg(long)]
+    pub em_size: Option<u32>,
+    /// Samples per pixel when a target must be traced first [default: 16].
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Pyramidal regularization weight ε_f.
+    #[arg(long, default_value_t = 0.1)]
+    pub eps_f: f32,
+    /// Turn the Khronos validation layer on (see the main command).
+    #[arg(long)]
+    pub validate: bool,
+    /// Vulkan device to use (substring of its name) [default: lavapipe].
+    #[arg(long, env = "ENGINE_DEVICE")]
+    pub device: Option<String>,
 }
 
 #[derive(Args, Debug, Clone)]

@@ -9,6 +9,7 @@ pub mod compare;
 pub mod cube;
 pub mod gpu_scene;
 pub mod graph;
+pub mod infer_cmd;
 pub mod passes;
 pub mod perf;
 pub mod play;

@@ -23,6 +23,7 @@ fn main() -> ExitCode {
             args.validate,
         ),
         Some(Command::Trace(args)) => (engine::trace_cmd::trace(args), false),
+        Some(Command::Infer(args)) => (engine::infer_cmd::infer(args), args.validate),
     };
     let mut code = ExitCode::SUCCESS;
     match result {

@@ -4,7 +4,9 @@
 //! forward-mapping baseline.
 
 use super::forward::forward_map;
-use crate::probe::{ProbeError, ProbeGeometry, ProbeRenderer, RenderingMatrix, build_matrix, verify_matrix};
+use crate::probe::{
+    ProbeError, ProbeGeometry, ProbeRenderer, RenderingMatrix, build_matrix, verify_matrix,
+};
 use crate::solve::layout::{TextureLayout, TextureShape};
 use crate::solve::{SolveOptions, solve_channels};
 use std::time::{Duration, Instant};
@@ -42,7 +44,12 @@ struct Timed<'a> {
 }
 
 impl ProbeRenderer for Timed<'_> {
-    fn render(&mut self, g: &ProbeGeometry, l: &TextureLayout, t: &[[f32; 4]]) -> Result<Vec<[f32; 4]>, ProbeError> {
+    fn render(
+        &mut self,
+        g: &ProbeGeometry,
+        l: &TextureLayout,
+        t: &[[f32; 4]],
+    ) -> Result<Vec<[f32; 4]>, ProbeError> {
         let start = Instant::now();
         let image = self.inner.render(g, l, t);
         self.spent += start.elapsed();
@@ -56,10 +63,20 @@ pub enum InferError {
     Probe(#[from] ProbeError),
     #[error(transparent)]
     Solve(#[from] crate::solve::SolveError),
-    #[error("layer {layer}: non-finite value at pixel {pixel} channel {channel} (expected finite floats)")]
-    NonFinite { layer: String, pixel: usize, channel: usize },
+    #[error(
+        "layer {layer}: non-finite value at pixel {pixel} channel {channel} (expected finite floats)"
+    )]
+    NonFinite {
+        layer: String,
+        pixel: usize,
+        channel: usize,
+    },
     #[error("layer {layer}: {got} pixels, the view has {expected}")]
-    Size { layer: String, got: usize, expected: usize },
+    Size {
+        layer: String,
+        got: usize,
+        expected: usize,
+    },
 }
 
 /// Interleaves per-channel maps into RGBA texels (alpha 1 when absent).
@@ -138,7 +155,13 @@ pub fn infer_layer(
     let verify = verify_matrix(&mut timed, geometry, &layout, &matrix, 1)?;
 
     let bs: Vec<Vec<f32>> = (0..target.channels)
-        .map(|c| matrix.pixels.iter().map(|&p| target.pixels[p as usize][c]).collect())
+        .map(|c| {
+            matrix
+                .pixels
+                .iter()
+                .map(|&p| target.pixels[p as usize][c])
+                .collect()
+        })
         .collect();
     let b_refs: Vec<&[f32]> = bs.iter().map(Vec::as_slice).collect();
     let warm: Option<Vec<&[f32]>> = warm_start
@@ -174,7 +197,10 @@ pub fn infer_layer(
         rows: matrix.pixels.len(),
         nnz: matrix.a.nnz(),
         iterations: solutions.iter().map(|s| s.iterations).collect(),
-        diagnostics: solutions.iter().filter_map(|s| s.diagnostic.clone()).collect(),
+        diagnostics: solutions
+            .iter()
+            .filter_map(|s| s.diagnostic.clone())
+            .collect(),
         probe_time,
         assembly_time: build_time.saturating_sub(probe_time),
         solve_time,

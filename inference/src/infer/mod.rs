@@ -4,5 +4,8 @@
 
 pub mod forward;
 pub mod layer;
+pub mod maps;
+#[cfg(test)]
+mod tests;
 
 pub use layer::{InferError, LayerResult, Target, infer_layer};

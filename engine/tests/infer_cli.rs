@@ -1,0 +1,110 @@
+//! `engine infer` end to end on a small view: traced targets, probe renders
+//! with validation on, maps and report.json; bad input fails cleanly.
+
+use std::process::{Command, Output};
+
+fn engine(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_engine"))
+        .args(args)
+        .output()
+        .expect("run engine")
+}
+
+#[test]
+fn infers_both_layers_of_a_sample_and_reports() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("infer");
+    let traces = dir.path().join("trace");
+    let o = engine(&[
+        "infer",
+        "--scene",
+        "teapot",
+        "--sample",
+        "1",
+        "--size",
+        "96x72",
+        "--em-size",
+        "16",
+        "--spp",
+        "2",
+        "--out",
+        out.to_str().expect("utf-8"),
+        "--trace-dir",
+        traces.to_str().expect("utf-8"),
+        "--validate",
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{}\n{stdout}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(
+        stdout.lines().any(|l| l == "validation messages: 0"),
+        "{stdout}"
+    );
+    assert!(
+        traces.join("sample_0001.exr").is_file(),
+        "target traced on demand"
+    );
+    for layer in ["teapot.specular_distant", "teapot.specular_local"] {
+        assert!(
+            out.join("sample_0001")
+                .join(format!("{layer}.exr"))
+                .is_file(),
+            "{layer}"
+        );
+    }
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).expect("report.json"))
+            .expect("JSON");
+    assert!(report["probe_renders"].as_u64().is_some_and(|n| n > 2));
+    assert!(
+        report["a_vs_render_psnr_db"]
+            .as_f64()
+            .is_some_and(|v| v >= 60.0),
+        "{report}"
+    );
+    assert!(report["solve_s"].as_f64().is_some_and(|v| v >= 0.0));
+    let layers = report["layers"].as_array().expect("layers");
+    assert_eq!(layers.len(), 2);
+    for l in layers {
+        let ls = l["psnr_db"]["least_squares"].as_f64().expect("LS PSNR");
+        let fm = l["psnr_db"]["forward_mapping"].as_f64().expect("FM PSNR");
+        assert!(ls.is_finite() && fm.is_finite() && ls > 5.0, "{l}");
+    }
+    // Distant layer: least squares must beat forward mapping (the thesis's claim).
+    let distant = &layers[0];
+    assert!(
+        distant["psnr_db"]["least_squares"].as_f64()
+            > distant["psnr_db"]["forward_mapping"].as_f64(),
+        "{distant}"
+    );
+}
+
+#[test]
+fn sample_out_of_range_fails_cleanly() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let o = engine(&[
+        "infer",
+        "--sample",
+        "1000",
+        "--out",
+        dir.path().to_str().expect("utf-8"),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("--sample 1000") && err.contains("0..100"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"));
+}
+
+#[test]
+fn em_size_must_be_a_power_of_two() {
+    let o = engine(&["infer", "--sample", "0", "--em-size", "100"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(err.contains("power of two"), "{err}");
+}

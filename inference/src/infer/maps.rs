@@ -1,0 +1,196 @@
+//! Inferred maps on disk: one multi-part EXR per map, one part per MIP
+//! level named `mip<l>`, the faces of a cube side by side in Vulkan order
+//! (+X, −X, +Y, −Y, +Z, −Z), f32 channels R, G, B (and A). Written to a
+//! temporary name and renamed, so a file is either whole or absent.
+
+use crate::solve::layout::TextureLayout;
+use exr::prelude::{
+    AnyChannel, AnyChannels, Encoding, FlatSamples, Image, ImageAttributes, IntegerBounds, Layer,
+    LayerAttributes, ReadChannels, ReadLayers, SmallVec, Text, Vec2, WritableImage, read,
+};
+use std::path::{Path, PathBuf};
+
+const CHANNELS: [&str; 4] = ["R", "G", "B", "A"];
+
+#[derive(Debug, thiserror::Error)]
+pub enum MapError {
+    #[error("{path}: {cause}")]
+    Exr {
+        path: PathBuf,
+        cause: exr::error::Error,
+    },
+    #[error("{path}: {cause}")]
+    Io {
+        path: PathBuf,
+        cause: std::io::Error,
+    },
+    #[error("{path}: {what} (expected {expected})")]
+    Shape {
+        path: PathBuf,
+        what: String,
+        expected: String,
+    },
+}
+
+/// Writes `map` (one Vec per channel, `layout` order) to `path`.
+pub fn write_map(path: &Path, layout: &TextureLayout, map: &[Vec<f32>]) -> Result<(), MapError> {
+    let faces = layout.faces();
+    let layers: Vec<Layer<AnyChannels<FlatSamples>>> = (0..layout.levels())
+        .map(|level| {
+            let (w, h) = layout.level_size(level);
+            let channels: SmallVec<[AnyChannel<FlatSamples>; 4]> = map
+                .iter()
+                .zip(CHANNELS)
+                .map(|(channel, name)| {
+                    let mut samples = Vec::with_capacity((w * h * faces) as usize);
+                    for y in 0..h {
+                        for face in 0..faces {
+                            for x in 0..w {
+                                samples.push(channel[layout.index(face, level, x, y)]);
+                            }
+                        }
+                    }
+                    AnyChannel::new(name, FlatSamples::F32(samples))
+                })
+                .collect();
+            Layer::new(
+                Vec2((w * faces) as usize, h as usize),
+                LayerAttributes::named(format!("mip{level}").as_str()),
+                Encoding::FAST_LOSSLESS,
+                AnyChannels::sort(channels),
+            )
+        })
+        .collect();
+    let (w0, h0) = layout.level_size(0);
+    let attributes = ImageAttributes::new(IntegerBounds::from_dimensions(Vec2(
+        (w0 * faces) as usize,
+        h0 as usize,
+    )));
+    let tmp = path.with_extension("exr.tmp");
+    let written = Image::from_layers(attributes, layers)
+        .write()
+        .to_file(&tmp)
+        .map_err(|cause| MapError::Exr {
+            path: path.to_owned(),
+            cause,
+        });
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(e);
+    }
+    std::fs::rename(&tmp, path).map_err(|cause| MapError::Io {
+        path: path.to_owned(),
+        cause,
+    })
+}
+
+/// Reads a map written by [`write_map`] for `layout` with `channels`
+/// channels; any mismatch is an error naming the file and what differs.
+pub fn read_map(
+    path: &Path,
+    layout: &TextureLayout,
+    channels: usize,
+) -> Result<Vec<Vec<f32>>, MapError> {
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|cause| MapError::Exr {
+            path: path.to_owned(),
+            cause,
+        })?;
+    let shape = |what: String, expected: String| MapError::Shape {
+        path: path.to_owned(),
+        what,
+        expected,
+    };
+    let faces = layout.faces();
+    let mut map = vec![vec![0.0f32; layout.len()]; channels];
+    for level in 0..layout.levels() {
+        let name = format!("mip{level}");
+        let layer = image
+            .layer_data
+            .iter()
+            .find(|l| {
+                l.attributes
+                    .layer_name
+                    .as_ref()
+                    .map(Text::to_string)
+                    .as_deref()
+                    == Some(name.as_str())
+            })
+            .ok_or_else(|| {
+                shape(
+                    format!("no part {name}"),
+                    format!("{} MIP levels", layout.levels()),
+                )
+            })?;
+        let (w, h) = layout.level_size(level);
+        if layer.size != Vec2((w * faces) as usize, h as usize) {
+            return Err(shape(
+                format!("part {name} is {}x{}", layer.size.0, layer.size.1),
+                format!("{}x{h}", w * faces),
+            ));
+        }
+        for (c, out) in map.iter_mut().enumerate() {
+            let channel = layer
+                .channel_data
+                .list
+                .iter()
+                .find(|ch| ch.name.to_string() == CHANNELS[c])
+                .ok_or_else(|| {
+                    shape(
+                        format!("part {name} has no channel {}", CHANNELS[c]),
+                        format!("{channels} channels"),
+                    )
+                })?;
+            let values: Vec<f32> = channel.sample_data.values_as_f32().collect();
+            for y in 0..h {
+                for face in 0..faces {
+                    for x in 0..w {
+                        let v = values[((y * faces + face) * w + x) as usize];
+                        if !v.is_finite() {
+                            return Err(shape(
+                                format!("part {name} holds {v}"),
+                                "finite values".into(),
+                            ));
+                        }
+                        out[layout.index(face, level, x, y)] = v;
+                    }
+                }
+            }
+        }
+    }
+    Ok(map)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solve::layout::TextureShape;
+
+    #[test]
+    fn cube_map_round_trips_and_mismatches_are_named() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("m.exr");
+        let layout = TextureLayout::full_chain(TextureShape::Cube { size: 8 });
+        let map: Vec<Vec<f32>> = (0..4)
+            .map(|c| {
+                (0..layout.len())
+                    .map(|i| (i * 4 + c) as f32 * 1e3)
+                    .collect()
+            })
+            .collect();
+        write_map(&path, &layout, &map).expect("write");
+        assert_eq!(read_map(&path, &layout, 4).expect("read"), map);
+        let other = TextureLayout::full_chain(TextureShape::Cube { size: 16 });
+        let err = read_map(&path, &other, 4)
+            .expect_err("size mismatch")
+            .to_string();
+        assert!(err.contains("m.exr") && err.contains("mip0"), "{err}");
+        assert!(!dir.path().join("m.exr.tmp").exists());
+    }
+}
