@@ -93,9 +93,10 @@ pub fn psnr_over_rows(image: &[[f32; 4]], target: &Target, pixels: &[u32]) -> f6
     let mut sum = 0.0f64;
     let mut n = 0usize;
     for &p in pixels {
-        for c in 0..target.channels {
-            let t = f64::from(target.pixels[p as usize][c]);
-            let d = f64::from(image[p as usize][c]) - t;
+        let (want, got) = (&target.pixels[p as usize], &image[p as usize]);
+        for (t, g) in want.iter().zip(got).take(target.channels) {
+            let t = f64::from(*t);
+            let d = f64::from(*g) - t;
             peak = peak.max(t.abs());
             sum += d * d;
             n += 1;
