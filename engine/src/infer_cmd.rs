@@ -30,6 +30,7 @@ pub struct LayerReport {
     pub psnr_db: PsnrPair,
     pub rows: usize,
     pub nnz: usize,
+    pub rows_across_cube_faces: usize,
     pub probe_renders: u32,
     pub a_vs_render_psnr_db: f64,
     pub cg_iterations: Vec<u32>,
@@ -75,6 +76,7 @@ impl From<&LayerResult> for LayerReport {
             },
             rows: r.rows,
             nnz: r.nnz,
+            rows_across_cube_faces: r.rows_across_faces,
             probe_renders: r.probe_renders,
             a_vs_render_psnr_db: finite_or_max(r.a_vs_render_psnr_db),
             cg_iterations: r.iterations.clone(),
@@ -92,27 +94,48 @@ fn output_dir(args: &InferArgs, scene: &Scene) -> PathBuf {
         .unwrap_or_else(|| Path::new("out").join(&scene.name).join("infer"))
 }
 
-/// One layer of one reflector to infer.
+/// What a job infers.
+#[derive(Clone, Copy, Debug)]
+enum Kind {
+    /// An EM layer on its geometry, indexed by texgen.
+    Em(EmLayer, EmGeometry),
+    /// A parameterized texture map: the reflector's whole appearance as a
+    /// 2D texture on its own texture coordinates.
+    Ptm,
+}
+
+/// One map of one reflector to infer.
 struct Job<'a> {
     object: &'a Object,
-    layer: EmLayer,
-    geometry: EmGeometry,
+    kind: Kind,
     origin: Vec3,
     resolution: u32,
 }
 
 impl Job<'_> {
     fn name(&self) -> String {
-        let layer = match self.layer {
-            EmLayer::Distant => "specular_distant",
-            EmLayer::Local => "specular_local",
+        let layer = match self.kind {
+            Kind::Em(EmLayer::Distant, _) => "specular_distant",
+            Kind::Em(EmLayer::Local, _) => "specular_local",
+            Kind::Ptm => "ptm",
         };
         format!("{}.{layer}", self.object.name)
     }
     fn channels(&self) -> usize {
-        match self.layer {
-            EmLayer::Distant => 3,
-            EmLayer::Local => 4,
+        match self.kind {
+            Kind::Em(EmLayer::Local, _) => 4,
+            _ => 3,
+        }
+    }
+    fn shape(&self) -> TextureShape {
+        match self.kind {
+            Kind::Em(..) => TextureShape::Cube {
+                size: self.resolution,
+            },
+            Kind::Ptm => TextureShape::Tex2D {
+                width: self.resolution,
+                height: self.resolution,
+            },
         }
     }
 }
@@ -150,12 +173,17 @@ fn jobs<'a>(scene: &'a Scene, em_size: Option<u32>) -> Result<Vec<Job<'a>>> {
             };
             jobs.push(Job {
                 object,
-                layer,
-                geometry,
+                kind: Kind::Em(layer, geometry),
                 origin,
                 resolution,
             });
         }
+        jobs.push(Job {
+            object,
+            kind: Kind::Ptm,
+            origin,
+            resolution,
+        });
     }
     Ok(jobs)
 }
@@ -216,12 +244,45 @@ fn target_pixels(
         .collect())
 }
 
+/// The reflector's own appearance from its layers, as the runtime
+/// composites it: `fresnel × (local over distant)` (+ diffuse if any).
+fn composite_pixels(
+    layers: &[output::ExrLayer],
+    object: &str,
+    pixel_count: usize,
+) -> Result<Vec<[f32; 4]>> {
+    let fresnel = target_pixels(layers, &format!("{object}.fresnel"), false, pixel_count)?;
+    let distant = target_pixels(
+        layers,
+        &format!("{object}.specular_distant"),
+        false,
+        pixel_count,
+    )?;
+    let local = target_pixels(
+        layers,
+        &format!("{object}.specular_local"),
+        true,
+        pixel_count,
+    )
+    .ok();
+    let diffuse = target_pixels(layers, &format!("{object}.diffuse"), false, pixel_count).ok();
+    Ok((0..pixel_count)
+        .map(|i| {
+            let (f, d) = (fresnel[i], distant[i]);
+            let l = local.as_ref().map_or([0.0; 4], |l| l[i]);
+            let base = diffuse.as_ref().map_or([0.0; 4], |v| v[i]);
+            let c = |k: usize| base[k] + f[k] * (l[k] + (1.0 - l[3]) * d[k]);
+            [c(0), c(1), c(2), 1.0]
+        })
+        .collect())
+}
+
 fn inputs_key(trace_key: u64, job: &Job, options: &SolveOptions, size: (u32, u32)) -> u64 {
     let mut h = std::collections::hash_map::DefaultHasher::new();
     (trace_key, job.name(), job.resolution, size).hash(&mut h);
     format!(
         "{:?} {:?} {:?} {:?}",
-        job.geometry, job.origin, options.eps_f, options.eps_b
+        job.kind, job.origin, options.eps_f, options.eps_b
     )
     .hash(&mut h);
     // The reflector's mesh decides texgen.
@@ -306,34 +367,43 @@ pub fn infer(args: &InferArgs) -> Result<String> {
                 bar.inc(1);
                 continue;
             }
-            let pixels = target_pixels(&layers, &name, job.layer == EmLayer::Local, pixel_count)?;
             let mesh = &job.object.mesh;
-            let mut lookups = vec![[0.0f32; 4]; mesh.positions.len()];
-            texgen(
-                &job.geometry,
-                job.origin,
-                eye,
-                &mesh.positions,
-                &mesh.normals,
-                &mut lookups,
-            );
+            let (pixels, lookup) = match job.kind {
+                Kind::Em(layer, em_geometry) => {
+                    let mut lookups = vec![[0.0f32; 4]; mesh.positions.len()];
+                    texgen(
+                        &em_geometry,
+                        job.origin,
+                        eye,
+                        &mesh.positions,
+                        &mesh.normals,
+                        &mut lookups,
+                    );
+                    (
+                        target_pixels(&layers, &name, layer == EmLayer::Local, pixel_count)?,
+                        Lookup::Cube(
+                            lookups
+                                .iter()
+                                .map(|l| Vec3::new(l[0], l[1], l[2]))
+                                .collect(),
+                        ),
+                    )
+                }
+                Kind::Ptm => (
+                    composite_pixels(&layers, &job.object.name, pixel_count)?,
+                    Lookup::Uv(mesh.uvs.clone()),
+                ),
+            };
             let geometry = ProbeGeometry {
                 key: key ^ u64::from(k),
                 positions: mesh.positions.clone(),
                 indices: mesh.indices.clone(),
-                lookup: Lookup::Cube(
-                    lookups
-                        .iter()
-                        .map(|l| Vec3::new(l[0], l[1], l[2]))
-                        .collect(),
-                ),
+                lookup,
                 view_proj: projection * scene.orbit.view(eye),
                 width,
                 height,
             };
-            let shape = TextureShape::Cube {
-                size: job.resolution,
-            };
+            let shape = job.shape();
             let layout = TextureLayout::full_chain(shape);
             let previous = k
                 .checked_sub(1)

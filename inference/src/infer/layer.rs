@@ -30,6 +30,8 @@ pub struct LayerResult {
     pub psnr_forward_db: f64,
     pub rows: usize,
     pub nnz: usize,
+    /// Rows filtered across cube-face edges (see `RenderingMatrix`).
+    pub rows_across_faces: usize,
     pub iterations: Vec<u32>,
     pub diagnostics: Vec<String>,
     pub probe_time: Duration,
@@ -197,6 +199,7 @@ pub fn infer_layer(
         probe_renders: matrix.probe_renders,
         rows: matrix.pixels.len(),
         nnz: matrix.a.nnz(),
+        rows_across_faces: matrix.rows_across_faces,
         iterations: solutions.iter().map(|s| s.iterations).collect(),
         diagnostics: solutions
             .iter()

@@ -31,6 +31,9 @@ pub struct RenderingMatrix {
     pub probe_renders: u32,
     /// Rows whose weights summed below 1 and were corrected.
     pub corrected_rows: usize,
+    /// Rows with weights on more than one cube face: the device filters
+    /// across face edges (seamless cube maps) where this is non-zero.
+    pub rows_across_faces: usize,
 }
 
 /// Builds A for `geometry` over a texture of `layout`, calling `progress`
@@ -98,11 +101,19 @@ pub fn build_matrix(
     }
     let mut a = builder.finish();
     let corrected_rows = correct_row_sums(&mut a, 1.0);
+    let rows_across_faces = rows
+        .iter()
+        .filter(|r| {
+            let mut faces = r.iter().map(|&(t, _)| layout.coords(t as usize).0);
+            faces.next().is_some_and(|f| faces.any(|g| g != f))
+        })
+        .count();
     Ok(RenderingMatrix {
         a,
         pixels,
         probe_renders: total as u32,
         corrected_rows,
+        rows_across_faces,
     })
 }
 
