@@ -11,7 +11,7 @@ fn engine(args: &[&str]) -> Output {
 }
 
 #[test]
-fn infers_both_layers_of_a_sample_and_reports() {
+fn infers_em_layers_and_ptm_of_a_sample_and_reports() {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().join("infer");
     let traces = dir.path().join("trace");
@@ -47,7 +47,7 @@ fn infers_both_layers_of_a_sample_and_reports() {
         traces.join("sample_0001.exr").is_file(),
         "target traced on demand"
     );
-    for layer in ["teapot.specular_distant", "teapot.specular_local"] {
+    for layer in ["teapot.specular_distant", "teapot.specular_local", "teapot.ptm"] {
         assert!(
             out.join("sample_0001")
                 .join(format!("{layer}.exr"))
@@ -67,7 +67,8 @@ fn infers_both_layers_of_a_sample_and_reports() {
     );
     assert!(report["solve_s"].as_f64().is_some_and(|v| v >= 0.0));
     let layers = report["layers"].as_array().expect("layers");
-    assert_eq!(layers.len(), 2);
+    let names: Vec<&str> = layers.iter().filter_map(|l| l["name"].as_str()).collect();
+    assert_eq!(names, ["teapot.specular_distant", "teapot.specular_local", "teapot.ptm"]);
     for l in layers {
         let ls = l["psnr_db"]["least_squares"].as_f64().expect("LS PSNR");
         let fm = l["psnr_db"]["forward_mapping"].as_f64().expect("FM PSNR");
