@@ -73,7 +73,7 @@ pub struct TraceArgs {
 }
 
 #[derive(Args, Debug, Clone)]
-#[command(group(clap::ArgGroup::new("which").required(true).args(["sample", "all"])))]
+#[command(group(clap::ArgGroup::new("which").required(true).args(["sample", "all", "diffuse"])))]
 pub struct InferArgs {
     /// Scene name (a file in assets/scenes/) or path to a scene file.
     #[arg(long, default_value = "teapot")]
@@ -84,6 +84,16 @@ pub struct InferArgs {
     /// Every orbit sample, skipping those already inferred from the same inputs.
     #[arg(long)]
     pub all: bool,
+    /// Infer one view-independent texture for this diffuse object from its
+    /// traced diffuse layers at --views, stacked into one solve.
+    #[arg(long)]
+    pub diffuse: Option<String>,
+    /// Orbit samples stacked by --diffuse.
+    #[arg(long, value_delimiter = ',', default_values_t = [0u32, 33, 66, 99])]
+    pub views: Vec<u32>,
+    /// Texture size (square, power of two) for --diffuse.
+    #[arg(long, default_value_t = 256)]
+    pub texture_size: u32,
     /// Output folder [default: out/<scene>/infer].
     #[arg(long)]
     pub out: Option<PathBuf>,

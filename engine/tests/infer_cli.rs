@@ -47,7 +47,11 @@ fn infers_em_layers_and_ptm_of_a_sample_and_reports() {
         traces.join("sample_0001.exr").is_file(),
         "target traced on demand"
     );
-    for layer in ["teapot.specular_distant", "teapot.specular_local", "teapot.ptm"] {
+    for layer in [
+        "teapot.specular_distant",
+        "teapot.specular_local",
+        "teapot.ptm",
+    ] {
         assert!(
             out.join("sample_0001")
                 .join(format!("{layer}.exr"))
@@ -68,7 +72,14 @@ fn infers_em_layers_and_ptm_of_a_sample_and_reports() {
     assert!(report["solve_s"].as_f64().is_some_and(|v| v >= 0.0));
     let layers = report["layers"].as_array().expect("layers");
     let names: Vec<&str> = layers.iter().filter_map(|l| l["name"].as_str()).collect();
-    assert_eq!(names, ["teapot.specular_distant", "teapot.specular_local", "teapot.ptm"]);
+    assert_eq!(
+        names,
+        [
+            "teapot.specular_distant",
+            "teapot.specular_local",
+            "teapot.ptm"
+        ]
+    );
     for l in layers {
         let ls = l["psnr_db"]["least_squares"].as_f64().expect("LS PSNR");
         let fm = l["psnr_db"]["forward_mapping"].as_f64().expect("FM PSNR");
@@ -108,4 +119,63 @@ fn em_size_must_be_a_power_of_two() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
     assert!(err.contains("power of two"), "{err}");
+}
+
+#[test]
+fn diffuse_texture_from_stacked_views() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("infer");
+    let traces = dir.path().join("trace");
+    let o = engine(&[
+        "infer",
+        "--diffuse",
+        "floor",
+        "--views",
+        "0,60",
+        "--size",
+        "64x48",
+        "--spp",
+        "2",
+        "--texture-size",
+        "32",
+        "--out",
+        out.to_str().expect("utf-8"),
+        "--trace-dir",
+        traces.to_str().expect("utf-8"),
+        "--validate",
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{}\n{stdout}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(
+        stdout.lines().any(|l| l == "validation messages: 0"),
+        "{stdout}"
+    );
+    assert!(out.join("floor.diffuse.exr").is_file());
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("diffuse_report.json")).expect("report"))
+            .expect("JSON");
+    let psnr = report["psnr_per_view_db"].as_array().expect("per view");
+    assert_eq!(psnr.len(), 2);
+    assert!(
+        psnr.iter()
+            .all(|p| p.as_f64().is_some_and(|v| v.is_finite() && v > 5.0)),
+        "{report}"
+    );
+}
+
+#[test]
+fn diffuse_needs_a_diffuse_object() {
+    let o = engine(&["infer", "--diffuse", "teapot"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("not diffuse"), "{err}");
+    let o = engine(&["infer", "--diffuse", "nothing"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("no such object"),
+        "{err}"
+    );
 }

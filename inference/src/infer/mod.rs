@@ -5,6 +5,7 @@
 pub mod forward;
 pub mod layer;
 pub mod maps;
+pub mod stacked;
 #[cfg(test)]
 mod tests;
 
