@@ -88,6 +88,38 @@ impl From<&LayerResult> for LayerReport {
     }
 }
 
+/// target | least squares | forward mapping, cropped to the object's
+/// bounding box (RGB, premultiplied for RGBA layers), sRGB PNG.
+fn write_comparison(path: &Path, width: u32, target: &[[f32; 4]], r: &LayerResult) -> Result<()> {
+    let (Some(x0), Some(x1)) = (
+        r.pixels.iter().map(|p| p % width).min(),
+        r.pixels.iter().map(|p| p % width).max(),
+    ) else {
+        return Ok(()); // nothing visible, nothing to show
+    };
+    let (y0, y1) = (r.pixels[0] / width, r.pixels[r.pixels.len() - 1] / width);
+    let (w, h) = (x1 - x0 + 1, y1 - y0 + 1);
+    let gap = 4;
+    let total = 3 * w + 2 * gap;
+    let mut out = vec![[0.0f32; 4]; (total * h) as usize];
+    let object: std::collections::HashSet<u32> = r.pixels.iter().copied().collect();
+    for (panel, image) in [target, &r.rendered_least_squares, &r.rendered_forward]
+        .into_iter()
+        .enumerate()
+    {
+        for y in 0..h {
+            for x in 0..w {
+                let p = (y0 + y) * width + x0 + x;
+                if object.contains(&p) {
+                    out[(y * total + panel as u32 * (w + gap) + x) as usize] = image[p as usize];
+                }
+            }
+        }
+    }
+    crate::capture::write_png(path, total, h, &out)?;
+    Ok(())
+}
+
 fn output_dir(args: &InferArgs, scene: &Scene) -> PathBuf {
     args.out
         .clone()
@@ -602,6 +634,7 @@ pub fn infer(args: &InferArgs) -> Result<String> {
             )
             .with_context(|| format!("sample {k}, {name}"))?;
             write_map(&map_path, &layout, &result.map)?;
+            write_comparison(&dir.join(format!("{name}.png")), width, &pixels, &result)?;
             std::fs::write(&key_path, key.to_string())
                 .with_context(|| format!("writing {}", key_path.display()))?;
             report.probe_renders += result.probe_renders;

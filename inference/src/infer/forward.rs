@@ -1,11 +1,13 @@
-//! The forward-mapping baseline (thesis §3, papers.md §1): map each texel of
-//! the finest level to where it lands in the image, filter the target image
-//! there with a Lanczos kernel (half-width 4 pixels), fill texels no pixel
-//! sees from coarser levels (pull-push), and box-filter the MIP chain.
+//! The forward-mapping baseline (thesis §3, papers.md §1): map each texel to
+//! where it lands in the image, filter the target image there with a
+//! Lanczos kernel (half-width 4 pixels), and fill texels no pixel places
+//! by pull-push through the MIP chain.
 //!
 //! A texel's image position is the weight-averaged position of the pixels
-//! whose rows of A sample it at the finest level, so the baseline sees the
-//! same visibility and texgen as least squares.
+//! whose rows of A sample it, so the baseline sees the same visibility and
+//! texgen as least squares. Every MIP level is mapped, not only the finest:
+//! where the view minifies, trilinear filtering reads coarse levels, and a
+//! chain box-filtered from a hole-filled finest level looks blocky there.
 
 use crate::solve::csr::CsrMatrix;
 use crate::solve::layout::TextureLayout;
@@ -36,22 +38,17 @@ pub fn forward_map(
     target: &[f32],
     object: &[bool],
 ) -> Vec<f32> {
-    let faces = layout.faces();
-    let (w0, h0) = layout.level_size(0);
-    let level0 = (w0 * h0 * faces) as usize;
-    // Accumulate Σ w·(x, y) and Σ w per finest-level texel.
-    let mut sum_x = vec![0.0f64; level0];
-    let mut sum_y = vec![0.0f64; level0];
-    let mut sum_w = vec![0.0f64; level0];
+    // Accumulate Σ w·(x, y) and Σ w for every texel of every level: where
+    // the image minifies, trilinear reads coarse levels, and those texels
+    // are the ones the image shows.
+    let n = layout.len();
+    let mut sum_x = vec![0.0f64; n];
+    let mut sum_y = vec![0.0f64; n];
+    let mut sum_w = vec![0.0f64; n];
     for (row, &p) in pixels.iter().enumerate().take(a.rows) {
         let (px, py) = (f64::from(p % width) + 0.5, f64::from(p / width) + 0.5);
         for k in a.row_ptr[row]..a.row_ptr[row + 1] {
-            let col = a.col_idx[k] as usize;
-            let (face, level, x, y) = layout.coords(col);
-            if level != 0 {
-                continue;
-            }
-            let t = ((face * h0 + y) * w0 + x) as usize;
+            let t = a.col_idx[k] as usize;
             let w = f64::from(a.values[k]);
             sum_x[t] += w * px;
             sum_y[t] += w * py;
@@ -59,8 +56,8 @@ pub fn forward_map(
         }
     }
     let height = (target.len() as u32).checked_div(width).unwrap_or(0);
-    let mut fine = vec![f32::NAN; level0]; // NaN = hole, filled below
-    for t in 0..level0 {
+    let mut mapped = vec![f32::NAN; n]; // NaN = no pixel places this texel
+    for t in 0..n {
         if sum_w[t] <= 1e-6 {
             continue;
         }
@@ -85,90 +82,78 @@ pub fn forward_map(
             }
         }
         if norm.abs() > 1e-6 {
-            fine[t] = acc / norm;
+            mapped[t] = acc / norm;
         }
     }
-    fill_and_build_mips(layout, fine)
+    fill_holes(layout, mapped)
 }
 
-/// Pull-push hole filling per face, then the box-filtered MIP chain, laid
-/// out as `layout` orders texels.
-fn fill_and_build_mips(layout: &TextureLayout, fine: Vec<f32>) -> Vec<f32> {
-    let faces = layout.faces();
-    let (w0, h0) = layout.level_size(0);
-    let mut out = vec![0.0f32; layout.len()];
-    for face in 0..faces {
-        let start = (face * w0 * h0) as usize;
-        let mut levels = vec![fine[start..start + (w0 * h0) as usize].to_vec()];
-        // Pull: average the known texels of each 2x2 block, level by level.
-        for level in 1..layout.levels() {
-            let (pw, ph) = layout.level_size(level - 1);
+/// Per face: a texel no pixel placed takes the box average of its placed
+/// children at the finer level, else its parent's value (pull-push across
+/// the chain); a face nobody sees is 0.
+fn fill_holes(layout: &TextureLayout, mut x: Vec<f32>) -> Vec<f32> {
+    let levels = layout.levels();
+    for face in 0..layout.faces() {
+        // Pull: coarse holes from finer placed texels.
+        for level in 1..levels {
             let (w, h) = layout.level_size(level);
-            let prev = &levels[level as usize - 1];
-            let mut next = vec![f32::NAN; (w * h) as usize];
+            let (fw, fh) = layout.level_size(level - 1);
             for y in 0..h {
-                for x in 0..w {
-                    let (mut s, mut n) = (0.0, 0);
+                for xx in 0..w {
+                    let i = layout.index(face, level, xx, y);
+                    if !x[i].is_nan() {
+                        continue;
+                    }
+                    let (mut s, mut c) = (0.0, 0);
                     for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                        let (sx, sy) = ((2 * x + dx).min(pw - 1), (2 * y + dy).min(ph - 1));
-                        let v = prev[(sy * pw + sx) as usize];
+                        let v = x[layout.index(
+                            face,
+                            level - 1,
+                            (2 * xx + dx).min(fw - 1),
+                            (2 * y + dy).min(fh - 1),
+                        )];
                         if !v.is_nan() {
                             s += v;
-                            n += 1;
+                            c += 1;
                         }
                     }
-                    if n > 0 {
-                        next[(y * w + x) as usize] = s / n as f32;
+                    if c > 0 {
+                        x[i] = s / c as f32;
                     }
                 }
             }
-            levels.push(next);
         }
-        // Push: holes take the value of the coarser level above them;
-        // a face nobody sees at all stays 0.
-        for level in (0..layout.levels().saturating_sub(1)).rev() {
+        // Push: remaining holes from the parent, coarse to fine.
+        for level in (0..levels.saturating_sub(1)).rev() {
             let (w, h) = layout.level_size(level);
             let (cw, ch) = layout.level_size(level + 1);
-            let (fine_levels, coarse_levels) = levels.split_at_mut(level as usize + 1);
-            let (target, coarse) = (&mut fine_levels[level as usize], &coarse_levels[0]);
             for y in 0..h {
-                for x in 0..w {
-                    let i = (y * w + x) as usize;
-                    if target[i].is_nan() {
-                        target[i] =
-                            coarse[((y / 2).min(ch - 1) * cw + (x / 2).min(cw - 1)) as usize];
+                for xx in 0..w {
+                    let i = layout.index(face, level, xx, y);
+                    if x[i].is_nan() {
+                        x[i] = x[layout.index(
+                            face,
+                            level + 1,
+                            (xx / 2).min(cw - 1),
+                            (y / 2).min(ch - 1),
+                        )];
                     }
                 }
             }
         }
-        // The MIP chain of the filled finest level (not the pull averages,
-        // which only fill holes).
-        let mut current = levels.swap_remove(0);
-        for level in 0..layout.levels() {
+        for level in 0..levels {
             let (w, h) = layout.level_size(level);
             for y in 0..h {
-                for x in 0..w {
-                    let v = current[(y * w + x) as usize];
-                    out[layout.index(face, level, x, y)] = if v.is_nan() { 0.0 } else { v };
+                for xx in 0..w {
+                    let i = layout.index(face, level, xx, y);
+                    if x[i].is_nan() {
+                        x[i] = 0.0;
+                    }
                 }
-            }
-            if level + 1 < layout.levels() {
-                let (nw, nh) = layout.level_size(level + 1);
-                current = (0..nh)
-                    .flat_map(|y| (0..nw).map(move |x| (x, y)))
-                    .map(|(x, y)| {
-                        let at = |dx: u32, dy: u32| {
-                            let v = current
-                                [((2 * y + dy).min(h - 1) * w + (2 * x + dx).min(w - 1)) as usize];
-                            if v.is_nan() { 0.0 } else { v }
-                        };
-                        0.25 * (at(0, 0) + at(1, 0) + at(0, 1) + at(1, 1))
-                    })
-                    .collect();
             }
         }
     }
-    out
+    x
 }
 
 #[cfg(test)]

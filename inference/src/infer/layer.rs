@@ -37,6 +37,11 @@ pub struct LayerResult {
     pub probe_time: Duration,
     pub assembly_time: Duration,
     pub solve_time: Duration,
+    /// The device's renders of the least-squares and forward-mapped maps
+    /// (full frame, RGBA), and the object's pixels, for pictures.
+    pub rendered_least_squares: Vec<[f32; 4]>,
+    pub rendered_forward: Vec<[f32; 4]>,
+    pub pixels: Vec<u32>,
 }
 
 /// Times the renderer so probe renders and matrix assembly can be told apart.
@@ -191,10 +196,12 @@ pub fn infer_layer(
     let map: Vec<Vec<f32>> = solutions.iter().map(|s| s.x.clone()).collect();
     let rendered_ls = timed.render(geometry, &layout, &texels(&map, layout.len()))?;
     let rendered_fm = timed.render(geometry, &layout, &texels(&forward, layout.len()))?;
+    let psnr_least_squares_db = psnr_over_rows(&rendered_ls, target, &matrix.pixels);
+    let psnr_forward_db = psnr_over_rows(&rendered_fm, target, &matrix.pixels);
     Ok(LayerResult {
         name: target.name.into(),
-        psnr_least_squares_db: psnr_over_rows(&rendered_ls, target, &matrix.pixels),
-        psnr_forward_db: psnr_over_rows(&rendered_fm, target, &matrix.pixels),
+        psnr_least_squares_db,
+        psnr_forward_db,
         a_vs_render_psnr_db: verify.psnr_db,
         probe_renders: matrix.probe_renders,
         rows: matrix.pixels.len(),
@@ -211,5 +218,8 @@ pub fn infer_layer(
         layout,
         map,
         forward,
+        rendered_least_squares: rendered_ls,
+        rendered_forward: rendered_fm,
+        pixels: matrix.pixels,
     })
 }
