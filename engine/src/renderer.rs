@@ -6,7 +6,7 @@ use crate::gpu_scene::GpuScene;
 use crate::graph::{Executor, Pass, PassTiming};
 use crate::passes::em_capture::{CubeTarget, EmCapturePass, MipPass};
 use crate::passes::mirror::{MirrorDraw, MirrorRenderer};
-use crate::passes::readback::ReadbackPass;
+use crate::passes::readback::{ImageReadbackPass, ReadbackPass};
 use crate::passes::room::{RoomRenderer, RoomStyle};
 use crate::passes::target::Target;
 use ash::vk;
@@ -261,6 +261,36 @@ impl Renderer {
             cpu.upload_ms += generated.elapsed().as_secs_f64() * 1e3;
         }
         Ok(())
+    }
+
+    /// The static EM of the `index`-th reflector (scene order): its cube
+    /// size, its world-space EM origin and every texel of every MIP level as
+    /// linear RGBA f32, level-major, then face, then rows.
+    pub fn static_em(&mut self, index: usize) -> GpuResult<(u32, Vec3, Vec<[f32; 4]>)> {
+        let Some(r) = self.reflectors.get(index) else {
+            return Err(GpuError::Invalid(format!("no reflector {index}")));
+        };
+        let bytes = crate::backend::upload::image_bytes(&r.cube.color)?;
+        let buffer = Buffer::new(
+            &self.device,
+            "static EM read-back",
+            bytes,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            gpu_allocator::MemoryLocation::GpuToCpu,
+        )?;
+        let pass = ImageReadbackPass {
+            device: &self.device,
+            image: &r.cube.color,
+            buffer: &buffer,
+            texel_size: 8,
+        };
+        self.executor.run(&[&pass])?;
+        let halves: &[f16] = bytemuck::cast_slice(&buffer.mapped()?[..bytes as usize]);
+        let texels = halves
+            .chunks_exact(4)
+            .map(|c| [c[0].to_f32(), c[1].to_f32(), c[2].to_f32(), c[3].to_f32()])
+            .collect();
+        Ok((r.cube.color.desc.width, r.cube.origin, texels))
     }
 
     /// The last frame's pixels as linear RGBA f32, row-major from the top.

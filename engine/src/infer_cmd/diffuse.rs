@@ -1,0 +1,188 @@
+//! `engine infer --diffuse`: one view-independent texture from several
+//! views, stacked into one solve.
+
+use super::output_dir;
+use super::report::finite_or_max;
+use super::targets::{target_pixels, traced_layers};
+use crate::backend::{DeviceOptions, create_device};
+use crate::cli::InferArgs;
+use crate::play::prepare_output;
+use crate::probe::VulkanProbe;
+use anyhow::{Context, Result, bail};
+use inference::infer::Target;
+use inference::infer::maps::write_map;
+use inference::probe::{Lookup, ProbeGeometry};
+use inference::scene::{Material, Scene};
+use inference::solve::SolveOptions;
+use inference::solve::layout::TextureShape;
+use inference::trace::{TraceSettings, Tracer, camera};
+use serde::Serialize;
+use std::path::Path;
+
+#[derive(Serialize)]
+pub struct DiffuseReport {
+    pub object: String,
+    pub views: Vec<u32>,
+    pub rows: usize,
+    pub probe_renders: u32,
+    pub psnr_per_view_db: Vec<f64>,
+    pub cg_iterations: Vec<u32>,
+    pub solve_s: f64,
+}
+
+/// Texture coordinates that give every surface point its own texel, which
+/// a view-independent texture needs (tiled UVs would force one tile to hold
+/// the lighting of the whole surface). A flat object is projected onto its
+/// plane, normalised to [0, 1]²; otherwise its own UVs are kept.
+pub(super) fn unique_uvs(mesh: &inference::scene::Mesh) -> Vec<glam::Vec2> {
+    let (lo, hi) = mesh.bounds();
+    let size = hi - lo;
+    let flat = size.min_element() <= 1e-4 * size.max_element();
+    if !flat {
+        return mesh.uvs.clone();
+    }
+    let thin = if size.x <= size.y.min(size.z) {
+        0
+    } else if size.y <= size.z {
+        1
+    } else {
+        2
+    };
+    let (u, v) = [(1, 2), (0, 2), (0, 1)][thin];
+    mesh.positions
+        .iter()
+        .map(|p| glam::Vec2::new((p[u] - lo[u]) / size[u], (p[v] - lo[v]) / size[v]))
+        .collect()
+}
+
+/// `--diffuse OBJECT`: one texture for all `--views`, stacked.
+pub(super) fn infer_diffuse(args: &InferArgs, object_name: &str) -> Result<String> {
+    let scene = Scene::load(&args.scene)?;
+    let object = scene.object(object_name).with_context(|| {
+        format!(
+            "--diffuse {object_name}: no such object in {}",
+            scene.source.display()
+        )
+    })?;
+    if !matches!(
+        scene.materials.get(object.material),
+        Some(Material::Diffuse { .. })
+    ) {
+        bail!(
+            "--diffuse {object_name}: the object's material is not diffuse (expected a Lambertian object)"
+        );
+    }
+    let size = args.texture_size;
+    if size == 0 || !size.is_power_of_two() || size > 4096 {
+        bail!("--texture-size {size}: expected a power of two up to 4096");
+    }
+    if let Some(&k) = args.views.iter().find(|&&k| k >= scene.orbit.samples) {
+        bail!(
+            "--views: sample {k} out of range 0..{} (the scene's orbit.samples)",
+            scene.orbit.samples
+        );
+    }
+    let tracer = Tracer::new(&scene)?;
+    let (width, height) = args.size;
+    let settings = TraceSettings {
+        width,
+        height,
+        spp: args.spp.unwrap_or(inference::trace::DEFAULT_SPP),
+        progress: true,
+        ..TraceSettings::default()
+    };
+    settings.validate()?;
+    let out = output_dir(args, &scene);
+    prepare_output(&out)?;
+    let trace_dir = args
+        .trace_dir
+        .clone()
+        .unwrap_or_else(|| Path::new("out").join(&scene.name).join("trace"));
+    let device = create_device(&DeviceOptions {
+        device_name: args.device.clone(),
+        validate: args.validate,
+    })?;
+    let mut probe = VulkanProbe::new(&device)?;
+    let projection = camera::projection(&scene, width, height);
+    let layer = format!("{object_name}.diffuse");
+    let uvs = unique_uvs(&object.mesh);
+    let mut targets = Vec::new();
+    for &k in &args.views {
+        let (layers, _) = traced_layers(&trace_dir, &scene, &tracer, k, &settings)?;
+        targets.push(target_pixels(
+            &layers,
+            &layer,
+            false,
+            width as usize * height as usize,
+        )?);
+    }
+    let views: Vec<(ProbeGeometry, Target)> = args
+        .views
+        .iter()
+        .zip(&targets)
+        .map(|(&k, pixels)| -> Result<_> {
+            let eye = tracer.sample_eye(k)?;
+            Ok((
+                ProbeGeometry {
+                    key: u64::from(k) + 1,
+                    positions: object.mesh.positions.clone(),
+                    indices: object.mesh.indices.clone(),
+                    lookup: Lookup::Uv(uvs.clone()),
+                    view_proj: projection * scene.orbit.view(eye),
+                    width,
+                    height,
+                },
+                Target {
+                    name: &layer,
+                    pixels,
+                    channels: 3,
+                },
+            ))
+        })
+        .collect::<Result<_>>()?;
+    let options = SolveOptions {
+        eps_f: args.eps_f,
+        ..SolveOptions::default()
+    };
+    let shape = TextureShape::Tex2D {
+        width: size,
+        height: size,
+    };
+    let result = inference::infer::stacked::infer_stacked(&mut probe, &views, shape, &options)
+        .with_context(|| format!("stacked solve for {layer}"))?;
+    write_map(
+        &out.join(format!("{layer}.exr")),
+        &result.layout,
+        &result.map,
+    )?;
+    let report = DiffuseReport {
+        object: object_name.into(),
+        views: args.views.clone(),
+        rows: result.rows,
+        probe_renders: result.probe_renders,
+        psnr_per_view_db: result
+            .psnr_per_view_db
+            .iter()
+            .map(|&v| finite_or_max(v))
+            .collect(),
+        cg_iterations: result.iterations.clone(),
+        solve_s: result.solve_time.as_secs_f64(),
+    };
+    std::fs::write(
+        out.join("diffuse_report.json"),
+        serde_json::to_string_pretty(&report)?,
+    )?;
+    Ok(format!(
+        "{layer}: {} views stacked, {} rows, {} probe renders, PSNR per view {:?} dB, solve {:.2} s ({:?} CG it.)\n",
+        args.views.len(),
+        report.rows,
+        report.probe_renders,
+        report
+            .psnr_per_view_db
+            .iter()
+            .map(|v| (v * 100.0).round() / 100.0)
+            .collect::<Vec<_>>(),
+        report.solve_s,
+        report.cg_iterations
+    ))
+}
