@@ -27,6 +27,10 @@ pub enum Command {
     /// least squares against the traced layers (tracing them if missing),
     /// beside the forward-mapping baseline; writes maps and report.json.
     Infer(InferArgs),
+    /// Compress every sample's inferred maps into one container per scene.
+    Encode(EncodeArgs),
+    /// Measure a container: ratio, PSNR, decode time, baselines (JSON).
+    CodecReport(CodecReportArgs),
     /// Ray-trace the gold-standard layers of one parameter sample, a free view or all samples
     /// (CPU, no Vulkan): one multi-layer EXR and a tone-mapped PNG per image.
     Trace(TraceArgs),
@@ -118,6 +122,40 @@ pub struct InferArgs {
     /// Vulkan device to use (substring of its name) [default: lavapipe].
     #[arg(long, env = "ENGINE_DEVICE")]
     pub device: Option<String>,
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct EncodeArgs {
+    /// Scene name (a file in assets/scenes/) or path to a scene file.
+    #[arg(long, default_value = "teapot")]
+    pub scene: String,
+    /// Target compression ratio against 32-bit floats [default: 384].
+    #[arg(long, conflicts_with = "bytes")]
+    pub ratio: Option<f64>,
+    /// Target container size in bytes.
+    #[arg(long)]
+    pub bytes: Option<u64>,
+    /// Where `engine infer --all` wrote the maps [default: out/<scene>/infer].
+    #[arg(long)]
+    pub infer_dir: Option<PathBuf>,
+    /// The container file to write.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct CodecReportArgs {
+    /// The container to measure.
+    pub file: PathBuf,
+    /// Where to write the JSON report.
+    #[arg(long)]
+    pub json: PathBuf,
+    /// Scene name (a file in assets/scenes/) or path to a scene file.
+    #[arg(long, default_value = "teapot")]
+    pub scene: String,
+    /// Where `engine infer --all` wrote the maps [default: out/<scene>/infer].
+    #[arg(long)]
+    pub infer_dir: Option<PathBuf>,
 }
 
 #[derive(Args, Debug, Clone)]

@@ -5,6 +5,7 @@ pub mod backend;
 pub mod bench;
 pub mod capture;
 pub mod cli;
+pub mod codec_cmd;
 pub mod compare;
 pub mod cube;
 pub mod gpu_scene;

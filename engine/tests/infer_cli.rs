@@ -88,8 +88,16 @@ fn infers_em_layers_and_ptm_of_a_sample_and_reports() {
     // Distant layer: least squares must beat forward mapping (the thesis's
     // claim); the static-EM baseline is reported beside them.
     let distant = &layers[0];
-    assert!(distant["psnr_db"]["static_em"].as_f64().is_some_and(f64::is_finite), "{distant}");
-    assert!(layers[1]["psnr_db"].get("static_em").is_none(), "static EM is a distant-layer baseline");
+    assert!(
+        distant["psnr_db"]["static_em"]
+            .as_f64()
+            .is_some_and(f64::is_finite),
+        "{distant}"
+    );
+    assert!(
+        layers[1]["psnr_db"].get("static_em").is_none(),
+        "static EM is a distant-layer baseline"
+    );
     assert!(
         distant["psnr_db"]["least_squares"].as_f64()
             > distant["psnr_db"]["forward_mapping"].as_f64(),

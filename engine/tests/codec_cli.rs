@@ -1,0 +1,143 @@
+//! `engine encode` and `engine codec-report` on a small scene (3 orbit
+//! samples, 16² maps) inferred end to end; missing maps fail cleanly.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn engine(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_engine"))
+        .args(args)
+        .output()
+        .expect("run engine")
+}
+
+fn small_scene(dir: &Path) -> String {
+    let text = std::fs::read_to_string(inference::scene::assets_dir().join("scenes/teapot.toml"))
+        .expect("teapot.toml");
+    let text = text
+        .lines()
+        .map(|l| match l.trim() {
+            "samples = 100" => "samples = 3",
+            "resolution = 256" => "resolution = 16",
+            _ => l,
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    assert!(
+        text.contains("samples = 3") && text.contains("resolution = 16"),
+        "scene fields moved"
+    );
+    let path = dir.join("small.toml");
+    std::fs::write(&path, text).expect("write scene");
+    path.to_str().expect("utf-8").to_string()
+}
+
+fn ok(o: &Output) -> String {
+    let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        o.status.success(),
+        "{}\n{stdout}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    stdout
+}
+
+#[test]
+fn encode_and_report_an_inferred_pem() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = small_scene(dir.path());
+    let infer = dir.path().join("infer");
+    let infer_s = infer.to_str().expect("utf-8");
+    let traces = dir.path().join("trace");
+    ok(&engine(&[
+        "infer",
+        "--scene",
+        &scene,
+        "--all",
+        "--size",
+        "64x48",
+        "--spp",
+        "2",
+        "--out",
+        infer_s,
+        "--trace-dir",
+        traces.to_str().expect("utf-8"),
+    ]));
+    let container = dir.path().join("teapot.ptxc");
+    let container_s = container.to_str().expect("utf-8");
+    let text = ok(&engine(&[
+        "encode",
+        "--scene",
+        &scene,
+        "--ratio",
+        "20",
+        "--infer-dir",
+        infer_s,
+        "--out",
+        container_s,
+    ]));
+    assert!(text.contains("3 textures x 3 samples"), "{text}");
+    assert!(container.is_file());
+    let json = dir.path().join("report.json");
+    ok(&engine(&[
+        "codec-report",
+        container_s,
+        "--json",
+        json.to_str().expect("utf-8"),
+        "--scene",
+        &scene,
+        "--infer-dir",
+        infer_s,
+    ]));
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&json).expect("json")).expect("JSON");
+    assert!(
+        report["ratio"].as_f64().is_some_and(|r| r > 10.0),
+        "{report}"
+    );
+    assert!(
+        report["psnr_db"]
+            .as_f64()
+            .is_some_and(|p| p.is_finite() && p > 20.0),
+        "{report}"
+    );
+    assert!(report["bytes"].as_u64().is_some_and(|b| b > 0));
+    assert!(report["decode_ms_median"].as_f64().is_some_and(|t| t > 0.0));
+    assert!(report["baselines"].is_array());
+}
+
+#[test]
+fn encode_without_inferred_maps_names_the_fix() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let o = engine(&[
+        "encode",
+        "--infer-dir",
+        dir.path().to_str().expect("utf-8"),
+        "--out",
+        dir.path().join("x.ptxc").to_str().expect("utf-8"),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("engine infer --scene teapot --all"),
+        "{err}"
+    );
+    assert!(!dir.path().join("x.ptxc").exists());
+}
+
+#[test]
+fn report_on_a_corrupt_container_fails_cleanly() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let file = dir.path().join("bad.ptxc");
+    std::fs::write(&file, b"PTXC not really a container").expect("write");
+    let o = engine(&[
+        "codec-report",
+        file.to_str().expect("utf-8"),
+        "--json",
+        dir.path().join("r.json").to_str().expect("utf-8"),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("bad.ptxc") && !err.contains("panicked"),
+        "{err}"
+    );
+}
