@@ -1,51 +1,13 @@
-//! The baselines least squares is measured against, and the pictures
-//! that compare them.
+//! The static-EM baseline: the engine's own static cube map, read back and
+//! rendered on the reflector like the other maps.
 
 use crate::probe::VulkanProbe;
 use anyhow::Result;
 use glam::Vec3;
-use inference::infer::{LayerResult, Target};
+use inference::infer::Target;
 use inference::probe::{Lookup, ProbeGeometry};
 use inference::scene::{Material, Scene};
 use inference::solve::layout::{TextureLayout, TextureShape};
-use std::path::Path;
-
-/// target | least squares | forward mapping, cropped to the object's
-/// bounding box (RGB, premultiplied for RGBA layers), sRGB PNG.
-pub(super) fn write_comparison(
-    path: &Path,
-    width: u32,
-    target: &[[f32; 4]],
-    r: &LayerResult,
-) -> Result<()> {
-    let (Some(x0), Some(x1)) = (
-        r.pixels.iter().map(|p| p % width).min(),
-        r.pixels.iter().map(|p| p % width).max(),
-    ) else {
-        return Ok(()); // nothing visible, nothing to show
-    };
-    let (y0, y1) = (r.pixels[0] / width, r.pixels[r.pixels.len() - 1] / width);
-    let (w, h) = (x1 - x0 + 1, y1 - y0 + 1);
-    let gap = 4;
-    let total = 3 * w + 2 * gap;
-    let mut out = vec![[0.0f32; 4]; (total * h) as usize];
-    let object: std::collections::HashSet<u32> = r.pixels.iter().copied().collect();
-    for (panel, image) in [target, &r.rendered_least_squares, &r.rendered_forward]
-        .into_iter()
-        .enumerate()
-    {
-        for y in 0..h {
-            for x in 0..w {
-                let p = (y0 + y) * width + x0 + x;
-                if object.contains(&p) {
-                    out[(y * total + panel as u32 * (w + gap) + x) as usize] = image[p as usize];
-                }
-            }
-        }
-    }
-    crate::capture::write_png(path, total, h, &out)?;
-    Ok(())
-}
 
 /// Each reflector's static EM from the engine (size, origin, texels).
 pub(super) type StaticEm = (u32, Vec3, Vec<[f32; 4]>);

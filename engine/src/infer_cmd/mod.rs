@@ -9,6 +9,7 @@
 mod baselines;
 mod diffuse;
 mod jobs;
+mod pictures;
 mod report;
 mod targets;
 
@@ -28,9 +29,10 @@ use inference::solve::layout::TextureLayout;
 use inference::trace::{TraceSettings, Tracer, camera};
 use std::path::{Path, PathBuf};
 
-use baselines::{static_em_psnr, static_ems, write_comparison};
+use baselines::{static_em_psnr, static_ems};
 use diffuse::infer_diffuse;
 use jobs::{Kind, inputs_key, jobs_for};
+use pictures::{write_comparison, write_map_picture};
 use report::{LayerReport, SampleReport, finite_or_max};
 use targets::{composite_pixels, target_pixels, traced_layers};
 
@@ -184,6 +186,7 @@ pub fn infer(args: &InferArgs) -> Result<String> {
             .with_context(|| format!("sample {k}, {name}"))?;
             write_map(&map_path, &layout, &result.map)?;
             write_comparison(&dir.join(format!("{name}.png")), width, &pixels, &result)?;
+            write_map_picture(&dir.join(format!("{name}.map.png")), &layout, &result.map)?;
             std::fs::write(&key_path, key.to_string())
                 .with_context(|| format!("writing {}", key_path.display()))?;
             report.probe_renders += result.probe_renders;
