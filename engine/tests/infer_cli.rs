@@ -190,3 +190,88 @@ fn diffuse_needs_a_diffuse_object() {
         "{err}"
     );
 }
+
+/// Rewrites `path` with pixel `pixel` of `layer`'s first channel set to NaN.
+fn poison(path: &std::path::Path, layer: &str, pixel: usize, width: u32, height: u32) {
+    use inference::trace::{Layer, TraceImage, output};
+    let layers = output::read_exr(path).expect("read traced EXR");
+    let layers = layers
+        .into_iter()
+        .map(|(name, channels)| {
+            // Interleave in R, G, B, A (or Y) order, as the tracer writes.
+            let mut order: Vec<&'static str> = ["R", "G", "B", "A", "Y"]
+                .into_iter()
+                .filter(|c| channels.iter().any(|(n, _)| n == c))
+                .collect();
+            let get = |c: &str| &channels.iter().find(|(n, _)| n == c).expect("channel").1;
+            let n = order.len();
+            let mut pixels = vec![0.0f32; (width * height) as usize * n];
+            for (ci, c) in order.iter().enumerate() {
+                for (p, v) in get(c).iter().enumerate() {
+                    pixels[p * n + ci] = *v;
+                }
+            }
+            if name == layer {
+                pixels[pixel * n] = f32::NAN;
+            }
+            Layer {
+                name,
+                channels: order,
+                pixels,
+            }
+        })
+        .collect();
+    let image = TraceImage {
+        width,
+        height,
+        layers,
+        rays: 0,
+        elapsed: std::time::Duration::ZERO,
+    };
+    output::write_exr(path, &image).expect("rewrite EXR");
+}
+
+#[test]
+fn nan_in_a_traced_layer_names_file_layer_and_pixel() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let traces = dir.path().join("trace");
+    let traces_s = traces.to_str().expect("utf-8");
+    let o = engine(&[
+        "trace", "--sample", "2", "--size", "48x36", "--spp", "2", "--out", traces_s,
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // The teapot sits in the middle of the frame.
+    let pixel = 18 * 48 + 24;
+    poison(
+        &traces.join("sample_0002.exr"),
+        "teapot.specular_distant",
+        pixel,
+        48,
+        36,
+    );
+    let o = engine(&[
+        "infer",
+        "--sample",
+        "2",
+        "--size",
+        "48x36",
+        "--spp",
+        "2",
+        "--em-size",
+        "8",
+        "--out",
+        dir.path().join("infer").to_str().expect("utf-8"),
+        "--trace-dir",
+        traces_s,
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "NaN accepted");
+    assert!(!err.contains("panicked"), "{err}");
+    for needle in [
+        "sample_0002.exr",
+        "teapot.specular_distant",
+        &format!("pixel {pixel}"),
+    ] {
+        assert!(err.contains(needle), "error lacks {needle:?}: {err}");
+    }
+}

@@ -183,7 +183,10 @@ pub fn infer(args: &InferArgs) -> Result<String> {
                 &options,
                 &mut |_, _| {},
             )
-            .with_context(|| format!("sample {k}, {name}"))?;
+            .with_context(|| {
+                let file = trace_dir.join(format!("sample_{k:04}.exr"));
+                format!("{}: sample {k}, {name}", file.display())
+            })?;
             write_map(&map_path, &layout, &result.map)?;
             write_comparison(&dir.join(format!("{name}.png")), width, &pixels, &result)?;
             write_map_picture(&dir.join(format!("{name}.map.png")), &layout, &result.map)?;
