@@ -199,7 +199,7 @@ fn poison(path: &std::path::Path, layer: &str, pixel: usize, width: u32, height:
         .into_iter()
         .map(|(name, channels)| {
             // Interleave in R, G, B, A (or Y) order, as the tracer writes.
-            let mut order: Vec<&'static str> = ["R", "G", "B", "A", "Y"]
+            let order: Vec<&'static str> = ["R", "G", "B", "A", "Y"]
                 .into_iter()
                 .filter(|c| channels.iter().any(|(n, _)| n == c))
                 .collect();
