@@ -282,7 +282,6 @@ impl Renderer {
             device: &self.device,
             image: &r.cube.color,
             buffer: &buffer,
-            texel_size: 8,
         };
         self.executor.run(&[&pass])?;
         let halves: &[f16] = bytemuck::cast_slice(&buffer.mapped()?[..bytes as usize]);

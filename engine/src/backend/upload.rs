@@ -6,7 +6,7 @@ use super::buffer::Buffer;
 use super::commands::Commands;
 use super::device::Device;
 use super::error::{GpuError, GpuResult};
-use super::image::Image;
+use super::image::{Image, ImageDesc};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
@@ -19,17 +19,43 @@ pub fn texel_size(format: vk::Format) -> Option<u64> {
     }
 }
 
-/// Bytes of all levels × layers, level-major, tightly packed.
-pub fn image_bytes(image: &Image) -> GpuResult<u64> {
-    let desc = &image.desc;
+/// One copy region per MIP level (all layers), tightly packed level-major
+/// then layer then rows — the order uploads take and read-backs give —
+/// and the total bytes.
+pub fn level_regions(desc: &ImageDesc) -> GpuResult<(Vec<vk::BufferImageCopy>, u64)> {
     let texel = texel_size(desc.format)
         .ok_or_else(|| GpuError::Invalid(format!("no texel size for {:?}", desc.format)))?;
-    Ok((0..desc.mip_levels)
-        .map(|l| {
-            let (w, h) = desc.mip_extent(l);
-            u64::from(w) * u64::from(h) * u64::from(desc.layers()) * texel
+    let mut offset = 0u64;
+    let regions = (0..desc.mip_levels)
+        .map(|level| {
+            let (w, h) = desc.mip_extent(level);
+            let region = vk::BufferImageCopy {
+                buffer_offset: offset,
+                buffer_row_length: 0,
+                buffer_image_height: 0,
+                image_subresource: vk::ImageSubresourceLayers {
+                    aspect_mask: desc.aspect(),
+                    mip_level: level,
+                    base_array_layer: 0,
+                    layer_count: desc.layers(),
+                },
+                image_offset: vk::Offset3D::default(),
+                image_extent: vk::Extent3D {
+                    width: w,
+                    height: h,
+                    depth: 1,
+                },
+            };
+            offset += u64::from(w) * u64::from(h) * u64::from(desc.layers()) * texel;
+            region
         })
-        .sum())
+        .collect();
+    Ok((regions, offset))
+}
+
+/// Bytes of all levels × layers, level-major, tightly packed.
+pub fn image_bytes(image: &Image) -> GpuResult<u64> {
+    Ok(level_regions(&image.desc)?.1)
 }
 
 /// Uploads `data` (every level, each level's layers in order) and leaves the
@@ -58,32 +84,7 @@ pub fn upload_image(
     staging.mapped_mut()?[..data.len()].copy_from_slice(data);
 
     let desc = image.desc;
-    let texel = texel_size(desc.format).unwrap_or(4);
-    let mut offset = 0u64;
-    let regions: Vec<vk::BufferImageCopy> = (0..desc.mip_levels)
-        .map(|level| {
-            let (w, h) = desc.mip_extent(level);
-            let region = vk::BufferImageCopy {
-                buffer_offset: offset,
-                buffer_row_length: 0,
-                buffer_image_height: 0,
-                image_subresource: vk::ImageSubresourceLayers {
-                    aspect_mask: desc.aspect(),
-                    mip_level: level,
-                    base_array_layer: 0,
-                    layer_count: desc.layers(),
-                },
-                image_offset: vk::Offset3D::default(),
-                image_extent: vk::Extent3D {
-                    width: w,
-                    height: h,
-                    depth: 1,
-                },
-            };
-            offset += u64::from(w) * u64::from(h) * u64::from(desc.layers()) * texel;
-            region
-        })
-        .collect();
+    let (regions, _) = level_regions(&desc)?;
 
     let cmd = commands.begin()?;
     let to_transfer = [vk::ImageMemoryBarrier2::default()

@@ -58,8 +58,6 @@ pub struct ImageReadbackPass<'a> {
     pub device: &'a Device,
     pub image: &'a Image,
     pub buffer: &'a Buffer,
-    /// Bytes per texel of the image's format.
-    pub texel_size: u64,
 }
 
 impl Pass for ImageReadbackPass<'_> {
@@ -70,32 +68,7 @@ impl Pass for ImageReadbackPass<'_> {
         vec![Access::whole(self.image, Usage::TransferSrc)]
     }
     fn record(&self, cmd: vk::CommandBuffer) -> GpuResult<()> {
-        let desc = self.image.desc;
-        let mut offset = 0u64;
-        let regions: Vec<vk::BufferImageCopy> = (0..desc.mip_levels)
-            .map(|level| {
-                let (w, h) = desc.mip_extent(level);
-                let region = vk::BufferImageCopy {
-                    buffer_offset: offset,
-                    buffer_row_length: 0,
-                    buffer_image_height: 0,
-                    image_subresource: vk::ImageSubresourceLayers {
-                        aspect_mask: desc.aspect(),
-                        mip_level: level,
-                        base_array_layer: 0,
-                        layer_count: desc.layers(),
-                    },
-                    image_offset: vk::Offset3D::default(),
-                    image_extent: vk::Extent3D {
-                        width: w,
-                        height: h,
-                        depth: 1,
-                    },
-                };
-                offset += u64::from(w) * u64::from(h) * u64::from(desc.layers()) * self.texel_size;
-                region
-            })
-            .collect();
+        let (regions, offset) = crate::backend::upload::level_regions(&self.image.desc)?;
         if offset > self.buffer.size {
             return Err(crate::backend::GpuError::Invalid(format!(
                 "read-back of {offset} bytes into a buffer of {}",
