@@ -1,10 +1,9 @@
 //! `engine infer --diffuse`: one view-independent texture from several
 //! views, stacked into one solve.
 
-use super::output_dir;
+use super::{open_device, output_dir, trace_dir, trace_settings};
 use super::report::finite_or_max;
 use super::targets::{target_pixels, traced_layers};
-use crate::backend::{DeviceOptions, create_device};
 use crate::cli::InferArgs;
 use crate::play::prepare_output;
 use crate::probe::VulkanProbe;
@@ -15,9 +14,8 @@ use inference::probe::{Lookup, ProbeGeometry};
 use inference::scene::{Material, Scene};
 use inference::solve::SolveOptions;
 use inference::solve::layout::TextureShape;
-use inference::trace::{TraceSettings, Tracer, camera};
+use inference::trace::{Tracer, camera};
 use serde::Serialize;
-use std::path::Path;
 
 #[derive(Serialize)]
 pub struct DiffuseReport {
@@ -84,24 +82,11 @@ pub(super) fn infer_diffuse(args: &InferArgs, object_name: &str) -> Result<Strin
     }
     let tracer = Tracer::new(&scene)?;
     let (width, height) = args.size;
-    let settings = TraceSettings {
-        width,
-        height,
-        spp: args.spp.unwrap_or(inference::trace::DEFAULT_SPP),
-        progress: true,
-        ..TraceSettings::default()
-    };
-    settings.validate()?;
+    let settings = trace_settings(args)?;
     let out = output_dir(args, &scene);
     prepare_output(&out)?;
-    let trace_dir = args
-        .trace_dir
-        .clone()
-        .unwrap_or_else(|| Path::new("out").join(&scene.name).join("trace"));
-    let device = create_device(&DeviceOptions {
-        device_name: args.device.clone(),
-        validate: args.validate,
-    })?;
+    let trace_dir = trace_dir(args, &scene);
+    let device = open_device(args)?;
     let mut probe = VulkanProbe::new(&device)?;
     let projection = camera::projection(&scene, width, height);
     let layer = format!("{object_name}.diffuse");

@@ -42,12 +42,8 @@ pub(super) fn output_dir(args: &InferArgs, scene: &Scene) -> PathBuf {
         .unwrap_or_else(|| Path::new("out").join(&scene.name).join("infer"))
 }
 
-pub fn infer(args: &InferArgs) -> Result<String> {
-    if let Some(object) = &args.diffuse {
-        return infer_diffuse(args, object);
-    }
-    let scene = Scene::load(&args.scene)?;
-    let tracer = Tracer::new(&scene)?;
+/// How targets are traced when missing: the size of the probe renders.
+pub(super) fn trace_settings(args: &InferArgs) -> Result<TraceSettings> {
     let (width, height) = args.size;
     let settings = TraceSettings {
         width,
@@ -57,6 +53,31 @@ pub fn infer(args: &InferArgs) -> Result<String> {
         ..TraceSettings::default()
     };
     settings.validate()?;
+    Ok(settings)
+}
+
+/// Where traced targets live: `--trace-dir`, else `out/<scene>/trace`.
+pub(super) fn trace_dir(args: &InferArgs, scene: &Scene) -> PathBuf {
+    args.trace_dir
+        .clone()
+        .unwrap_or_else(|| Path::new("out").join(&scene.name).join("trace"))
+}
+
+pub(super) fn open_device(args: &InferArgs) -> Result<crate::backend::Device> {
+    Ok(create_device(&DeviceOptions {
+        device_name: args.device.clone(),
+        validate: args.validate,
+    })?)
+}
+
+pub fn infer(args: &InferArgs) -> Result<String> {
+    if let Some(object) = &args.diffuse {
+        return infer_diffuse(args, object);
+    }
+    let scene = Scene::load(&args.scene)?;
+    let tracer = Tracer::new(&scene)?;
+    let (width, height) = args.size;
+    let settings = trace_settings(args)?;
     let samples: Vec<u32> = match args.sample {
         Some(k) if k >= scene.orbit.samples => {
             bail!(
@@ -76,14 +97,8 @@ pub fn infer(args: &InferArgs) -> Result<String> {
     }
     let out = output_dir(args, &scene);
     prepare_output(&out)?;
-    let trace_dir = args
-        .trace_dir
-        .clone()
-        .unwrap_or_else(|| Path::new("out").join(&scene.name).join("trace"));
-    let device = create_device(&DeviceOptions {
-        device_name: args.device.clone(),
-        validate: args.validate,
-    })?;
+    let trace_dir = trace_dir(args, &scene);
+    let device = open_device(args)?;
     let mut probe = VulkanProbe::new(&device)?;
     let options = SolveOptions {
         eps_f: args.eps_f,
