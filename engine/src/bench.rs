@@ -2,13 +2,11 @@
 //! same meshes with one texture. Frames alternate between the two modes in
 //! one process so machine noise hits both alike; the ratio is of medians.
 
-use crate::backend::{DeviceOptions, create_device};
 use crate::cli::PlayArgs;
 use crate::perf::{PerfLog, PerfReport};
-use crate::play::{frame_angle, output_dir, prepare_output};
-use crate::renderer::{FrameMode, Renderer};
+use crate::play::{Session, frame_angle, open_session};
+use crate::renderer::FrameMode;
 use anyhow::Result;
-use inference::scene::Scene;
 use serde::Serialize;
 use std::time::Instant;
 
@@ -23,15 +21,13 @@ pub struct BenchReport {
 }
 
 pub fn bench(args: &PlayArgs) -> Result<BenchReport> {
-    let scene = Scene::load(&args.scene)?;
-    let out = output_dir(args, &scene);
-    prepare_output(&out)?;
-    let device = create_device(&DeviceOptions {
-        device_name: args.device.clone(),
-        validate: args.validate,
-    })?;
+    let Session {
+        scene,
+        out,
+        device,
+        mut renderer,
+    } = open_session(args)?;
     let (width, height) = args.size;
-    let mut renderer = Renderer::new(&device, &scene, width, height)?;
     let frames = args.frames.unwrap_or(200);
     let modes = [FrameMode::StaticEm, FrameMode::Bare];
     let mut logs = [PerfLog::default(), PerfLog::default()];

@@ -41,7 +41,16 @@ pub fn frame_angle(scene: &Scene, i: u32, frames: u32) -> f32 {
     }
 }
 
-pub fn play(args: &PlayArgs) -> Result<PerfReport> {
+/// What playing and benchmarking share: the scene, a writable output
+/// folder, the device and a renderer set up at the requested size.
+pub struct Session {
+    pub scene: Scene,
+    pub out: PathBuf,
+    pub device: crate::backend::Device,
+    pub renderer: Renderer,
+}
+
+pub fn open_session(args: &PlayArgs) -> Result<Session> {
     let scene = Scene::load(&args.scene)?;
     let out = output_dir(args, &scene);
     prepare_output(&out)?;
@@ -50,8 +59,24 @@ pub fn play(args: &PlayArgs) -> Result<PerfReport> {
         validate: args.validate,
     })?;
     let (width, height) = args.size;
-    let mut renderer = Renderer::new(&device, &scene, width, height)
+    let renderer = Renderer::new(&device, &scene, width, height)
         .with_context(|| format!("setting up scene {}", scene.source.display()))?;
+    Ok(Session {
+        scene,
+        out,
+        device,
+        renderer,
+    })
+}
+
+pub fn play(args: &PlayArgs) -> Result<PerfReport> {
+    let Session {
+        scene,
+        out,
+        device,
+        mut renderer,
+    } = open_session(args)?;
+    let (width, height) = args.size;
     let mode = match args.mode {
         Mode::StaticEm => FrameMode::StaticEm,
         Mode::Bare => FrameMode::Bare,

@@ -1,9 +1,9 @@
 //! `engine infer --diffuse`: one view-independent texture from several
 //! views, stacked into one solve.
 
-use super::{open_device, output_dir, trace_dir, trace_settings};
 use super::report::finite_or_max;
 use super::targets::{target_pixels, traced_layers};
+use super::{open_device, output_dir, trace_dir, trace_settings};
 use crate::cli::InferArgs;
 use crate::play::prepare_output;
 use crate::probe::VulkanProbe;
