@@ -49,7 +49,8 @@ fn encode_and_report_an_inferred_pem() {
     let infer = dir.path().join("infer");
     let infer_s = infer.to_str().expect("utf-8");
     let traces = dir.path().join("trace");
-    ok(&engine(&[
+    let traces_s = traces.to_str().expect("utf-8");
+    let infer_all = [
         "infer",
         "--scene",
         &scene,
@@ -61,8 +62,20 @@ fn encode_and_report_an_inferred_pem() {
         "--out",
         infer_s,
         "--trace-dir",
-        traces.to_str().expect("utf-8"),
-    ]));
+        traces_s,
+    ];
+    let text = ok(&engine(&infer_all));
+    assert!(
+        text.contains("teapot.specular_distant") && text.contains("3 samples: LS"),
+        "{text}"
+    );
+    assert!(infer.join("summary.json").is_file());
+    // A second run finds every map up to date and still summarizes.
+    let text = ok(&engine(&infer_all));
+    assert!(
+        text.contains("9 layers already inferred") && text.contains("3 samples: LS"),
+        "{text}"
+    );
     let container = dir.path().join("teapot.ptxc");
     let container_s = container.to_str().expect("utf-8");
     let text = ok(&engine(&[

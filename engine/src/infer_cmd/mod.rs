@@ -11,6 +11,7 @@ mod diffuse;
 mod jobs;
 mod pictures;
 mod report;
+mod summary;
 mod targets;
 
 use crate::backend::{DeviceOptions, create_device};
@@ -266,6 +267,9 @@ pub fn infer(args: &InferArgs) -> Result<String> {
     }
     if skipped > 0 {
         text += &format!("{skipped} layers already inferred from the same inputs: skipped\n");
+    }
+    if args.all {
+        text += &summary::summarize(&out)?;
     }
     // A single sample's report is also DIR/report.json, as tools expect.
     if let [only] = reports.as_slice() {
