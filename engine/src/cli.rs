@@ -156,6 +156,18 @@ pub struct CodecReportArgs {
     /// Where `engine infer --all` wrote the maps [default: out/<scene>/infer].
     #[arg(long)]
     pub infer_dir: Option<PathBuf>,
+    /// Traced targets for the rendered-frame PSNR [default: out/<scene>/trace].
+    #[arg(long)]
+    pub trace_dir: Option<PathBuf>,
+    /// Size the targets were traced at, as WIDTHxHEIGHT.
+    #[arg(long, default_value = "640x480", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Measure rendered frames at every Nth sample (0: skip).
+    #[arg(long, default_value_t = 10)]
+    pub frames_every: u32,
+    /// Vulkan device to use (substring of its name) [default: lavapipe].
+    #[arg(long, env = "ENGINE_DEVICE")]
+    pub device: Option<String>,
 }
 
 #[derive(Args, Debug, Clone)]

@@ -176,15 +176,150 @@ pub fn encode(args: &EncodeArgs) -> Result<String> {
     ))
 }
 
+/// Rendered-frame PSNR of every reflector's distant layer at every
+/// `every`-th sample with a traced target: the decoded map and the
+/// uncompressed map, each rendered on the reflector by this device (box
+/// texgen, as inferred), against the traced layer over the object's pixels.
+/// Returns the medians (decoded, uncompressed) and the frames measured.
+fn frames_psnr(
+    args: &CodecReportArgs,
+    scene: &Scene,
+    container: &codec::Container,
+    infer_dir: &Path,
+) -> Result<Option<(f64, f64, usize)>> {
+    use inference::em_geometry::{EmGeometry, texgen};
+    use inference::infer::Target;
+    use inference::probe::{Lookup, ProbeGeometry, ProbeRenderer};
+    if args.frames_every == 0 {
+        return Ok(None);
+    }
+    let trace_dir = args
+        .trace_dir
+        .clone()
+        .unwrap_or_else(|| Path::new("out").join(&scene.name).join("trace"));
+    let (width, height) = args.size;
+    let device = crate::backend::create_device(&crate::backend::DeviceOptions {
+        device_name: args.device.clone(),
+        validate: false,
+    })?;
+    let mut probe = crate::probe::VulkanProbe::new(&device)?;
+    let projection = inference::trace::camera::projection(scene, width, height);
+    let (room_min, room_max) = scene.bounds();
+    let (mut decoded_db, mut raw_db) = (Vec::new(), Vec::new());
+    for (index, spec) in map_specs(scene).iter().enumerate() {
+        if spec.layer != "specular_distant" {
+            continue;
+        }
+        let Some(object) = scene.object(&spec.object) else {
+            continue;
+        };
+        let layout = TextureLayout::full_chain(spec.shape);
+        let origin = object.mesh.area_weighted_centroid();
+        for k in (0..scene.orbit.samples).step_by(args.frames_every as usize) {
+            let traced = trace_dir.join(format!("sample_{k:04}.exr"));
+            if !traced.is_file() {
+                continue;
+            }
+            let layers = inference::trace::output::read_exr(&traced)?;
+            let name = format!("{}.{}", spec.object, spec.layer);
+            let target = crate::infer_cmd::targets::target_pixels(
+                &layers,
+                &name,
+                false,
+                (width * height) as usize,
+            )
+            .with_context(|| format!("{}", traced.display()))?;
+            let eye = scene.orbit.sample_eye(k)?;
+            let mut lookups = vec![[0.0f32; 4]; object.mesh.positions.len()];
+            let geometry_em = EmGeometry::Box {
+                min: room_min,
+                max: room_max,
+            };
+            texgen(
+                &geometry_em,
+                origin,
+                eye,
+                &object.mesh.positions,
+                &object.mesh.normals,
+                &mut lookups,
+            );
+            let geometry = ProbeGeometry {
+                key: 0xC0DEC ^ u64::from(k),
+                positions: object.mesh.positions.clone(),
+                indices: object.mesh.indices.clone(),
+                lookup: Lookup::Cube(
+                    lookups
+                        .iter()
+                        .map(|l| glam::Vec3::new(l[0], l[1], l[2]))
+                        .collect(),
+                ),
+                view_proj: projection * scene.orbit.view(eye),
+                width,
+                height,
+            };
+            let mut decoded = vec![0.0f32; layout.len() * 4];
+            codec::decode_leaf_all(container, index as u32, 0, [k, 0], &mut decoded)?;
+            let decoded: Vec<[f32; 4]> = decoded
+                .chunks_exact(4)
+                .map(|c| [c[0], c[1], c[2], 1.0])
+                .collect();
+            let path = infer_dir
+                .join(format!("sample_{k:04}"))
+                .join(format!("{name}.exr"));
+            let raw = inference::infer::layer::texels(&read_map(&path, &layout, 3)?, layout.len());
+            let t = Target {
+                name: &name,
+                pixels: &target,
+                channels: 3,
+            };
+            let render_decoded = probe.render(&geometry, &layout, &decoded)?;
+            let pixels: Vec<u32> = (0..width * height)
+                .filter(|&p| render_decoded[p as usize][3] > 0.5)
+                .collect();
+            let render_raw = probe.render(&geometry, &layout, &raw)?;
+            decoded_db.push(inference::infer::layer::psnr_over_rows(
+                &render_decoded,
+                &t,
+                &pixels,
+            ));
+            raw_db.push(inference::infer::layer::psnr_over_rows(
+                &render_raw,
+                &t,
+                &pixels,
+            ));
+        }
+    }
+    if decoded_db.is_empty() {
+        return Ok(None);
+    }
+    let median = crate::perf::median;
+    Ok(Some((
+        median(&decoded_db),
+        median(&raw_db),
+        decoded_db.len(),
+    )))
+}
+
 pub fn codec_report(args: &CodecReportArgs) -> Result<String> {
     let scene = Scene::load(&args.scene)?;
     let container = codec::Container::open(&args.file)
         .with_context(|| format!("opening {}", args.file.display()))?;
     let dir = infer_dir(&scene, args.infer_dir.as_deref());
     let input = load_input(&scene, &dir)?;
-    let report =
+    let mut report =
         codec::report::report(&container, &input, &codec::report::ReportOptions::default())
             .with_context(|| format!("measuring {}", args.file.display()))?;
+    match frames_psnr(args, &scene, &container, &dir)? {
+        Some((decoded, raw, n)) => {
+            report.frames_psnr_db = Some(decoded);
+            report.notes.push(format!(
+                "rendered frames: distant layer at {n} samples, decoded {decoded:.2} dB vs uncompressed {raw:.2} dB (medians, against the traced layer)"
+            ));
+        }
+        None => report
+            .notes
+            .push("rendered frames: no traced targets found (see --trace-dir, --size)".into()),
+    }
     let json = serde_json::to_string_pretty(&report)?;
     if let Some(parent) = args.json.parent().filter(|p| !p.as_os_str().is_empty()) {
         crate::play::prepare_output(parent)?;
@@ -198,6 +333,13 @@ pub fn codec_report(args: &CodecReportArgs) -> Result<String> {
         report.psnr_db,
         report.decode_ms_median
     );
+    if let Some(n) = report
+        .notes
+        .iter()
+        .find(|n| n.starts_with("rendered frames"))
+    {
+        text += &format!("  {n}\n");
+    }
     for b in &report.baselines {
         text += &format!(
             "  baseline {:<24} ratio {:.1}:1, PSNR {:.2} dB\n",

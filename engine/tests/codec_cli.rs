@@ -101,9 +101,24 @@ fn encode_and_report_an_inferred_pem() {
         &scene,
         "--infer-dir",
         infer_s,
+        "--trace-dir",
+        traces_s,
+        "--size",
+        "64x48",
+        "--frames-every",
+        "2",
     ]));
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(&json).expect("json")).expect("JSON");
+    // Rendered frames of the decoded distant layer at samples 0 and 2.
+    assert!(
+        report["frames_psnr_db"]
+            .as_f64()
+            .is_some_and(|p| p.is_finite() && p > 10.0),
+        "{report}"
+    );
+    let notes = report["notes"].to_string();
+    assert!(notes.contains("at 2 samples"), "{notes}");
     assert!(
         report["ratio"].as_f64().is_some_and(|r| r > 10.0),
         "{report}"

@@ -12,7 +12,7 @@ mod jobs;
 mod pictures;
 mod report;
 mod summary;
-mod targets;
+pub(crate) mod targets;
 
 use crate::backend::{DeviceOptions, create_device};
 use crate::cli::InferArgs;

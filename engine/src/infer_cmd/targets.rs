@@ -33,7 +33,7 @@ pub(super) fn traced_layers(
 }
 
 /// `name`'s pixels as RGBA (premultiplied by A when `premultiply`).
-pub(super) fn target_pixels(
+pub(crate) fn target_pixels(
     layers: &[output::ExrLayer],
     name: &str,
     premultiply: bool,
