@@ -6,7 +6,7 @@ use crate::gpu_scene::GpuScene;
 use crate::graph::{Executor, Pass, PassTiming};
 use crate::passes::em_capture::{CubeTarget, EmCapturePass, MipPass};
 use crate::passes::mirror::{MirrorDraw, MirrorRenderer};
-use crate::passes::readback::{ImageReadbackPass, ReadbackPass};
+use crate::passes::readback::ReadbackPass;
 use crate::passes::room::{RoomRenderer, RoomStyle};
 use crate::passes::target::Target;
 use ash::vk;
@@ -278,17 +278,13 @@ impl Renderer {
             vk::BufferUsageFlags::TRANSFER_DST,
             gpu_allocator::MemoryLocation::GpuToCpu,
         )?;
-        let pass = ImageReadbackPass {
+        let pass = ReadbackPass {
             device: &self.device,
             image: &r.cube.color,
             buffer: &buffer,
         };
         self.executor.run(&[&pass])?;
-        let halves: &[f16] = bytemuck::cast_slice(&buffer.mapped()?[..bytes as usize]);
-        let texels = halves
-            .chunks_exact(4)
-            .map(|c| [c[0].to_f32(), c[1].to_f32(), c[2].to_f32(), c[3].to_f32()])
-            .collect();
+        let texels = rgba16f_to_f32(&buffer.mapped()?[..bytes as usize]);
         Ok((r.cube.color.desc.width, r.cube.origin, texels))
     }
 
@@ -296,10 +292,14 @@ impl Renderer {
     pub fn pixels(&self) -> GpuResult<Vec<[f32; 4]>> {
         let bytes = self.readback.mapped()?;
         let texels = (self.width * self.height) as usize;
-        let halves: &[f16] = bytemuck::cast_slice(&bytes[..texels * 8]);
-        Ok(halves
-            .chunks_exact(4)
-            .map(|c| [c[0].to_f32(), c[1].to_f32(), c[2].to_f32(), c[3].to_f32()])
-            .collect())
+        Ok(rgba16f_to_f32(&bytes[..texels * 8]))
     }
+}
+
+/// RGBA16F texels read back from the device as linear RGBA f32.
+fn rgba16f_to_f32(bytes: &[u8]) -> Vec<[f32; 4]> {
+    bytemuck::cast_slice::<u8, f16>(bytes)
+        .chunks_exact(4)
+        .map(|c| [c[0].to_f32(), c[1].to_f32(), c[2].to_f32(), c[3].to_f32()])
+        .collect()
 }
