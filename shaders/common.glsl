@@ -5,3 +5,12 @@
 vec3 schlick(vec3 f0, float one_minus_cos_pow5) {
     return f0 + (vec3(1.0) - f0) * one_minus_cos_pow5;
 }
+
+// The Schlick factor (1 - cos)^5 from the LUT: texel i holds
+// (1 - i/(N-1))^5, so address texel centres to make cos = 0 and cos = 1
+// read the exact end values.
+float fresnel_factor(sampler1D lut, float cos_theta) {
+    float n = float(textureSize(lut, 0));
+    float u = (clamp(cos_theta, 0.0, 1.0) * (n - 1.0) + 0.5) / n;
+    return texture(lut, u).r;
+}

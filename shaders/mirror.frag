@@ -16,11 +16,7 @@ layout(set = 0, binding = 1) uniform sampler1D fresnel_lut; // (1 - cos)^5 over 
 layout(location = 0) out vec4 out_color;
 
 void main() {
-    // Texel i holds (1 - i/(N-1))^5: address texel centres so that cos = 0
-    // and cos = 1 read the exact end values.
-    float n = float(textureSize(fresnel_lut, 0));
-    float u = (clamp(in_cos, 0.0, 1.0) * (n - 1.0) + 0.5) / n;
-    float factor = texture(fresnel_lut, u).r;
+    float factor = fresnel_factor(fresnel_lut, in_cos);
     vec3 fresnel = schlick(pc.f0.rgb, factor);
     out_color = vec4(fresnel * texture(environment, in_lookup).rgb, 1.0);
 }

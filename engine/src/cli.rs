@@ -175,7 +175,8 @@ pub struct PlayArgs {
     /// Scene name (a file in assets/scenes/) or path to a scene file.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
-    /// Frames to render along the orbit [default: one per viewpoint sample].
+    /// Frames along the default path: through every orbit sample, then
+    /// rising above the orbit plane [default: 1.5 per viewpoint sample].
     #[arg(long)]
     pub frames: Option<u32>,
     /// Frame size as WIDTHxHEIGHT.
@@ -185,8 +186,10 @@ pub struct PlayArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// What each frame draws.
-    #[arg(long, value_enum, default_value_t = Mode::StaticEm)]
+    #[arg(long, value_enum, default_value_t = Mode::LayeredPem)]
     pub mode: Mode,
+    #[command(flatten)]
+    pub pem: PemArgs,
     /// Turn the Khronos validation layer on; the run ends with
     /// `validation messages: N` and fails when N > 0.
     #[arg(long)]
@@ -205,10 +208,62 @@ pub struct PlayArgs {
     pub no_capture: bool,
 }
 
+/// Where PEM playback reads maps and the knobs that trade speed for accuracy.
+#[derive(Args, Debug, Clone)]
+pub struct PemArgs {
+    /// Where PEM maps come from: the compressed container (compiled when
+    /// missing) or the inferred EXR files.
+    #[arg(long, value_enum, default_value_t = Maps::Container)]
+    pub maps: Maps,
+    /// The container [default: out/<scene>/<scene>.ptxc].
+    #[arg(long)]
+    pub container: Option<PathBuf>,
+    /// Where `engine infer --all` wrote the maps [default: out/<scene>/infer].
+    #[arg(long)]
+    pub infer_dir: Option<PathBuf>,
+    /// Draw the nearest viewpoint sample only (no blend pass).
+    #[arg(long)]
+    pub no_blend: bool,
+    /// Layered PEM: the distant layer only (no local layer).
+    #[arg(long)]
+    pub distant_only: bool,
+    /// Use every Nth viewpoint sample only.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub spacing: u32,
+    /// EM resolution to play (a power of two up to the inferred one; lower
+    /// sizes use the inferred maps' coarser MIP levels) [default: inferred].
+    #[arg(long)]
+    pub em_size: Option<u32>,
+    /// Texture filtering of the maps.
+    #[arg(long, value_enum, default_value_t = Filter::Trilinear)]
+    pub filtering: Filter,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Maps {
+    Container,
+    Exr,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Filter {
+    Trilinear,
+    Bilinear,
+    Nearest,
+}
+
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mode {
     /// Mirror reflectors from one static cube map (the baseline).
     StaticEm,
+    /// One inferred sphere-at-infinity EM per viewpoint sample.
+    SpherePem,
+    /// Inferred distant (box) and local (ellipsoid) EMs per sample (the PEM paper).
+    LayeredPem,
+    /// Inferred parameterized texture maps pasted on the surface.
+    Ptm,
+    /// The ray-traced gold standard (CPU, seconds per frame).
+    Trace,
     /// Every mesh with one texture and nothing else (reference cost).
     Bare,
 }

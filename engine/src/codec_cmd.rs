@@ -11,15 +11,15 @@ use inference::solve::layout::{TextureLayout, TextureShape};
 use std::path::{Path, PathBuf};
 
 /// One parameterized map of the scene: which object and layer, its shape.
-struct MapSpec {
-    object: String,
-    layer: &'static str,
-    shape: TextureShape,
-    channels: u32,
+pub(crate) struct MapSpec {
+    pub(crate) object: String,
+    pub(crate) layer: &'static str,
+    pub(crate) shape: TextureShape,
+    pub(crate) channels: u32,
 }
 
 /// The maps `engine infer` writes for the scene, in container order.
-fn map_specs(scene: &Scene) -> Vec<MapSpec> {
+pub(crate) fn map_specs(scene: &Scene) -> Vec<MapSpec> {
     let mut specs = Vec::new();
     for o in &scene.objects {
         let reflective = matches!(

@@ -12,7 +12,10 @@ use crate::passes::target::Target;
 use ash::vk;
 use glam::{Mat4, Vec3};
 use half::f16;
-use inference::scene::{Material, Scene};
+use crate::pem::player::{PemPlayer, PemSettings};
+use crate::pem::samples::{SampleBlend, sample_blend};
+use crate::pem::source::MapSource;
+use inference::scene::{Material, Orbit, Scene};
 use std::time::Instant;
 
 pub const COLOR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
@@ -27,6 +30,8 @@ pub enum FrameMode {
     StaticEm,
     /// Every mesh with one texture: the reference cost of drawing at all.
     Bare,
+    /// The lit room, reflectors from parameterized maps (see `set_pem`).
+    Pem,
 }
 
 /// A reflective object and the static environment map it samples.
@@ -44,6 +49,8 @@ pub struct CpuTimes {
     pub texgen_ms: f64,
     pub upload_ms: f64,
     pub submit_ms: f64,
+    /// Reading maps into staging (codec decode or EXR read).
+    pub decode_ms: f64,
 }
 
 pub struct FrameStats {
@@ -66,6 +73,8 @@ pub struct Renderer {
     height: u32,
     projection: Mat4,
     texgen_scratch: Vec<inference::texgen::TexgenVertex>,
+    pem: Option<PemPlayer>,
+    orbit: Orbit,
     /// What set-up cost on the GPU (static EM capture, MIP chain).
     pub setup_timings: Vec<PassTiming>,
 }
@@ -156,10 +165,45 @@ impl Renderer {
             height,
             projection,
             texgen_scratch: Vec::new(),
+            pem: None,
+            orbit: scene.orbit,
             setup_timings: Vec::new(),
         };
         renderer.setup_timings = renderer.capture_static_ems(scene.camera.near, far)?;
         Ok(renderer)
+    }
+
+    /// Sets up PEM playback (`FrameMode::Pem`) with `settings`, reading
+    /// maps from `source`; replaces any earlier PEM set-up.
+    pub fn set_pem(
+        &mut self,
+        scene: &Scene,
+        settings: PemSettings,
+        source: MapSource,
+    ) -> anyhow::Result<()> {
+        if let Some(old) = self.pem.take() {
+            old.release(&mut self.executor);
+        }
+        self.pem = Some(PemPlayer::new(
+            &self.device,
+            &mut self.executor,
+            scene,
+            settings,
+            source,
+            COLOR_FORMAT,
+            DEPTH_FORMAT,
+        )?);
+        Ok(())
+    }
+
+    pub fn pem_settings(&self) -> Option<PemSettings> {
+        self.pem.as_ref().map(|p| p.settings)
+    }
+
+    /// The samples a PEM frame from `eye` draws (None without PEM set-up).
+    pub fn pem_blend(&self, eye: Vec3) -> Option<SampleBlend> {
+        let s = self.pem.as_ref()?.settings;
+        Some(sample_blend(&self.orbit, eye, s.spacing, s.blend))
     }
 
     pub fn size(&self) -> (u32, u32) {
@@ -206,21 +250,46 @@ impl Renderer {
             clear: true,
             front_face: vk::FrontFace::COUNTER_CLOCKWISE,
         };
+        let mut blend = None;
+        if mode == FrameMode::Pem {
+            let Some(pem) = self.pem.as_mut() else {
+                return Err(GpuError::Invalid("PEM frame without set_pem()".into()));
+            };
+            let b = sample_blend(&self.orbit, eye, pem.settings.spacing, pem.settings.blend);
+            let prepared = pem
+                .prepare(eye, &b)
+                .map_err(|e| GpuError::Invalid(format!("{e:#}")))?;
+            cpu.texgen_ms += prepared.texgen_ms;
+            cpu.decode_ms += prepared.decode_ms;
+            blend = Some(b);
+        }
         let mut passes: Vec<Box<dyn Pass + '_>> = Vec::new();
         match mode {
-            FrameMode::StaticEm => {
+            FrameMode::StaticEm | FrameMode::Pem => {
+                let upload = match (&self.pem, mode) {
+                    (Some(pem), FrameMode::Pem) => pem.upload_pass()?,
+                    _ => None,
+                };
+                if let Some(upload) = upload {
+                    passes.push(Box::new(upload));
+                }
                 passes.push(Box::new(
                     self.room.pass("room", &self.gpu, target, view_proj),
                 ));
-                if !self.reflectors.is_empty() {
+                let later = Target {
+                    clear: false,
+                    ..target
+                };
+                if let (Some(pem), Some(b)) = (&self.pem, &blend) {
+                    for pass in pem.draw_passes(&self.gpu, b, later, view_proj)? {
+                        passes.push(Box::new(pass));
+                    }
+                } else if !self.reflectors.is_empty() {
                     passes.push(Box::new(self.mirror.pass(
                         &self.gpu,
                         self.reflectors.iter().map(|r| &r.draw).collect(),
                         self.reflectors.iter().map(|r| &r.cube.color).collect(),
-                        Target {
-                            clear: false,
-                            ..target
-                        },
+                        later,
                         view_proj,
                     )));
                 }

@@ -55,6 +55,23 @@ pub const MIRROR_ATTRIBUTES: [vk::VertexInputAttributeDescription; 2] = [
     attribute(1, 1, vk::Format::R32G32B32A32_SFLOAT, 0),
 ];
 
+/// `shaders/pem.vert`: position, then the distant-layer texgen stream
+/// (binding 1: lookup + cos θ) and the local-layer one (binding 2).
+pub const LOCAL_TEXGEN_BINDING: vk::VertexInputBindingDescription =
+    vk::VertexInputBindingDescription {
+        binding: 2,
+        stride: 16,
+        input_rate: vk::VertexInputRate::VERTEX,
+    };
+pub const PEM_ATTRIBUTES: [vk::VertexInputAttributeDescription; 3] = [
+    MIRROR_ATTRIBUTES[0],
+    MIRROR_ATTRIBUTES[1],
+    attribute(2, 2, vk::Format::R32G32B32A32_SFLOAT, 0),
+];
+/// `shaders/ptm.vert`: position and texture coordinates of binding 0.
+pub const PTM_ATTRIBUTES: [vk::VertexInputAttributeDescription; 2] =
+    [Vertex::ATTRIBUTES[0], Vertex::ATTRIBUTES[2]];
+
 const fn attribute(
     location: u32,
     binding: u32,
@@ -99,6 +116,15 @@ pub struct MirrorPush {
     pub f0: Vec4,
 }
 
+/// `shaders/pem.vert`, `pem_*.frag`, `ptm.*` push constants.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct PemPush {
+    pub view_proj: Mat4,
+    /// rgb Schlick F0; a = the pass's blend weight (1 on the first pass).
+    pub f0_weight: Vec4,
+}
+
 /// Embedded SPIR-V compiled by build.rs from `shaders/`.
 pub mod spirv {
     macro_rules! shader {
@@ -111,4 +137,9 @@ pub mod spirv {
     pub const BARE_FRAG: &[u8] = shader!("bare.frag");
     pub const MIRROR_VERT: &[u8] = shader!("mirror.vert");
     pub const MIRROR_FRAG: &[u8] = shader!("mirror.frag");
+    pub const PEM_VERT: &[u8] = shader!("pem.vert");
+    pub const PEM_LAYERED_FRAG: &[u8] = shader!("pem_layered.frag");
+    pub const PEM_DISTANT_FRAG: &[u8] = shader!("pem_distant.frag");
+    pub const PTM_VERT: &[u8] = shader!("ptm.vert");
+    pub const PTM_FRAG: &[u8] = shader!("ptm.frag");
 }

@@ -229,16 +229,42 @@ pub struct Sampler {
     pub raw: vk::Sampler,
 }
 
+/// How a sampler filters: the knob playback trades speed for accuracy with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Filtering {
+    /// Linear within and between MIP levels (the inferred maps assume it).
+    #[default]
+    Trilinear,
+    /// Linear on the finest level only (no MIP chain: aliasing, one fetch).
+    Bilinear,
+    /// Nearest texel of the finest level.
+    Nearest,
+}
+
 impl Sampler {
     pub fn trilinear(device: &Device, address: vk::SamplerAddressMode) -> GpuResult<Self> {
+        Self::new(device, address, Filtering::Trilinear)
+    }
+
+    pub fn new(
+        device: &Device,
+        address: vk::SamplerAddressMode,
+        filtering: Filtering,
+    ) -> GpuResult<Self> {
+        let (filter, max_lod) = match filtering {
+            Filtering::Trilinear => (vk::Filter::LINEAR, vk::LOD_CLAMP_NONE),
+            Filtering::Bilinear => (vk::Filter::LINEAR, 0.0),
+            Filtering::Nearest => (vk::Filter::NEAREST, 0.0),
+        };
         let info = vk::SamplerCreateInfo::default()
-            .mag_filter(vk::Filter::LINEAR)
-            .min_filter(vk::Filter::LINEAR)
+            .mag_filter(filter)
+            .min_filter(filter)
             .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
             .address_mode_u(address)
             .address_mode_v(address)
             .address_mode_w(address)
-            .max_lod(vk::LOD_CLAMP_NONE);
+            .max_lod(max_lod);
         // SAFETY: valid device; destroyed in Drop.
         let raw = unsafe { device.device.create_sampler(&info, None) }.vk("vkCreateSampler")?;
         Ok(Self {

@@ -15,6 +15,6 @@ pub use buffer::Buffer;
 pub use commands::Commands;
 pub use device::{Device, DeviceOptions, create_device};
 pub use error::{GpuError, GpuResult, VkContext};
-pub use image::{Image, ImageDesc, ImageKind, Sampler};
+pub use image::{Filtering, Image, ImageDesc, ImageKind, Sampler};
 pub use pipeline::{Binding, Pipeline, PipelineDesc};
 pub use queries::{PassQueries, PassSample};

@@ -19,6 +19,9 @@ pub struct PipelineDesc<'a> {
     pub push_constant_size: u32,
     /// Set 0, binding i has descriptor type `bindings[i]` (fragment stage).
     pub bindings: &'a [vk::DescriptorType],
+    /// Blend the output over the target by its alpha (`a·src + (1 − a)·dst`)
+    /// instead of replacing it: how a second pass mixes in a weighted term.
+    pub blend_by_alpha: bool,
 }
 
 /// What a descriptor set binds at one binding.
@@ -274,8 +277,19 @@ unsafe fn create_graphics_pipeline(
         .depth_test_enable(true)
         .depth_write_enable(true)
         .depth_compare_op(vk::CompareOp::LESS_OR_EQUAL);
-    let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
-        .color_write_mask(vk::ColorComponentFlags::RGBA)];
+    let mut attachment =
+        vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA);
+    if desc.blend_by_alpha {
+        attachment = attachment
+            .blend_enable(true)
+            .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
+            .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+            .color_blend_op(vk::BlendOp::ADD)
+            .src_alpha_blend_factor(vk::BlendFactor::ZERO)
+            .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+            .alpha_blend_op(vk::BlendOp::ADD);
+    }
+    let blend_attachments = [attachment];
     let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
     // Front face is dynamic: the same pipeline renders mirrored cube faces.
     let dynamic_states = [

@@ -2,7 +2,9 @@
 
 pub mod em_capture;
 pub mod mirror;
+pub mod pem;
 pub mod probe;
 pub mod readback;
 pub mod room;
 pub mod target;
+pub mod upload;

@@ -152,6 +152,7 @@ pub fn room_pipeline(
                 vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
                 vk::DescriptorType::UNIFORM_BUFFER,
             ],
+            blend_by_alpha: false,
         },
     )
 }

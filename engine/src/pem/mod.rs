@@ -1,0 +1,9 @@
+//! Parameterized-environment-map playback (PEM paper): which samples a
+//! frame uses, where their maps come from, the per-frame texgen, the
+//! resident sample slots, and the default path through the viewpoints.
+
+pub mod path;
+pub mod player;
+pub mod samples;
+pub mod source;
+pub mod texgen;

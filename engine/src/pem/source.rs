@@ -1,0 +1,219 @@
+//! Where playback gets a sample's maps: the compressed container (default;
+//! decoded straight into the caller's staging memory) or the inferred EXR
+//! files themselves. Both write the same layout: RGBA f16, MIP-major, then
+//! face, then rows — what `level_regions` uploads.
+
+use crate::codec_cmd::map_specs;
+use anyhow::{Context, Result, bail};
+use half::f16;
+use inference::infer::maps::read_map;
+use inference::scene::Scene;
+use inference::solve::layout::{TextureLayout, TextureShape};
+use std::path::{Path, PathBuf};
+
+/// One kind of inferred map of a reflector.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum MapLayer {
+    Distant,
+    Local,
+    Sphere,
+    Ptm,
+}
+
+impl MapLayer {
+    /// The map's file name part, as `engine infer` writes it.
+    pub fn file_part(self) -> &'static str {
+        match self {
+            MapLayer::Distant => "specular_distant",
+            MapLayer::Local => "specular_local",
+            MapLayer::Sphere => "specular_sphere",
+            MapLayer::Ptm => "ptm",
+        }
+    }
+    pub fn channels(self) -> usize {
+        match self {
+            MapLayer::Local => 4,
+            _ => 3,
+        }
+    }
+    pub fn shape(self, resolution: u32) -> TextureShape {
+        match self {
+            MapLayer::Ptm => TextureShape::Tex2D {
+                width: resolution,
+                height: resolution,
+            },
+            _ => TextureShape::Cube { size: resolution },
+        }
+    }
+}
+
+/// Which source playback reads maps from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SourceKind {
+    /// The codec container (`engine encode`), decoded per sample.
+    #[default]
+    Container,
+    /// The inferred EXR maps, read per sample (uncompressed).
+    Exr,
+}
+
+pub struct MapSource {
+    kind: Kind,
+    /// What a read took, for the counters.
+    pub last_read_ms: f64,
+}
+
+enum Kind {
+    Container {
+        path: PathBuf,
+        container: codec::Container,
+        cache: codec::DecodeCache,
+        /// (object name, layer) → container texture (object index).
+        index: Vec<(String, &'static str, u32)>,
+    },
+    Exr {
+        dir: PathBuf,
+    },
+}
+
+impl MapSource {
+    /// Opens the container at `path`, checking it holds the maps this scene
+    /// asks for, in the order `engine encode` writes them.
+    pub fn container(scene: &Scene, path: &Path) -> Result<Self> {
+        let container = codec::Container::open(path)
+            .with_context(|| format!("opening map container {}", path.display()))?;
+        let specs = map_specs(scene);
+        let textures = container.textures();
+        if textures.len() != specs.len() {
+            bail!(
+                "{}: holds {} textures, scene {} asks for {} (re-run `engine encode --scene {}`)",
+                path.display(),
+                textures.len(),
+                scene.name,
+                specs.len(),
+                scene.name
+            );
+        }
+        let mut index = Vec::new();
+        for (i, (spec, tex)) in specs.iter().zip(textures).enumerate() {
+            let layout = TextureLayout::full_chain(spec.shape);
+            let (w, h) = layout.level_size(0);
+            let got = (tex.layout.width, tex.layout.height, tex.layout.faces, tex.layout.channels);
+            let want = (w, h, layout.faces(), spec.channels);
+            if got != want || tex.grid.n0 < scene.orbit.samples {
+                bail!(
+                    "{}: texture {i} ({}.{}) is {}x{}x{} faces, {} channels, {} samples; expected {}x{}x{}, {} channels, {} samples (re-run `engine encode`)",
+                    path.display(),
+                    spec.object,
+                    spec.layer,
+                    got.0,
+                    got.1,
+                    got.2,
+                    got.3,
+                    tex.grid.n0,
+                    want.0,
+                    want.1,
+                    want.2,
+                    want.3,
+                    scene.orbit.samples
+                );
+            }
+            index.push((spec.object.clone(), spec.layer, i as u32));
+        }
+        Ok(Self {
+            kind: Kind::Container {
+                path: path.to_owned(),
+                container,
+                cache: codec::DecodeCache::default(),
+                index,
+            },
+            last_read_ms: 0.0,
+        })
+    }
+
+    /// Reads the EXR maps under `dir` (`sample_XXXX/<object>.<layer>.exr`).
+    pub fn exr(dir: &Path) -> Self {
+        Self {
+            kind: Kind::Exr {
+                dir: dir.to_owned(),
+            },
+            last_read_ms: 0.0,
+        }
+    }
+
+    /// Whether this source can give `layer` of `object` (containers hold
+    /// only what `engine encode` put in them).
+    pub fn has(&self, object: &str, layer: MapLayer) -> bool {
+        match &self.kind {
+            Kind::Container { index, .. } => index
+                .iter()
+                .any(|(o, l, _)| o == object && *l == layer.file_part()),
+            Kind::Exr { dir } => sample_path(dir, 0, object, layer).is_file(),
+        }
+    }
+
+    /// Writes sample `sample` of `object`'s `layer` (a `resolution` map with
+    /// its full MIP chain) into `out`: RGBA f16, alpha 1 for RGB maps.
+    pub fn read(
+        &mut self,
+        object: &str,
+        layer: MapLayer,
+        resolution: u32,
+        sample: u32,
+        out: &mut [f16],
+    ) -> Result<()> {
+        let start = std::time::Instant::now();
+        let layout = TextureLayout::full_chain(layer.shape(resolution));
+        if out.len() != layout.len() * 4 {
+            bail!(
+                "staging slice of {} halves for {object}.{} (expected {})",
+                out.len(),
+                layer.file_part(),
+                layout.len() * 4
+            );
+        }
+        match &mut self.kind {
+            Kind::Container {
+                path,
+                container,
+                cache,
+                index,
+            } => {
+                let Some(&(_, _, texture)) = index
+                    .iter()
+                    .find(|(o, l, _)| o == object && *l == layer.file_part())
+                else {
+                    bail!("{}: holds no {object}.{} maps", path.display(), layer.file_part());
+                };
+                cache
+                    .decode_leaf_all(container, texture, 0, [sample, 0], out)
+                    .with_context(|| {
+                        format!(
+                            "{}: decoding {object}.{} of sample {sample}",
+                            path.display(),
+                            layer.file_part()
+                        )
+                    })?;
+                cache.end_frame();
+            }
+            Kind::Exr { dir } => {
+                let path = sample_path(dir, sample, object, layer);
+                let map = read_map(&path, &layout, layer.channels())
+                    .with_context(|| format!("reading inferred map {}", path.display()))?;
+                for (i, texel) in out.chunks_exact_mut(4).enumerate() {
+                    for (c, v) in texel.iter_mut().enumerate() {
+                        *v = f16::from_f32(map.get(c).map_or(1.0, |m| m[i]));
+                    }
+                }
+            }
+        }
+        self.last_read_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok(())
+    }
+}
+
+pub fn sample_path(dir: &Path, sample: u32, object: &str, layer: MapLayer) -> PathBuf {
+    dir.join(format!("sample_{sample:04}"))
+        .join(format!("{object}.{}.exr", layer.file_part()))
+}
