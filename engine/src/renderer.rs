@@ -51,6 +51,7 @@ pub struct CpuTimes {
     pub submit_ms: f64,
     /// Reading maps into staging (codec decode or EXR read).
     pub decode_ms: f64,
+    pub decoded_maps: u32,
 }
 
 pub struct FrameStats {
@@ -261,6 +262,7 @@ impl Renderer {
                 .map_err(|e| GpuError::Invalid(format!("{e:#}")))?;
             cpu.texgen_ms += prepared.texgen_ms;
             cpu.decode_ms += prepared.decode_ms;
+            cpu.decoded_maps += prepared.decoded_maps;
             blend = Some(b);
         }
         let mut passes: Vec<Box<dyn Pass + '_>> = Vec::new();
