@@ -125,6 +125,44 @@ pub struct InferArgs {
 }
 
 #[derive(Args, Debug, Clone)]
+pub struct EvalArgs {
+    /// Scene name (a file in assets/scenes/) or path to a scene file.
+    #[arg(long, default_value = "teapot")]
+    pub scene: String,
+    /// Output folder for eval.json, tradeoff.png and pictures [default: out/<scene>/eval].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Frame size as WIDTHxHEIGHT (the maps' inference size is best).
+    #[arg(long, default_value = "640x480", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Views per category (on the orbit, between samples, above the plane),
+    /// spread evenly along the orbit.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=50))]
+    pub views: u32,
+    /// Elevation of the "above" views over the orbit plane, in degrees.
+    #[arg(long, default_value_t = 10.0)]
+    pub elevation: f32,
+    /// Samples per pixel of the traced references.
+    #[arg(long, default_value_t = 16)]
+    pub spp: u32,
+    /// Timed frames per view and row (after one untimed frame).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+    pub repeats: u32,
+    /// Only these rows (labels as printed, comma-separated) [default: all].
+    #[arg(long, value_delimiter = ',')]
+    pub rows: Vec<String>,
+    /// Where the scene's compiled inputs live (trace, infer, container) [default: out/<scene>].
+    #[arg(long)]
+    pub data: Option<PathBuf>,
+    /// Turn the Khronos validation layer on.
+    #[arg(long)]
+    pub validate: bool,
+    /// Vulkan device to use (substring of its name) [default: lavapipe].
+    #[arg(long, env = "ENGINE_DEVICE")]
+    pub device: Option<String>,
+}
+
+#[derive(Args, Debug, Clone)]
 pub struct EncodeArgs {
     /// Scene name (a file in assets/scenes/) or path to a scene file.
     #[arg(long, default_value = "teapot")]
@@ -206,6 +244,9 @@ pub struct PlayArgs {
     /// Write no frames (only perf.json): for benchmarks.
     #[arg(long)]
     pub no_capture: bool,
+    /// Samples per pixel of `--mode trace` frames.
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub trace_spp: u32,
 }
 
 /// Where PEM playback reads maps and the knobs that trade speed for accuracy.

@@ -240,6 +240,7 @@ pub fn setup_mode<'s>(
             let settings = TraceSettings {
                 width: w,
                 height: h,
+                spp: args.trace_spp,
                 ..TraceSettings::default()
             };
             FrameSource::Trace(Box::new(Tracer::new(scene)?), settings)

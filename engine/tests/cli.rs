@@ -51,6 +51,8 @@ fn validated_run_writes_frames_and_perf_json() {
             out,
             "--validate",
             "--exr",
+            "--mode",
+            "static-em",
         ],
         &[],
     );
