@@ -58,13 +58,27 @@ pub fn map_source(
         return Ok(MapSource::exr(&paths.infer_dir));
     }
     if !paths.container.is_file() {
-        let text = crate::codec_cmd::encode(&EncodeArgs {
-            scene: args.scene.clone(),
-            ratio: None,
-            bytes: None,
-            infer_dir: Some(paths.infer_dir.clone()),
-            out: paths.container.clone(),
-        })?;
+        let encode = |bytes: Option<u64>| {
+            crate::codec_cmd::encode(&EncodeArgs {
+                scene: args.scene.clone(),
+                ratio: None,
+                bytes,
+                infer_dir: Some(paths.infer_dir.clone()),
+                out: paths.container.clone(),
+            })
+        };
+        // The default ratio; maps too small for it (test scenes) get the
+        // smallest container the codec can write.
+        let text = match encode(None) {
+            Err(e) => match e.downcast_ref::<codec::CodecError>() {
+                Some(&codec::CodecError::BudgetTooSmall { minimum, .. }) => {
+                    eprintln!("maps too small for the default ratio: encoding at {minimum} bytes");
+                    encode(Some(minimum))?
+                }
+                _ => return Err(e),
+            },
+            ok => ok?,
+        };
         eprint!("{text}");
     }
     MapSource::container(scene, &paths.container)
@@ -100,7 +114,10 @@ fn infer_all(args: &PlayArgs, scene: &Scene, paths: &Compiled, sphere: bool) -> 
     ]
     .map(String::from)
     .to_vec();
-    for (flag, path) in [("--out", &paths.infer_dir), ("--trace-dir", &paths.trace_dir)] {
+    for (flag, path) in [
+        ("--out", &paths.infer_dir),
+        ("--trace-dir", &paths.trace_dir),
+    ] {
         argv.push(flag.into());
         argv.push(path.display().to_string());
     }

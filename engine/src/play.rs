@@ -4,13 +4,13 @@
 use crate::backend::{DeviceOptions, create_device};
 use crate::capture;
 use crate::cli::{Mode, PlayArgs};
-use crate::perf::{PerfLog, PerfReport};
 use crate::pem::path::{default_frames, path_view};
 use crate::pem::player::{PemKind, PemSettings};
+use crate::perf::{PerfLog, PerfReport};
 use crate::renderer::{FrameMode, FrameStats, Renderer};
-use inference::trace::{TraceSettings, Tracer};
 use anyhow::{Context, Result, bail};
 use inference::scene::Scene;
+use inference::trace::{TraceSettings, Tracer};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::Instant;

@@ -9,12 +9,12 @@ use crate::passes::mirror::{MirrorDraw, MirrorRenderer};
 use crate::passes::readback::ReadbackPass;
 use crate::passes::room::{RoomRenderer, RoomStyle};
 use crate::passes::target::Target;
-use ash::vk;
-use glam::{Mat4, Vec3};
-use half::f16;
 use crate::pem::player::{PemPlayer, PemSettings};
 use crate::pem::samples::{SampleBlend, sample_blend};
 use crate::pem::source::MapSource;
+use ash::vk;
+use glam::{Mat4, Vec3};
+use half::f16;
 use inference::scene::{Material, Orbit, Scene};
 use std::time::Instant;
 

@@ -277,8 +277,8 @@ unsafe fn create_graphics_pipeline(
         .depth_test_enable(true)
         .depth_write_enable(true)
         .depth_compare_op(vk::CompareOp::LESS_OR_EQUAL);
-    let mut attachment =
-        vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA);
+    let mut attachment = vk::PipelineColorBlendAttachmentState::default()
+        .color_write_mask(vk::ColorComponentFlags::RGBA);
     if desc.blend_by_alpha {
         attachment = attachment
             .blend_enable(true)

@@ -68,17 +68,20 @@ impl PemPipelines {
                     depth_format: depth,
                     cull_mode: vk::CullModeFlags::BACK,
                     push_constant_size: size_of::<PemPush>() as u32,
-                    bindings: &vec![
-                        vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
-                        shading.bindings()
-                    ],
+                    bindings: &vec![vk::DescriptorType::COMBINED_IMAGE_SAMPLER; shading.bindings()],
                     blend_by_alpha: blend,
                 },
             )
         };
         Ok(Self {
-            layered: [make(Shading::Layered, false)?, make(Shading::Layered, true)?],
-            single: [make(Shading::SingleEm, false)?, make(Shading::SingleEm, true)?],
+            layered: [
+                make(Shading::Layered, false)?,
+                make(Shading::Layered, true)?,
+            ],
+            single: [
+                make(Shading::SingleEm, false)?,
+                make(Shading::SingleEm, true)?,
+            ],
             ptm: [make(Shading::Ptm, false)?, make(Shading::Ptm, true)?],
         })
     }
@@ -131,7 +134,11 @@ impl Pass for PemPass<'_> {
             Access::level(self.target.color, self.target.level, Usage::ColorTarget),
             Access::level(self.target.depth, self.target.level, Usage::DepthTarget),
         ];
-        accesses.extend(self.sampled.iter().map(|i| Access::whole(i, Usage::Sampled)));
+        accesses.extend(
+            self.sampled
+                .iter()
+                .map(|i| Access::whole(i, Usage::Sampled)),
+        );
         accesses
     }
     fn record(&self, cmd: vk::CommandBuffer) -> GpuResult<()> {

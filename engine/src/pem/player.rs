@@ -152,8 +152,13 @@ impl PemPlayer {
     ) -> anyhow::Result<Self> {
         let pipelines = PemPipelines::new(device, color, depth)?;
         let lut = fresnel_lut_image(device, executor)?;
-        let cube_sampler = Sampler::new(device, vk::SamplerAddressMode::CLAMP_TO_EDGE, settings.filtering)?;
-        let flat_sampler = Sampler::new(device, vk::SamplerAddressMode::REPEAT, settings.filtering)?;
+        let cube_sampler = Sampler::new(
+            device,
+            vk::SamplerAddressMode::CLAMP_TO_EDGE,
+            settings.filtering,
+        )?;
+        let flat_sampler =
+            Sampler::new(device, vk::SamplerAddressMode::REPEAT, settings.filtering)?;
         let (room_min, room_max) = scene.bounds();
         let layers = settings.layers();
         let mut reflectors = Vec::new();
@@ -178,7 +183,11 @@ impl PemPlayer {
                         o.name,
                         layer.file_part(),
                         scene.name,
-                        if layer == MapLayer::Sphere { " --all --sphere" } else { " --all" }
+                        if layer == MapLayer::Sphere {
+                            " --all --sphere"
+                        } else {
+                            " --all"
+                        }
                     );
                 }
             }
@@ -225,7 +234,14 @@ impl PemPlayer {
             };
             for _ in 0..SLOTS {
                 let slot = make_slot(
-                    device, &pipelines, &settings, &layers, &r, &lut, &cube_sampler, &flat_sampler,
+                    device,
+                    &pipelines,
+                    &settings,
+                    &layers,
+                    &r,
+                    &lut,
+                    &cube_sampler,
+                    &flat_sampler,
                 )?;
                 r.slots.push(slot);
             }
@@ -297,7 +313,14 @@ impl PemPlayer {
                     streams.push((r.local, &mut r.texgen_local));
                 }
                 for (geometry, buffer) in streams {
-                    texgen_parallel(&geometry, r.origin, eye, &r.positions, &r.normals, &mut self.scratch);
+                    texgen_parallel(
+                        &geometry,
+                        r.origin,
+                        eye,
+                        &r.positions,
+                        &r.normals,
+                        &mut self.scratch,
+                    );
                     let bytes: &[u8] = bytemuck::cast_slice(&self.scratch);
                     buffer.mapped_mut()?[..bytes.len()].copy_from_slice(bytes);
                 }
@@ -477,9 +500,11 @@ fn make_slot(
     let cube = |i: usize| Binding::Image(images[i].view, cube_sampler.raw);
     let (set, hull_set) = match settings.kind {
         PemKind::Layered if layers.len() == 2 => (
-            pipelines
-                .get(Shading::Layered, false)
-                .descriptor_set(&[cube(0), cube(1), lut_binding])?,
+            pipelines.get(Shading::Layered, false).descriptor_set(&[
+                cube(0),
+                cube(1),
+                lut_binding,
+            ])?,
             Some(
                 pipelines
                     .get(Shading::SingleEm, false)
@@ -524,9 +549,7 @@ fn dropped_bytes(layer: MapLayer, resolution: u32, drop: u32) -> GpuResult<u64> 
     }
     .all_mip_levels();
     let (regions, _) = level_regions(&desc)?;
-    Ok(regions
-        .get(drop as usize)
-        .map_or(0, |r| r.buffer_offset))
+    Ok(regions.get(drop as usize).map_or(0, |r| r.buffer_offset))
 }
 
 /// Which triangles lie on the mesh's convex hull (they use the distant EM
@@ -538,14 +561,20 @@ fn hull_flags(mesh: &inference::scene::Mesh) -> Vec<bool> {
 /// The mesh's indices with hull triangles first, and how many indices
 /// those are.
 pub fn hull_sorted_indices(indices: &[u32], hull: &[bool]) -> (Vec<u32>, u32) {
-    let triangles = indices.chunks_exact(3).zip(hull.iter().chain(std::iter::repeat(&false)));
+    let triangles = indices
+        .chunks_exact(3)
+        .zip(hull.iter().chain(std::iter::repeat(&false)));
     let mut sorted: Vec<u32> = triangles
         .clone()
         .filter(|(_, on)| **on)
         .flat_map(|(t, _)| t.iter().copied())
         .collect();
     let hull_count = sorted.len() as u32;
-    sorted.extend(triangles.filter(|(_, on)| !**on).flat_map(|(t, _)| t.iter().copied()));
+    sorted.extend(
+        triangles
+            .filter(|(_, on)| !**on)
+            .flat_map(|(t, _)| t.iter().copied()),
+    );
     (sorted, hull_count)
 }
 

@@ -38,7 +38,11 @@ pub fn orbit_position(orbit: &Orbit, eye: Vec3) -> f32 {
     let middle = orbit.start_deg + orbit.step_deg * last * 0.5;
     let relative = (azimuth - middle + 180.0).rem_euclid(360.0) - 180.0;
     let p = (middle + relative - orbit.start_deg) / orbit.step_deg;
-    if p.is_finite() { p.clamp(0.0, last) } else { 0.0 }
+    if p.is_finite() {
+        p.clamp(0.0, last)
+    } else {
+        0.0
+    }
 }
 
 /// The samples drawn for `eye` when only every `spacing`-th sample is used
@@ -86,7 +90,14 @@ mod tests {
         for k in [0, 1, 37, 98, 99] {
             let eye = o.sample_eye(k).expect("in range");
             let b = sample_blend(&o, eye, 1, true);
-            assert_eq!(b, SampleBlend { first: k, second: None }, "sample {k}");
+            assert_eq!(
+                b,
+                SampleBlend {
+                    first: k,
+                    second: None
+                },
+                "sample {k}"
+            );
         }
     }
 
@@ -103,7 +114,13 @@ mod tests {
         assert!((b.second.expect("blend").1 - 0.25).abs() < 1e-3);
         // Without blending, the nearest alone.
         let b = sample_blend(&o, o.eye(10.75, 0.0), 1, false);
-        assert_eq!(b, SampleBlend { first: 11, second: None });
+        assert_eq!(
+            b,
+            SampleBlend {
+                first: 11,
+                second: None
+            }
+        );
     }
 
     #[test]
@@ -119,7 +136,14 @@ mod tests {
         let o = orbit();
         for (angle, expected) in [(-5.0, 0), (-170.0, 0), (99.0, 99), (140.0, 99), (200.0, 99)] {
             let b = sample_blend(&o, o.eye(angle, 0.0), 1, true);
-            assert_eq!(b, SampleBlend { first: expected, second: None }, "{angle}°");
+            assert_eq!(
+                b,
+                SampleBlend {
+                    first: expected,
+                    second: None
+                },
+                "{angle}°"
+            );
         }
         // Straight above the centre, at the centre, and non-finite eyes stay in range.
         for eye in [
@@ -143,7 +167,13 @@ mod tests {
         assert!((w - 0.25).abs() < 1e-3);
         // The grid's last sample (96) is the end: 99 clamps to it.
         let b = sample_blend(&o, o.eye(99.0, 0.0), 4, true);
-        assert_eq!(b, SampleBlend { first: 96, second: None });
+        assert_eq!(
+            b,
+            SampleBlend {
+                first: 96,
+                second: None
+            }
+        );
         // Degenerate orbits.
         let one = Orbit { samples: 1, ..o };
         assert_eq!(sample_blend(&one, o.eye(50.0, 0.0), 1, true).first, 0);

@@ -99,7 +99,12 @@ impl MapSource {
         for (i, (spec, tex)) in specs.iter().zip(textures).enumerate() {
             let layout = TextureLayout::full_chain(spec.shape);
             let (w, h) = layout.level_size(0);
-            let got = (tex.layout.width, tex.layout.height, tex.layout.faces, tex.layout.channels);
+            let got = (
+                tex.layout.width,
+                tex.layout.height,
+                tex.layout.faces,
+                tex.layout.channels,
+            );
             let want = (w, h, layout.faces(), spec.channels);
             if got != want || tex.grid.n0 < scene.orbit.samples {
                 bail!(
@@ -184,7 +189,11 @@ impl MapSource {
                     .iter()
                     .find(|(o, l, _)| o == object && *l == layer.file_part())
                 else {
-                    bail!("{}: holds no {object}.{} maps", path.display(), layer.file_part());
+                    bail!(
+                        "{}: holds no {object}.{} maps",
+                        path.display(),
+                        layer.file_part()
+                    );
                 };
                 cache
                     .decode_leaf_all(container, texture, 0, [sample, 0], out)

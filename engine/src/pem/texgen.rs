@@ -44,8 +44,22 @@ mod tests {
         let eye = Vec3::new(0.5, 1.0, 3.0);
         let mut serial = vec![[0.0; 4]; positions.len()];
         let mut parallel = serial.clone();
-        texgen(&geometry, Vec3::ZERO, eye, &positions, &normals, &mut serial);
-        texgen_parallel(&geometry, Vec3::ZERO, eye, &positions, &normals, &mut parallel);
+        texgen(
+            &geometry,
+            Vec3::ZERO,
+            eye,
+            &positions,
+            &normals,
+            &mut serial,
+        );
+        texgen_parallel(
+            &geometry,
+            Vec3::ZERO,
+            eye,
+            &positions,
+            &normals,
+            &mut parallel,
+        );
         assert_eq!(serial, parallel);
     }
 }

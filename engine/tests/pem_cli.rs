@@ -1,0 +1,162 @@
+//! The main job end to end on a tiny teapot scene (3 viewpoint samples,
+//! 16² maps): the first run compiles what is missing (trace, infer,
+//! encode) and plays layered PEMs; the second starts playing at once; every
+//! mode and knob plays with validation on.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn engine(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_engine"))
+        .args(args)
+        .output()
+        .expect("run engine")
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "stdout:\n{}\nstderr:\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+/// The teapot scene with 3 samples, 16² maps and a coarse teapot.
+fn tiny_scene(dir: &Path) -> PathBuf {
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/scenes/teapot.toml");
+    let mut text = std::fs::read_to_string(source).expect("teapot.toml");
+    for (from, to) in [
+        ("samples = 100", "samples = 3"),
+        ("resolution = 256", "resolution = 16"),
+        ("segments = 25", "segments = 6"),
+    ] {
+        assert!(text.contains(from), "teapot.toml lacks {from:?}");
+        text = text.replacen(from, to, 1);
+    }
+    let path = dir.join("tiny.toml");
+    std::fs::write(&path, text).expect("write scene");
+    path
+}
+
+fn play(scene: &Path, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "--scene",
+        scene.to_str().expect("utf-8"),
+        "--size",
+        "64x48",
+        "--frames",
+        "5",
+        "--warmup",
+        "1",
+        "--out",
+        out.to_str().expect("utf-8"),
+        "--validate",
+    ];
+    args.extend_from_slice(extra);
+    engine(&args)
+}
+
+fn pass_names(out: &Path) -> Vec<String> {
+    let perf: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("perf.json")).expect("perf.json"))
+            .expect("JSON");
+    perf["passes"]
+        .as_array()
+        .expect("passes")
+        .iter()
+        .filter_map(|p| p["name"].as_str().map(String::from))
+        .collect()
+}
+
+#[test]
+fn main_job_compiles_what_is_missing_then_plays_every_mode() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = tiny_scene(dir.path());
+    let out = dir.path().join("out");
+
+    let first = play(&scene, &out, &[]);
+    assert!(first.status.success(), "{}", text(&first));
+    let log = text(&first);
+    assert!(log.contains("validation messages: 0"), "{log}");
+    assert!(log.contains("tracing and inferring"), "{log}");
+    assert!(out.join("teapot.ptxc").is_file(), "container compiled");
+    for k in 0..3 {
+        assert!(
+            out.join(format!("infer/sample_{k:04}/teapot.specular_local.exr"))
+                .is_file()
+        );
+    }
+    for i in 0..5 {
+        assert!(out.join(format!("frame_{i:04}.png")).is_file());
+    }
+    // The path passes between samples: the blend pass runs; maps were
+    // uploaded through the staging ring.
+    let names = pass_names(&out);
+    for pass in ["upload", "room", "pem", "pem_blend", "readback"] {
+        assert!(names.iter().any(|n| n == pass), "{pass} missing: {names:?}");
+    }
+
+    // A second run compiles nothing.
+    let again = play(&scene, &out, &["--no-capture"]);
+    assert!(again.status.success(), "{}", text(&again));
+    assert!(
+        !text(&again).contains("tracing and inferring"),
+        "{}",
+        text(&again)
+    );
+    assert!(
+        !text(&again).contains("ratio"),
+        "re-encoded: {}",
+        text(&again)
+    );
+
+    // Every mode and knob plays cleanly (sphere PEMs need `infer --sphere`).
+    for extra in [
+        &["--mode", "ptm"][..],
+        &["--mode", "static-em"],
+        &["--no-blend", "--distant-only"],
+        &["--maps", "exr", "--filtering", "nearest", "--em-size", "4"],
+        &["--spacing", "2", "--filtering", "bilinear"],
+    ] {
+        let mut args = vec!["--no-capture"];
+        args.extend_from_slice(extra);
+        let o = play(&scene, &out, &args);
+        assert!(o.status.success(), "{extra:?}: {}", text(&o));
+        assert!(text(&o).contains("validation messages: 0"), "{extra:?}");
+        let names = pass_names(&out);
+        if extra.contains(&"--no-blend") {
+            assert!(!names.iter().any(|n| n == "pem_blend"), "{names:?}");
+        }
+    }
+}
+
+#[test]
+fn bad_pem_knobs_fail_cleanly() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = tiny_scene(dir.path());
+    let out = dir.path().join("out");
+    std::fs::create_dir_all(&out).expect("mkdir");
+    // Not a power of two / larger than the inferred maps: rejected before any work.
+    for size in ["12", "32"] {
+        let o = play(&scene, &out, &["--em-size", size]);
+        assert!(!o.status.success());
+        assert!(text(&o).contains("--em-size"), "{}", text(&o));
+    }
+    let o = play(&scene, &out, &["--spacing", "0"]);
+    assert!(!o.status.success());
+    // A container that is not one: a clear error naming it.
+    let bogus = out.join("bogus.ptxc");
+    std::fs::write(&bogus, b"not a container").expect("write");
+    let o = play(
+        &scene,
+        &out,
+        &[
+            "--container",
+            bogus.to_str().expect("utf-8"),
+            "--infer-dir",
+            "/nonexistent-maps",
+        ],
+    );
+    assert!(!o.status.success());
+    assert!(!text(&o).contains("panicked"), "{}", text(&o));
+}
