@@ -3,7 +3,10 @@
 //! encode) and plays layered PEMs; the second starts playing at once; every
 //! mode and knob plays with validation on.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::tiny_scene;
+use std::path::Path;
 use std::process::{Command, Output};
 
 fn engine(args: &[&str]) -> Output {
@@ -19,23 +22,6 @@ fn text(o: &Output) -> String {
         String::from_utf8_lossy(&o.stdout),
         String::from_utf8_lossy(&o.stderr)
     )
-}
-
-/// The teapot scene with 3 samples, 16² maps and a coarse teapot.
-fn tiny_scene(dir: &Path) -> PathBuf {
-    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/scenes/teapot.toml");
-    let mut text = std::fs::read_to_string(source).expect("teapot.toml");
-    for (from, to) in [
-        ("samples = 100", "samples = 3"),
-        ("resolution = 256", "resolution = 16"),
-        ("segments = 25", "segments = 6"),
-    ] {
-        assert!(text.contains(from), "teapot.toml lacks {from:?}");
-        text = text.replacen(from, to, 1);
-    }
-    let path = dir.join("tiny.toml");
-    std::fs::write(&path, text).expect("write scene");
-    path
 }
 
 fn play(scene: &Path, out: &Path, extra: &[&str]) -> Output {

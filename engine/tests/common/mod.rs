@@ -81,3 +81,20 @@ pub fn assert_matches_golden(
         );
     }
 }
+
+/// The teapot scene with 3 samples, 16² maps and a coarse teapot.
+pub fn tiny_scene(dir: &Path) -> PathBuf {
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/scenes/teapot.toml");
+    let mut text = std::fs::read_to_string(source).expect("teapot.toml");
+    for (from, to) in [
+        ("samples = 100", "samples = 3"),
+        ("resolution = 256", "resolution = 16"),
+        ("segments = 25", "segments = 6"),
+    ] {
+        assert!(text.contains(from), "teapot.toml lacks {from:?}");
+        text = text.replacen(from, to, 1);
+    }
+    let path = dir.join("tiny.toml");
+    std::fs::write(&path, text).expect("write scene");
+    path
+}

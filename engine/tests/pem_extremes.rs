@@ -1,0 +1,112 @@
+//! PEM playback at the extremes the issue names, on a tiny compiled
+//! scene: eyes exactly on samples (no blend pass) and beyond the orbit's
+//! ends (clamped), inside the local ellipsoid, outside the room box,
+//! straight above, grazing; a vertex normal of zero length. Every frame
+//! must be finite with validation clean.
+
+mod common;
+
+use common::*;
+use engine::pem::player::{PemKind, PemSettings};
+use engine::pem::source::MapSource;
+use engine::renderer::{FrameMode, Renderer};
+use glam::Vec3;
+use inference::scene::Scene;
+use std::process::Command;
+
+#[test]
+fn pem_frames_stay_finite_at_the_extremes() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene_path = tiny_scene(dir.path());
+    let out = dir.path().join("out");
+    // Compile the maps with the main job itself.
+    let o = Command::new(env!("CARGO_BIN_EXE_engine"))
+        .args([
+            "--scene",
+            scene_path.to_str().expect("utf-8"),
+            "--size",
+            "64x48",
+        ])
+        .args([
+            "--frames",
+            "1",
+            "--no-capture",
+            "--out",
+            out.to_str().expect("utf-8"),
+        ])
+        .output()
+        .expect("run engine");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+
+    let mut scene = Scene::load(scene_path.to_str().expect("utf-8")).expect("scene");
+    let teapot = scene
+        .objects
+        .iter_mut()
+        .find(|o| o.name == "teapot")
+        .expect("teapot");
+    teapot.mesh.normals[0] = Vec3::ZERO; // a vertex normal of zero length
+    let centroid = teapot.mesh.area_weighted_centroid();
+    let device = validated_device();
+    let mut renderer = Renderer::new(&device, &scene, 64, 48).expect("renderer");
+    let orbit = scene.orbit;
+    let (room_min, room_max) = scene.bounds();
+    let eyes = [
+        ("first sample", orbit.sample_eye(0).expect("sample")),
+        (
+            "last sample",
+            orbit.sample_eye(orbit.samples - 1).expect("sample"),
+        ),
+        (
+            "before the first sample",
+            orbit.eye(orbit.start_deg - 30.0, 0.0),
+        ),
+        (
+            "beyond the last sample",
+            orbit.eye(orbit.start_deg + 170.0, 0.0),
+        ),
+        (
+            "between samples",
+            orbit.eye(orbit.start_deg + 0.5 * orbit.step_deg, 0.0),
+        ),
+        ("above the plane", orbit.eye(orbit.start_deg, 60.0)),
+        ("straight above", orbit.center + Vec3::Y * 2.0),
+        (
+            "inside the local ellipsoid",
+            centroid + Vec3::new(0.01, 0.02, 0.0),
+        ),
+        ("outside the room box", room_max + Vec3::splat(1.0)),
+        ("grazing the floor", Vec3::new(0.0, room_min.y + 1e-4, 2.0)),
+    ];
+    for kind in [PemKind::Layered, PemKind::Ptm] {
+        let source = MapSource::container(&scene, &out.join("teapot.ptxc")).expect("container");
+        renderer
+            .set_pem(&scene, PemSettings::new(kind), source)
+            .expect("PEM set-up");
+        for (what, eye) in eyes {
+            let stats = renderer
+                .frame(FrameMode::Pem, eye, orbit.view(eye))
+                .unwrap_or_else(|e| panic!("{kind:?} {what}: {e}"));
+            let pixels = renderer.pixels().expect("pixels");
+            assert!(
+                pixels.iter().flatten().all(|v| v.is_finite()),
+                "{kind:?} {what}: non-finite pixel"
+            );
+            let names: Vec<&str> = stats.passes.iter().map(|p| p.name.as_str()).collect();
+            let blend = renderer.pem_blend(eye).expect("PEM set up");
+            assert!(
+                blend.samples().all(|s| s < orbit.samples),
+                "{what}: {blend:?}"
+            );
+            // A blend pass exactly when the eye is between two samples.
+            assert_eq!(
+                names.contains(&"pem_blend"),
+                blend.second.is_some(),
+                "{what}: {names:?}"
+            );
+            if what.contains("sample") && !what.contains("between") {
+                assert!(blend.second.is_none(), "{what}: {blend:?}");
+            }
+        }
+    }
+    assert_no_validation_messages();
+}
