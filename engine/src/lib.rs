@@ -8,6 +8,7 @@ pub mod cli;
 pub mod codec_cmd;
 pub mod compare;
 pub mod cube;
+pub mod eval;
 pub mod gpu_scene;
 pub mod graph;
 pub mod infer_cmd;
