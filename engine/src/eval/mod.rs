@@ -4,4 +4,5 @@
 pub mod files;
 pub mod metrics;
 pub mod plot;
+pub mod reference;
 pub mod table;
