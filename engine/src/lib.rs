@@ -9,6 +9,7 @@ pub mod codec_cmd;
 pub mod compare;
 pub mod compile;
 pub mod cube;
+pub mod eval;
 pub mod gpu_scene;
 pub mod graph;
 pub mod infer_cmd;

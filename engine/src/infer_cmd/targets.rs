@@ -65,7 +65,7 @@ pub(crate) fn target_pixels(
 
 /// The reflector's own appearance from its layers, as the runtime
 /// composites it: `fresnel × (local over distant)` (+ diffuse if any).
-pub(super) fn composite_pixels(
+pub(crate) fn composite_pixels(
     layers: &[output::ExrLayer],
     object: &str,
     pixel_count: usize,
