@@ -31,6 +31,10 @@ pub enum Command {
     Encode(EncodeArgs),
     /// Measure a container: ratio, PSNR, decode time, baselines (JSON).
     CodecReport(CodecReportArgs),
+    /// Measure every mode and speed/accuracy knob against the tracer on
+    /// views on the orbit, between samples and above the orbit plane;
+    /// writes eval.json and tradeoff.png.
+    Eval(EvalArgs),
     /// Ray-trace the gold-standard layers of one parameter sample, a free view or all samples
     /// (CPU, no Vulkan): one multi-layer EXR and a tone-mapped PNG per image.
     Trace(TraceArgs),

@@ -10,6 +10,7 @@ pub mod compare;
 pub mod compile;
 pub mod cube;
 pub mod eval;
+pub mod eval_cmd;
 pub mod gpu_scene;
 pub mod graph;
 pub mod infer_cmd;

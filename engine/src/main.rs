@@ -24,6 +24,7 @@ fn main() -> ExitCode {
         ),
         Some(Command::Trace(args)) => (engine::trace_cmd::trace(args), false),
         Some(Command::Infer(args)) => (engine::infer_cmd::infer(args), args.validate),
+        Some(Command::Eval(args)) => (engine::eval_cmd::eval(args), args.validate),
         Some(Command::Encode(args)) => (engine::codec_cmd::encode(args), false),
         Some(Command::CodecReport(args)) => (engine::codec_cmd::codec_report(args), false),
     };
