@@ -114,6 +114,13 @@ pub struct InferArgs {
     /// Cube-map size for every EM [default: the scene's [objects.em] resolution].
     #[arg(long)]
     pub em_size: Option<u32>,
+    /// Also infer one sphere-at-infinity EM per reflector,
+    /// `<object>.specular_sphere`: its whole specular appearance (local over
+    /// distant, before Fresnel, shaded like the distant layer), the single
+    /// PEM the layered one is compared with. Other maps keep their keys, so
+    /// `--all --sphere` after `--all` infers only the sphere EMs.
+    #[arg(long, conflicts_with = "diffuse")]
+    pub sphere: bool,
     /// Samples per pixel when a target must be traced first [default: 16].
     #[arg(long)]
     pub spp: Option<u32>,

@@ -105,6 +105,172 @@ fn infers_em_layers_and_ptm_of_a_sample_and_reports() {
     );
 }
 
+/// The teapot scene with only `samples` orbit samples, written into `dir`.
+fn small_scene(dir: &std::path::Path, samples: u32) -> String {
+    let text = std::fs::read_to_string(inference::scene::assets_dir().join("scenes/teapot.toml"))
+        .expect("teapot.toml");
+    let line = format!("samples = {samples}");
+    let text = text
+        .lines()
+        .map(|l| {
+            if l.trim() == "samples = 100" {
+                &line
+            } else {
+                l
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    assert!(text.contains(&line), "scene fields moved");
+    let path = dir.join("small.toml");
+    std::fs::write(&path, text).expect("write scene");
+    path.to_str().expect("utf-8").to_string()
+}
+
+fn json(path: &std::path::Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(path).expect("read JSON")).expect("JSON")
+}
+
+fn layer_names(report: &serde_json::Value) -> Vec<String> {
+    report["layers"]
+        .as_array()
+        .expect("layers")
+        .iter()
+        .filter_map(|l| l["name"].as_str().map(String::from))
+        .collect()
+}
+
+#[test]
+fn sphere_em_is_added_to_an_inferred_pem_without_redoing_its_maps() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = small_scene(dir.path(), 2);
+    let out = dir.path().join("infer");
+    let traces = dir.path().join("trace");
+    let base = [
+        "infer",
+        "--scene",
+        &scene,
+        "--size",
+        "48x36",
+        "--em-size",
+        "8",
+        "--spp",
+        "2",
+        "--out",
+        out.to_str().expect("utf-8"),
+        "--trace-dir",
+        traces.to_str().expect("utf-8"),
+    ];
+    let run = |extra: &[&str]| {
+        let o = engine(&[&base[..], extra].concat());
+        let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+        let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(o.status.success(), "{stderr}\n{stdout}");
+        (stdout, stderr)
+    };
+    let (text, _) = run(&["--all"]);
+    assert!(!text.contains("specular_sphere"), "{text}");
+    let key = |k: u32, name: &str| {
+        std::fs::read_to_string(out.join(format!("sample_{k:04}/teapot.{name}.key"))).expect("key")
+    };
+    let keys: Vec<String> = ["specular_distant", "specular_local", "ptm"]
+        .iter()
+        .flat_map(|n| [key(0, n), key(1, n)])
+        .collect();
+
+    // Adding the sphere EM infers it alone: the other maps keep their keys
+    // and are skipped, and say so before any work.
+    let (text, stderr) = run(&["--all", "--sphere"]);
+    assert!(
+        stderr.contains("teapot.specular_distant 2/0")
+            && stderr.contains("teapot.specular_sphere 0/2"),
+        "{stderr}"
+    );
+    assert!(text.contains("6 layers already inferred"), "{text}");
+    let inferred: Vec<&str> = text.lines().filter(|l| l.starts_with("sample")).collect();
+    assert_eq!(inferred.len(), 2, "{text}");
+    assert!(
+        inferred
+            .iter()
+            .all(|l| l.contains("teapot.specular_sphere")),
+        "{text}"
+    );
+    let after: Vec<String> = ["specular_distant", "specular_local", "ptm"]
+        .iter()
+        .flat_map(|n| [key(0, n), key(1, n)])
+        .collect();
+    assert_eq!(keys, after);
+    // Each sample's report gains the sphere EM and keeps the other layers.
+    for k in 0..2 {
+        let sample = out.join(format!("sample_{k:04}"));
+        assert!(sample.join("teapot.specular_sphere.exr").is_file());
+        let report = json(&sample.join("report.json"));
+        assert_eq!(
+            layer_names(&report),
+            [
+                "teapot.specular_distant",
+                "teapot.specular_local",
+                "teapot.specular_sphere",
+                "teapot.ptm"
+            ],
+            "{report}"
+        );
+        let sphere = &report["layers"][2];
+        for psnr in ["least_squares", "forward_mapping", "static_em"] {
+            assert!(
+                sphere["psnr_db"][psnr]
+                    .as_f64()
+                    .is_some_and(|v| v.is_finite() && v > 5.0),
+                "{psnr}: {sphere}"
+            );
+        }
+        let renders: u64 = report["layers"]
+            .as_array()
+            .expect("layers")
+            .iter()
+            .filter_map(|l| l["probe_renders"].as_u64())
+            .sum();
+        assert_eq!(report["probe_renders"].as_u64(), Some(renders), "{report}");
+    }
+    // The summary has the sphere EM beside the others, with its baselines.
+    assert!(
+        text.contains("teapot.specular_sphere") && text.contains("2 samples: LS"),
+        "{text}"
+    );
+    let summary = json(&out.join("summary.json"));
+    let sphere = &summary["teapot.specular_sphere"];
+    assert_eq!(sphere["samples"].as_u64(), Some(2), "{summary}");
+    assert!(
+        sphere["forward_mapping_db_median"]
+            .as_f64()
+            .is_some_and(f64::is_finite)
+    );
+    assert!(
+        sphere["static_em_db_median"]
+            .as_f64()
+            .is_some_and(f64::is_finite)
+    );
+    assert_eq!(
+        summary["teapot.specular_distant"]["samples"].as_u64(),
+        Some(2)
+    );
+
+    // A third run has nothing left to do.
+    let (text, _) = run(&["--all", "--sphere"]);
+    assert!(text.contains("8 layers already inferred"), "{text}");
+
+    // With --sample, every map of that sample is inferred, sphere included.
+    let (text, _) = run(&["--sample", "1", "--sphere"]);
+    assert_eq!(
+        text.lines().filter(|l| l.starts_with("sample")).count(),
+        4,
+        "{text}"
+    );
+    let report = json(&out.join("report.json"));
+    assert_eq!(report["sample"].as_u64(), Some(1));
+    assert_eq!(layer_names(&report).len(), 4, "{report}");
+}
+
 #[test]
 fn sample_out_of_range_fails_cleanly() {
     let dir = tempfile::tempdir().expect("tempdir");

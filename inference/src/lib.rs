@@ -1,10 +1,12 @@
 //! Offline side and the math shared with the runtime: scene, teapot,
-//! Fresnel, CPU texgen and EM geometry, the gold-standard tracer, probe
-//! renders, the least-squares solver and texture/EM inference.
+//! Fresnel, CPU texgen and EM geometry, convex-hull triangles, the
+//! gold-standard tracer, probe renders, the least-squares solver and
+//! texture/EM inference.
 //! Pure CPU, no Vulkan.
 
 pub mod em_geometry;
 pub mod fresnel;
+pub mod hull;
 pub mod infer;
 pub mod probe;
 pub mod scene;

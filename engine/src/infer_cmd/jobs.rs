@@ -1,5 +1,6 @@
 //! Which maps a scene asks for: per reflector with EM settings, each EM
-//! layer on its geometry, and its PTM.
+//! layer on its geometry, on request one sphere-at-infinity EM for its
+//! whole specular appearance, and its PTM.
 
 use anyhow::{Result, bail};
 use glam::Vec3;
@@ -14,6 +15,10 @@ use std::hash::{Hash, Hasher};
 pub(super) enum Kind {
     /// An EM layer on its geometry, indexed by texgen.
     Em(EmLayer, EmGeometry),
+    /// One EM on its geometry for the reflector's whole specular
+    /// appearance, local over distant (`infer --sphere`: the single
+    /// sphere-at-infinity PEM the layered one is compared with).
+    Whole(EmGeometry),
     /// A parameterized texture map: the reflector's whole appearance as a
     /// 2D texture on its own texture coordinates.
     Ptm,
@@ -32,6 +37,7 @@ impl Job<'_> {
         let layer = match self.kind {
             Kind::Em(EmLayer::Distant, _) => "specular_distant",
             Kind::Em(EmLayer::Local, _) => "specular_local",
+            Kind::Whole(_) => "specular_sphere",
             Kind::Ptm => "ptm",
         };
         format!("{}.{layer}", self.object.name)
@@ -44,7 +50,7 @@ impl Job<'_> {
     }
     pub(super) fn shape(&self) -> TextureShape {
         match self.kind {
-            Kind::Em(..) => TextureShape::Cube {
+            Kind::Em(..) | Kind::Whole(_) => TextureShape::Cube {
                 size: self.resolution,
             },
             Kind::Ptm => TextureShape::Tex2D {
@@ -55,8 +61,14 @@ impl Job<'_> {
     }
 }
 
-/// The EM layers the scene asks for: reflective objects with EM settings.
-pub(super) fn jobs_for<'a>(scene: &'a Scene, em_size: Option<u32>) -> Result<Vec<Job<'a>>> {
+/// The maps the scene asks for: per reflective object with EM settings,
+/// its EM layers, with `sphere` its whole specular appearance on one
+/// sphere-at-infinity EM (same resolution), then its PTM.
+pub(super) fn jobs_for<'a>(
+    scene: &'a Scene,
+    em_size: Option<u32>,
+    sphere: bool,
+) -> Result<Vec<Job<'a>>> {
     let (room_min, room_max) = scene.bounds();
     let mut jobs = Vec::new();
     for object in &scene.objects {
@@ -93,6 +105,14 @@ pub(super) fn jobs_for<'a>(scene: &'a Scene, em_size: Option<u32>) -> Result<Vec
                 resolution,
             });
         }
+        if sphere {
+            jobs.push(Job {
+                object,
+                kind: Kind::Whole(EmGeometry::SphereAtInfinity),
+                origin,
+                resolution,
+            });
+        }
         jobs.push(Job {
             object,
             kind: Kind::Ptm,
@@ -103,6 +123,12 @@ pub(super) fn jobs_for<'a>(scene: &'a Scene, em_size: Option<u32>) -> Result<Vec
     Ok(jobs)
 }
 
+/// What a map was inferred from: the traced target, the job (its name,
+/// kind with geometry, origin, resolution), the solve options, the image
+/// size and the reflector's mesh. A map whose `.key` file holds this is up
+/// to date. Any change here re-infers every map already made (the teapot's
+/// 100 samples took 36 min), so new kinds of job must leave the keys of the
+/// existing ones as they are.
 pub(super) fn inputs_key(
     trace_key: u64,
     job: &Job,

@@ -2,9 +2,12 @@
 //! samples. Per sample: the traced layers (traced first when missing or
 //! stale), then for each reflector with `[objects.em]` and each of its
 //! layers — distant on the room's box, local on the reflector's
-//! minimum-volume ellipsoid (premultiplied RGBA) — probe renders on this
-//! device, the regularized solve warm-started from the previous sample, the
-//! forward-mapping baseline, and the maps written as EXR with a report.
+//! minimum-volume ellipsoid (premultiplied RGBA), with `--sphere` one
+//! sphere-at-infinity EM for its whole specular appearance — and its PTM:
+//! probe renders on this device, the regularized solve warm-started from the
+//! previous sample, the forward-mapping baseline, and the maps written as
+//! EXR with a report. With `--all`, maps whose inputs are unchanged are
+//! skipped and their entries in the sample's report kept.
 
 mod baselines;
 mod diffuse;
@@ -20,14 +23,14 @@ use crate::play::prepare_output;
 use crate::probe::VulkanProbe;
 use anyhow::{Context, Result, bail};
 use glam::Vec3;
-use inference::em_geometry::texgen;
+use inference::em_geometry::{EmGeometry, texgen};
 use inference::infer::maps::{read_map, write_map};
 use inference::infer::{Target, infer_layer};
 use inference::probe::{Lookup, ProbeGeometry};
-use inference::scene::{EmLayer, Scene};
+use inference::scene::{EmLayer, Mesh, Scene};
 use inference::solve::SolveOptions;
 use inference::solve::layout::TextureLayout;
-use inference::trace::{TraceSettings, Tracer, camera};
+use inference::trace::{TraceSettings, Tracer, cache, camera};
 use std::path::{Path, PathBuf};
 
 use baselines::{static_em_psnr, static_ems};
@@ -35,7 +38,7 @@ use diffuse::infer_diffuse;
 use jobs::{Kind, inputs_key, jobs_for};
 use pictures::{write_comparison, write_map_picture};
 use report::{LayerReport, SampleReport, finite_or_max};
-use targets::{composite_pixels, target_pixels, traced_layers};
+use targets::{composite_pixels, specular_pixels, target_pixels, traced_layers};
 
 pub(super) fn output_dir(args: &InferArgs, scene: &Scene) -> PathBuf {
     args.out
@@ -89,7 +92,7 @@ pub fn infer(args: &InferArgs) -> Result<String> {
         Some(k) => vec![k],
         None => (0..scene.orbit.samples).collect(),
     };
-    let jobs = jobs_for(&scene, args.em_size)?;
+    let jobs = jobs_for(&scene, args.em_size, args.sphere)?;
     if jobs.is_empty() {
         bail!(
             "{}: no reflective object has [objects.em] settings: nothing to infer",
@@ -99,66 +102,62 @@ pub fn infer(args: &InferArgs) -> Result<String> {
     let out = output_dir(args, &scene);
     prepare_output(&out)?;
     let trace_dir = trace_dir(args, &scene);
-    let device = open_device(args)?;
-    let mut probe = VulkanProbe::new(&device)?;
     let options = SolveOptions {
         eps_f: args.eps_f,
         ..SolveOptions::default()
     };
+    if args.all {
+        // Before any work: which maps will be skipped, so a changed key
+        // shows at once rather than after hours of re-inference.
+        let mut line = String::from("up to date, skipped / to infer:");
+        for job in &jobs {
+            let mut fresh = 0;
+            for &k in &samples {
+                let trace_key = cache::key(&scene, tracer.sample_eye(k)?, &settings);
+                let key = inputs_key(trace_key, job, &options, args.size);
+                fresh += usize::from(up_to_date(&out, k, &job.name(), key));
+            }
+            line += &format!(" {} {fresh}/{}", job.name(), samples.len() - fresh);
+        }
+        eprintln!("{line}");
+    }
+    let device = open_device(args)?;
+    let mut probe = VulkanProbe::new(&device)?;
     let projection = camera::projection(&scene, width, height);
     let pixel_count = width as usize * height as usize;
     let static_ems = static_ems(&device, &scene, width, height)?;
     let bar = indicatif::ProgressBar::new(samples.len() as u64 * jobs.len() as u64);
+    let order: Vec<String> = jobs.iter().map(|j| j.name()).collect();
     let mut reports = Vec::new();
+    let mut text = String::new();
     let mut skipped = 0;
     for &k in &samples {
         let (layers, trace_key) = traced_layers(&trace_dir, &scene, &tracer, k, &settings)?;
         let eye = tracer.sample_eye(k)?;
         let dir = out.join(format!("sample_{k:04}"));
         prepare_output(&dir)?;
-        let mut report = SampleReport {
-            sample: k,
-            probe_renders: 0,
-            a_vs_render_psnr_db: f64::MAX,
-            solve_s: 0.0,
-            warm_started: false,
-            layers: Vec::new(),
-        };
+        let mut fresh = Vec::new();
+        let mut warm_started = false;
         for job in &jobs {
             let name = job.name();
             let key = inputs_key(trace_key, job, &options, args.size);
             let key_path = dir.join(format!("{name}.key"));
             let map_path = dir.join(format!("{name}.exr"));
-            if args.all
-                && map_path.is_file()
-                && std::fs::read_to_string(&key_path).ok() == Some(key.to_string())
-            {
+            if args.all && up_to_date(&out, k, &name, key) {
                 skipped += 1;
                 bar.inc(1);
                 continue;
             }
             let mesh = &job.object.mesh;
             let (pixels, lookup) = match job.kind {
-                Kind::Em(layer, em_geometry) => {
-                    let mut lookups = vec![[0.0f32; 4]; mesh.positions.len()];
-                    texgen(
-                        &em_geometry,
-                        job.origin,
-                        eye,
-                        &mesh.positions,
-                        &mesh.normals,
-                        &mut lookups,
-                    );
-                    (
-                        target_pixels(&layers, &name, layer == EmLayer::Local, pixel_count)?,
-                        Lookup::Cube(
-                            lookups
-                                .iter()
-                                .map(|l| Vec3::new(l[0], l[1], l[2]))
-                                .collect(),
-                        ),
-                    )
-                }
+                Kind::Em(layer, em_geometry) => (
+                    target_pixels(&layers, &name, layer == EmLayer::Local, pixel_count)?,
+                    cube_lookup(&em_geometry, job.origin, eye, mesh),
+                ),
+                Kind::Whole(em_geometry) => (
+                    specular_pixels(&layers, &job.object.name, pixel_count)?,
+                    cube_lookup(&em_geometry, job.origin, eye, mesh),
+                ),
                 Kind::Ptm => (
                     composite_pixels(&layers, &job.object.name, pixel_count)?,
                     Lookup::Uv(mesh.uvs.clone()),
@@ -183,7 +182,7 @@ pub fn infer(args: &InferArgs) -> Result<String> {
                 })
                 .filter(|p| p.is_file())
                 .and_then(|p| read_map(&p, &layout, job.channels()).ok());
-            report.warm_started |= previous.is_some();
+            warm_started |= previous.is_some();
             bar.set_message(format!("sample {k} {name}"));
             let target = Target {
                 name: &name,
@@ -208,13 +207,10 @@ pub fn infer(args: &InferArgs) -> Result<String> {
             write_map_picture(&dir.join(format!("{name}.map.png")), &layout, &result.map)?;
             std::fs::write(&key_path, key.to_string())
                 .with_context(|| format!("writing {}", key_path.display()))?;
-            report.probe_renders += result.probe_renders;
-            report.a_vs_render_psnr_db = report
-                .a_vs_render_psnr_db
-                .min(finite_or_max(result.a_vs_render_psnr_db));
-            report.solve_s += result.solve_time.as_secs_f64();
             let mut layer_report = LayerReport::from(&result);
-            if let (Kind::Em(EmLayer::Distant, _), Some(em)) =
+            // The static EM against the targets it stands for: the distant
+            // layer and the whole specular appearance.
+            if let (Kind::Em(EmLayer::Distant, _) | Kind::Whole(_), Some(em)) =
                 (job.kind, static_ems.get(&job.object.name))
             {
                 let target = Target {
@@ -233,38 +229,19 @@ pub fn infer(args: &InferArgs) -> Result<String> {
                 )?;
                 layer_report.psnr_db.static_em = Some(finite_or_max(psnr));
             }
-            report.layers.push(layer_report);
+            text += &layer_line(k, &layer_report);
+            fresh.push(layer_report);
             bar.inc(1);
         }
-        if !report.layers.is_empty() {
-            let json = serde_json::to_string_pretty(&report)?;
-            std::fs::write(dir.join("report.json"), &json)?;
+        if !fresh.is_empty() {
+            let path = dir.join("report.json");
+            let report = SampleReport::merged(&path, k, fresh, warm_started, &order)?;
+            std::fs::write(&path, serde_json::to_string_pretty(&report)?)
+                .with_context(|| format!("writing {}", path.display()))?;
             reports.push(report);
         }
     }
     bar.finish_and_clear();
-    let mut text = String::new();
-    for r in &reports {
-        for l in &r.layers {
-            text += &format!(
-                "sample {:>3} {:<26} LS {:>6.2} dB  forward {:>6.2} dB{}  A·x vs render {:>6.1} dB  {} rows  {} renders  probe {:.1} s  assembly {:.1} s  solve {:.2} s ({:?} CG it.)\n",
-                r.sample,
-                l.name,
-                l.psnr_db.least_squares,
-                l.psnr_db.forward_mapping,
-                l.psnr_db
-                    .static_em
-                    .map_or(String::new(), |v| format!("  static EM {v:>6.2} dB")),
-                l.a_vs_render_psnr_db,
-                l.rows,
-                l.probe_renders,
-                l.probe_s,
-                l.assembly_s,
-                l.solve_s,
-                l.cg_iterations
-            );
-        }
-    }
     if skipped > 0 {
         text += &format!("{skipped} layers already inferred from the same inputs: skipped\n");
     }
@@ -281,4 +258,53 @@ pub fn infer(args: &InferArgs) -> Result<String> {
         )?;
     }
     Ok(text)
+}
+
+/// Whether sample `k`'s map `name` under `out` exists and was inferred from
+/// inputs with `key`.
+fn up_to_date(out: &Path, k: u32, name: &str, key: u64) -> bool {
+    let dir = out.join(format!("sample_{k:04}"));
+    dir.join(format!("{name}.exr")).is_file()
+        && std::fs::read_to_string(dir.join(format!("{name}.key"))).ok() == Some(key.to_string())
+}
+
+/// One printed line per layer inferred.
+fn layer_line(sample: u32, l: &LayerReport) -> String {
+    format!(
+        "sample {:>3} {:<26} LS {:>6.2} dB  forward {:>6.2} dB{}  A·x vs render {:>6.1} dB  {} rows  {} renders  probe {:.1} s  assembly {:.1} s  solve {:.2} s ({:?} CG it.)\n",
+        sample,
+        l.name,
+        l.psnr_db.least_squares,
+        l.psnr_db.forward_mapping,
+        l.psnr_db
+            .static_em
+            .map_or(String::new(), |v| format!("  static EM {v:>6.2} dB")),
+        l.a_vs_render_psnr_db,
+        l.rows,
+        l.probe_renders,
+        l.probe_s,
+        l.assembly_s,
+        l.solve_s,
+        l.cg_iterations
+    )
+}
+
+/// Per-vertex cube lookups of `mesh` seen from `eye` for an EM on
+/// `geometry` centred at `origin` (CPU texgen).
+fn cube_lookup(geometry: &EmGeometry, origin: Vec3, eye: Vec3, mesh: &Mesh) -> Lookup {
+    let mut lookups = vec![[0.0f32; 4]; mesh.positions.len()];
+    texgen(
+        geometry,
+        origin,
+        eye,
+        &mesh.positions,
+        &mesh.normals,
+        &mut lookups,
+    );
+    Lookup::Cube(
+        lookups
+            .iter()
+            .map(|l| Vec3::new(l[0], l[1], l[2]))
+            .collect(),
+    )
 }

@@ -1,9 +1,11 @@
 //! What `engine infer` writes to report.json and prints.
 
+use anyhow::{Context, Result, bail};
 use inference::infer::LayerResult;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
 
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 pub struct LayerReport {
     pub name: String,
     pub psnr_db: PsnrPair,
@@ -19,17 +21,18 @@ pub struct LayerReport {
     pub diagnostics: Vec<String>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 pub struct PsnrPair {
     pub least_squares: f64,
     pub forward_mapping: f64,
-    /// The engine-issue baseline (distant layers): the static EM rasterised
-    /// at the EM origin, indexed as a sphere at infinity.
+    /// The engine-issue baseline (distant layer and sphere EM): the static
+    /// EM rasterised at the EM origin, indexed as a sphere at infinity,
+    /// against the same target.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub static_em: Option<f64>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 pub struct SampleReport {
     pub sample: u32,
     pub probe_renders: u32,
@@ -38,6 +41,69 @@ pub struct SampleReport {
     pub solve_s: f64,
     pub warm_started: bool,
     pub layers: Vec<LayerReport>,
+}
+
+impl SampleReport {
+    /// Sample `sample`'s report after this run inferred `fresh` layers:
+    /// they replace the same-named layers of the report already in
+    /// `path` (if any), whose other layers — maps skipped as up to date, or
+    /// not asked for this time — are kept. Layers follow `order` (job
+    /// names; others last, as they were); the totals are recomputed over
+    /// every layer, as a full run computes them.
+    pub(super) fn merged(
+        path: &Path,
+        sample: u32,
+        fresh: Vec<LayerReport>,
+        warm_started: bool,
+        order: &[String],
+    ) -> Result<SampleReport> {
+        let old = match std::fs::read(path) {
+            Ok(bytes) => {
+                let old: SampleReport = serde_json::from_slice(&bytes).with_context(|| {
+                    format!(
+                        "{}: not a sample report (move it away to start the report afresh)",
+                        path.display()
+                    )
+                })?;
+                if old.sample != sample {
+                    bail!(
+                        "{}: reports sample {}, expected {sample}",
+                        path.display(),
+                        old.sample
+                    );
+                }
+                Some(old)
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
+            Err(e) => return Err(e).with_context(|| format!("reading {}", path.display())),
+        };
+        let (mut layers, old_warm) =
+            old.map_or((Vec::new(), false), |o| (o.layers, o.warm_started));
+        // Kept layers may have been warm-started by the earlier run.
+        let old_warm = old_warm
+            && layers
+                .iter()
+                .any(|l| fresh.iter().all(|f| f.name != l.name));
+        for layer in fresh {
+            match layers.iter_mut().find(|l| l.name == layer.name) {
+                Some(slot) => *slot = layer,
+                None => layers.push(layer),
+            }
+        }
+        let rank = |l: &LayerReport| order.iter().position(|n| *n == l.name);
+        layers.sort_by_key(|l| rank(l).unwrap_or(usize::MAX));
+        Ok(SampleReport {
+            sample,
+            probe_renders: layers.iter().map(|l| l.probe_renders).sum(),
+            a_vs_render_psnr_db: layers
+                .iter()
+                .map(|l| l.a_vs_render_psnr_db)
+                .fold(f64::MAX, f64::min),
+            solve_s: layers.iter().map(|l| l.solve_s).sum(),
+            warm_started: warm_started || old_warm,
+            layers,
+        })
+    }
 }
 
 /// A JSON number for PSNRs, which are ∞ for exact matches.

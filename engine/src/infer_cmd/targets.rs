@@ -63,6 +63,41 @@ pub(crate) fn target_pixels(
         .collect())
 }
 
+/// The reflector's whole specular appearance before Fresnel, `local over
+/// distant` = `rgb_L · α_L + (1 − α_L) · rgb_D`, opaque: the target of a
+/// single EM standing for both layers. The traced distant and local layers
+/// carry no Fresnel (the tracer keeps it in its own layer and the probe
+/// renders read the Fresnel LUT at 1), so the runtime shades this map as it
+/// shades the distant layer, `fresnel × map`, and at the sample view that
+/// reproduces `fresnel × (local over distant)`, the layered PEM's specular
+/// term.
+pub(super) fn specular_pixels(
+    layers: &[output::ExrLayer],
+    object: &str,
+    pixel_count: usize,
+) -> Result<Vec<[f32; 4]>> {
+    let distant = target_pixels(
+        layers,
+        &format!("{object}.specular_distant"),
+        false,
+        pixel_count,
+    )?;
+    let local = target_pixels(
+        layers,
+        &format!("{object}.specular_local"),
+        true,
+        pixel_count,
+    )?;
+    Ok(distant
+        .iter()
+        .zip(&local)
+        .map(|(d, l)| {
+            let c = |k: usize| l[k] + (1.0 - l[3]) * d[k];
+            [c(0), c(1), c(2), 1.0]
+        })
+        .collect())
+}
+
 /// The reflector's own appearance from its layers, as the runtime
 /// composites it: `fresnel × (local over distant)` (+ diffuse if any).
 pub(crate) fn composite_pixels(
@@ -94,4 +129,56 @@ pub(crate) fn composite_pixels(
             [c(0), c(1), c(2), 1.0]
         })
         .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn layer(name: &str, channels: &[(&str, [f32; 2])]) -> output::ExrLayer {
+        (
+            name.to_string(),
+            channels
+                .iter()
+                .map(|(c, v)| (c.to_string(), v.to_vec()))
+                .collect(),
+        )
+    }
+
+    #[test]
+    fn the_sphere_target_is_local_over_distant_and_fresnel_makes_it_the_composite() {
+        let layers = vec![
+            layer(
+                "pot.fresnel",
+                &[("R", [0.5, 1.0]), ("G", [0.6, 1.0]), ("B", [0.7, 1.0])],
+            ),
+            layer(
+                "pot.specular_distant",
+                &[("R", [1.0, 2.0]), ("G", [2.0, 2.0]), ("B", [3.0, 2.0])],
+            ),
+            // Straight RGB with coverage alpha, as the tracer writes it.
+            layer(
+                "pot.specular_local",
+                &[
+                    ("R", [4.0, 0.0]),
+                    ("G", [4.0, 0.0]),
+                    ("B", [4.0, 0.0]),
+                    ("A", [0.25, 0.0]),
+                ],
+            ),
+        ];
+        let sphere = specular_pixels(&layers, "pot", 2).expect("sphere target");
+        // 0.25 · 4 + 0.75 · distant; no local at the second pixel.
+        assert_eq!(sphere, [[1.75, 2.5, 3.25, 1.0], [2.0, 2.0, 2.0, 1.0]]);
+        let composite = composite_pixels(&layers, "pot", 2).expect("composite");
+        let fresnel = target_pixels(&layers, "pot.fresnel", false, 2).expect("fresnel");
+        for ((s, c), f) in sphere.iter().zip(&composite).zip(&fresnel) {
+            for k in 0..3 {
+                assert!((f[k] * s[k] - c[k]).abs() < 1e-6, "{s:?} {c:?} {f:?}");
+            }
+        }
+        let err = specular_pixels(&layers[..2], "pot", 2).expect_err("no local layer");
+        assert!(format!("{err:#}").contains("pot.specular_local"), "{err:#}");
+        assert!(specular_pixels(&layers, "pot", 3).is_err(), "pixel count");
+    }
 }
