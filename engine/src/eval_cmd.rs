@@ -6,17 +6,17 @@
 
 use crate::backend::{DeviceOptions, create_device};
 use crate::cli::{Cli, EvalArgs, PlayArgs};
+use crate::eval::metrics;
 use crate::eval::plot::{ChartSpec, LegendPosition, Series, xy_chart};
 use crate::eval::reference::{References, View as RefView};
 use crate::eval::table::{EvalRow, EvalTable, ViewCounts};
-use crate::eval::metrics;
-use inference::trace::TraceSettings;
 use crate::perf::median;
 use crate::play::{FrameSource, prepare_output, setup_mode};
 use crate::renderer::Renderer;
 use anyhow::{Context, Result, bail};
 use clap::Parser;
 use inference::scene::Scene;
+use inference::trace::TraceSettings;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -27,12 +27,24 @@ pub const ROWS: &[(&str, &str)] = &[
     ("sphere-pem", "--mode sphere-pem"),
     ("sphere-pem nearest-sample", "--mode sphere-pem --no-blend"),
     ("layered-pem", "--mode layered-pem"),
-    ("layered-pem nearest-sample", "--mode layered-pem --no-blend"),
-    ("layered-pem distant-only", "--mode layered-pem --distant-only"),
+    (
+        "layered-pem nearest-sample",
+        "--mode layered-pem --no-blend",
+    ),
+    (
+        "layered-pem distant-only",
+        "--mode layered-pem --distant-only",
+    ),
     ("layered-pem em128", "--mode layered-pem --em-size 128"),
     ("layered-pem em64", "--mode layered-pem --em-size 64"),
-    ("layered-pem bilinear", "--mode layered-pem --filtering bilinear"),
-    ("layered-pem nearest-texel", "--mode layered-pem --filtering nearest"),
+    (
+        "layered-pem bilinear",
+        "--mode layered-pem --filtering bilinear",
+    ),
+    (
+        "layered-pem nearest-texel",
+        "--mode layered-pem --filtering nearest",
+    ),
     ("layered-pem spacing2", "--mode layered-pem --spacing 2"),
     ("layered-pem spacing4", "--mode layered-pem --spacing 4"),
     ("layered-pem spacing8", "--mode layered-pem --spacing 8"),
@@ -179,7 +191,8 @@ pub fn eval(args: &EvalArgs) -> Result<String> {
                 pixels = source.frame(&mut renderer, &scene, eye)?.1;
                 times.push(start.elapsed().as_secs_f64() * 1e3);
             }
-            let scores = metrics::scores(&reference.beauty, &pixels, width, height, &reference.mask)?;
+            let scores =
+                metrics::scores(&reference.beauty, &pixels, width, height, &reference.mask)?;
             let (Some(psnr_db), Some(flip)) = (scores.psnr_db, scores.flip) else {
                 bail!(
                     "view at azimuth {}°, elevation {}°: {reflector} covers no pixel",
@@ -187,9 +200,19 @@ pub fn eval(args: &EvalArgs) -> Result<String> {
                     view.elevation_deg
                 );
             };
-            results.push((view.category, ViewResult { psnr_db, flip, frame_ms: median(&times) }));
+            results.push((
+                view.category,
+                ViewResult {
+                    psnr_db,
+                    flip,
+                    frame_ms: median(&times),
+                },
+            ));
             // The first view above the plane, for the side-by-side picture.
-            if i == views.iter().position(|v| v.category == Category::Above).unwrap_or(0)
+            if i == views
+                .iter()
+                .position(|v| v.category == Category::Above)
+                .unwrap_or(0)
                 && !label.contains(' ')
             {
                 pictures.push((label.to_string(), pixels));
@@ -197,7 +220,11 @@ pub fn eval(args: &EvalArgs) -> Result<String> {
             progress.inc(1);
         }
         let mean = |c: Category, f: fn(&ViewResult) -> f64| {
-            let v: Vec<f64> = results.iter().filter(|r| r.0 == c).map(|r| f(&r.1)).collect();
+            let v: Vec<f64> = results
+                .iter()
+                .filter(|r| r.0 == c)
+                .map(|r| f(&r.1))
+                .collect();
             v.iter().sum::<f64>() / v.len().max(1) as f64
         };
         let times: Vec<f64> = results.iter().map(|r| r.1.frame_ms).collect();
@@ -229,7 +256,13 @@ pub fn eval(args: &EvalArgs) -> Result<String> {
     if let Some(above) = views.iter().position(|v| v.category == Category::Above) {
         let gold = references[above].beauty.clone();
         pictures.push(("gold (traced)".into(), gold));
-        side_by_side(&out.join("modes_above.png"), &pictures, &references[above].mask, width, height)?;
+        side_by_side(
+            &out.join("modes_above.png"),
+            &pictures,
+            &references[above].mask,
+            width,
+            height,
+        )?;
     }
     let mut text = format!(
         "{} | {} {width}x{height} | {} views per category, above = +{}°, reference {} spp\n",
@@ -239,7 +272,11 @@ pub fn eval(args: &EvalArgs) -> Result<String> {
     for s in &skipped {
         text += &format!("skipped {s}\n");
     }
-    text += &format!("wrote {} and {}\n", json_path.display(), plot_path.display());
+    text += &format!(
+        "wrote {} and {}\n",
+        json_path.display(),
+        plot_path.display()
+    );
     Ok(text)
 }
 
@@ -355,13 +392,21 @@ fn tradeoff_chart(path: &Path, table: &EvalTable, device: &str, args: &EvalArgs)
     );
     spec.legend = LegendPosition::LowerRight;
     for (name, f, labelled) in [
-        ("between samples", (|r: &EvalRow| r.psnr_between_db) as fn(&EvalRow) -> f64, true),
+        (
+            "between samples",
+            (|r: &EvalRow| r.psnr_between_db) as fn(&EvalRow) -> f64,
+            true,
+        ),
         ("above the plane", |r: &EvalRow| r.psnr_above_db, false),
     ] {
         spec.series.push(Series {
             name: name.into(),
             points: rows.iter().map(|r| (r.frame_ms, f(r))).collect(),
-            labels: if labelled { rows.iter().map(|r| label(r)).collect() } else { Vec::new() },
+            labels: if labelled {
+                rows.iter().map(|r| label(r)).collect()
+            } else {
+                Vec::new()
+            },
             connect: false,
         });
     }

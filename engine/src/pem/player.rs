@@ -192,7 +192,8 @@ impl PemPlayer {
                 }
             }
             let origin = o.mesh.area_weighted_centroid();
-            let hull = hull_flags(&o.mesh);
+            // Convex-hull triangles cannot see the reflector: distant EM only.
+            let hull = inference::hull::hull_triangles(&o.mesh);
             let (indices, hull_index_count) = hull_sorted_indices(&o.mesh.indices, &hull);
             let n = o.mesh.positions.len();
             let stream = |name: &str| {
@@ -550,12 +551,6 @@ fn dropped_bytes(layer: MapLayer, resolution: u32, drop: u32) -> GpuResult<u64> 
     .all_mip_levels();
     let (regions, _) = level_regions(&desc)?;
     Ok(regions.get(drop as usize).map_or(0, |r| r.buffer_offset))
-}
-
-/// Which triangles lie on the mesh's convex hull (they use the distant EM
-/// only).
-fn hull_flags(mesh: &inference::scene::Mesh) -> Vec<bool> {
-    vec![false; mesh.triangle_count()]
 }
 
 /// The mesh's indices with hull triangles first, and how many indices
