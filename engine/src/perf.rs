@@ -33,6 +33,8 @@ pub struct CpuReport {
     pub decode_ms_median: f64,
     pub decode_ms_mean: f64,
     pub maps_decoded: u64,
+    /// Of those, decoded ahead on the worker while earlier frames drew.
+    pub maps_prefetched: u64,
 }
 
 #[derive(Serialize)]
@@ -138,6 +140,7 @@ impl PerfLog {
                 decode_ms_mean: self.cpu.iter().map(|c| c.decode_ms).sum::<f64>()
                     / self.cpu.len().max(1) as f64,
                 maps_decoded: self.cpu.iter().map(|c| u64::from(c.decoded_maps)).sum(),
+                maps_prefetched: self.cpu.iter().map(|c| u64::from(c.prefetched_maps)).sum(),
             },
         }
     }
@@ -187,10 +190,11 @@ impl PerfReport {
         );
         if self.cpu.maps_decoded > 0 {
             out += &format!(
-                "{:<16} {:>12.3}   (mean; {} maps read, {:.2} ms each)\n",
+                "{:<16} {:>12.3}   (mean on the frame; {} maps, {} decoded ahead; {:.2} ms each)\n",
                 "cpu map decode",
                 self.cpu.decode_ms_mean,
                 self.cpu.maps_decoded,
+                self.cpu.maps_prefetched,
                 self.cpu.decode_ms_mean * self.frames as f64 / self.cpu.maps_decoded as f64
             );
         }

@@ -52,6 +52,8 @@ pub struct CpuTimes {
     /// Reading maps into staging (codec decode or EXR read).
     pub decode_ms: f64,
     pub decoded_maps: u32,
+    /// Of those, maps decoded ahead on the worker thread.
+    pub prefetched_maps: u32,
 }
 
 pub struct FrameStats {
@@ -263,6 +265,7 @@ impl Renderer {
             cpu.texgen_ms += prepared.texgen_ms;
             cpu.decode_ms += prepared.decode_ms;
             cpu.decoded_maps += prepared.decoded_maps;
+            cpu.prefetched_maps += prepared.prefetched_maps;
             blend = Some(b);
         }
         let mut passes: Vec<Box<dyn Pass + '_>> = Vec::new();

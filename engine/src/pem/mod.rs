@@ -4,6 +4,7 @@
 
 pub mod path;
 pub mod player;
+pub mod prefetch;
 pub mod samples;
 pub mod source;
 pub mod texgen;

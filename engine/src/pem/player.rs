@@ -4,6 +4,7 @@
 //! scene and the eye need: no local layer on convex-hull triangles, no
 //! blend pass exactly on a sample.
 
+use super::prefetch::{MapKey, Prefetcher};
 use super::samples::SampleBlend;
 use super::source::{MapLayer, MapSource};
 use super::texgen::texgen_parallel;
@@ -123,6 +124,8 @@ pub struct PemCpu {
     pub texgen_ms: f64,
     pub decode_ms: f64,
     pub decoded_maps: u32,
+    /// Maps the worker had decoded ahead (their copy is in `decode_ms`).
+    pub prefetched_maps: u32,
 }
 
 pub struct PemPlayer {
@@ -136,6 +139,9 @@ pub struct PemPlayer {
     staging: Vec<Buffer>,
     pending: Vec<Pending>,
     source: MapSource,
+    prefetch: Option<Prefetcher>,
+    samples: u32,
+    last_position: Option<f32>,
     frame: u64,
     scratch: Vec<TexgenVertex>,
 }
@@ -274,7 +280,11 @@ impl PemPlayer {
             reflectors,
             staging,
             pending: Vec::new(),
+            // Without a second handle playback still works, decoding in line.
+            prefetch: source.reopen().ok().map(Prefetcher::new),
             source,
+            samples: scene.orbit.samples,
+            last_position: None,
             frame: 0,
             scratch: Vec::new(),
         })
@@ -348,9 +358,23 @@ impl PemPlayer {
                     let bytes = &mut staging.mapped_mut()?[..halves * 2];
                     let out: &mut [f16] = bytemuck::try_cast_slice_mut(bytes)
                         .map_err(|e| anyhow::anyhow!("staging buffer not f16-aligned: {e}"))?;
-                    self.source
-                        .read(&r.name, layer, r.resolution, sample, out)?;
-                    cpu.decode_ms += self.source.last_read_ms;
+                    let key = MapKey {
+                        object: r.name.clone(),
+                        layer,
+                        resolution: r.resolution,
+                        sample,
+                    };
+                    let read_start = Instant::now();
+                    match self.prefetch.as_mut().and_then(|p| p.take(&key)) {
+                        Some((texels, _)) if texels.len() == out.len() => {
+                            out.copy_from_slice(&texels);
+                            cpu.prefetched_maps += 1;
+                        }
+                        _ => self
+                            .source
+                            .read(&r.name, layer, r.resolution, sample, out)?,
+                    }
+                    cpu.decode_ms += read_start.elapsed().as_secs_f64() * 1e3;
                     cpu.decoded_maps += 1;
                     self.pending.push(Pending {
                         reflector: ri,
@@ -365,7 +389,44 @@ impl PemPlayer {
                 slot.last_used = self.frame;
             }
         }
+        self.prefetch_next(blend, &layers);
         Ok(cpu)
+    }
+
+    /// Asks the worker for the sample beyond `blend` in the direction the
+    /// eye moves, for every reflector that does not hold it yet.
+    fn prefetch_next(&mut self, blend: &SampleBlend, layers: &[MapLayer]) {
+        let position = match blend.second {
+            Some((s, w)) => blend.first as f32 * (1.0 - w) + s as f32 * w,
+            None => blend.first as f32,
+        };
+        let last = self.last_position.replace(position);
+        let (Some(last), Some(prefetch)) = (last, self.prefetch.as_mut()) else {
+            return;
+        };
+        let step = self.settings.spacing.max(1) as i64;
+        let ahead = match position.partial_cmp(&last) {
+            Some(std::cmp::Ordering::Greater) => blend.samples().max().map(|s| s as i64 + step),
+            Some(std::cmp::Ordering::Less) => blend.samples().min().map(|s| s as i64 - step),
+            _ => None,
+        };
+        let Some(next) = ahead.filter(|&s| s >= 0 && s < i64::from(self.samples)) else {
+            return;
+        };
+        let next = next as u32;
+        for r in &self.reflectors {
+            if r.slots.iter().any(|s| s.sample == Some(next)) {
+                continue;
+            }
+            for &layer in layers {
+                prefetch.request(MapKey {
+                    object: r.name.clone(),
+                    layer,
+                    resolution: r.resolution,
+                    sample: next,
+                });
+            }
+        }
     }
 
     /// The upload pass for what `prepare` read (None when all was resident).

@@ -147,6 +147,24 @@ impl MapSource {
         }
     }
 
+    /// A second, independent handle on the same maps (for a worker thread).
+    pub fn reopen(&self) -> Result<Self> {
+        let kind = match &self.kind {
+            Kind::Container { path, index, .. } => Kind::Container {
+                path: path.clone(),
+                container: codec::Container::open(path)
+                    .with_context(|| format!("opening map container {}", path.display()))?,
+                cache: codec::DecodeCache::default(),
+                index: index.clone(),
+            },
+            Kind::Exr { dir } => Kind::Exr { dir: dir.clone() },
+        };
+        Ok(Self {
+            kind,
+            last_read_ms: 0.0,
+        })
+    }
+
     /// Whether this source can give `layer` of `object` (containers hold
     /// only what `engine encode` put in them).
     pub fn has(&self, object: &str, layer: MapLayer) -> bool {
