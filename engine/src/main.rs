@@ -10,18 +10,9 @@ fn main() -> ExitCode {
             engine::play::play(&cli.play).map(|r| r.table()),
             cli.play.validate,
         ),
-        Some(Command::Bench(args)) => (
-            engine::bench::bench(args).map(|r| {
-                format!(
-                    "{}{}static-EM / bare frame: {:.2}x (GPU passes: {:.2}x)\n",
-                    r.static_em.table(),
-                    r.bare.table(),
-                    r.frame_ratio,
-                    r.gpu_ratio
-                )
-            }),
-            args.validate,
-        ),
+        Some(Command::Bench(args)) => {
+            (engine::bench::bench(args).map(|r| r.table()), args.validate)
+        }
         Some(Command::Trace(args)) => (engine::trace_cmd::trace(args), false),
         Some(Command::Infer(args)) => (engine::infer_cmd::infer(args), args.validate),
         Some(Command::Eval(args)) => (engine::eval_cmd::eval(args), args.validate),

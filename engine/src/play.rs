@@ -33,17 +33,6 @@ pub fn prepare_output(dir: &Path) -> Result<()> {
     Ok(())
 }
 
-/// The orbit angle of frame `i` of `frames`, spread over the samples' span.
-pub fn frame_angle(scene: &Scene, i: u32, frames: u32) -> f32 {
-    let orbit = &scene.orbit;
-    let span = orbit.step_deg * orbit.samples.saturating_sub(1) as f32;
-    if frames <= 1 {
-        orbit.start_deg
-    } else {
-        orbit.start_deg + span * i as f32 / (frames - 1) as f32
-    }
-}
-
 /// What playing and benchmarking share: the scene, a writable output
 /// folder, the device and a renderer set up at the requested size.
 pub struct Session {

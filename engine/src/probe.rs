@@ -268,6 +268,7 @@ impl VulkanProbe {
             layer: 0,
             clear: true,
             front_face: vk::FrontFace::COUNTER_CLOCKWISE,
+            area: None,
         };
         let probe = ProbePass {
             device: &self.device,

@@ -8,7 +8,7 @@ use crate::passes::em_capture::{CubeTarget, EmCapturePass, MipPass};
 use crate::passes::mirror::{MirrorDraw, MirrorRenderer};
 use crate::passes::readback::ReadbackPass;
 use crate::passes::room::{RoomRenderer, RoomStyle};
-use crate::passes::target::Target;
+use crate::passes::target::{Target, screen_bounds, union};
 use crate::pem::player::{PemPlayer, PemSettings};
 use crate::pem::samples::{SampleBlend, sample_blend};
 use crate::pem::source::MapSource;
@@ -41,6 +41,8 @@ struct Reflector {
     /// World-space vertices, the input of CPU texgen every frame.
     positions: Vec<Vec3>,
     normals: Vec<Vec3>,
+    /// World-space bounds, for the mirror pass's render area.
+    bounds: (Vec3, Vec3),
 }
 
 /// CPU-side costs of one frame, in milliseconds.
@@ -129,6 +131,7 @@ impl Renderer {
                 cube,
                 positions: object.mesh.positions.clone(),
                 normals: object.mesh.normals.clone(),
+                bounds: object.mesh.bounds(),
             });
         }
         let color = Image::new(
@@ -252,6 +255,7 @@ impl Renderer {
             layer: 0,
             clear: true,
             front_face: vk::FrontFace::COUNTER_CLOCKWISE,
+            area: None,
         };
         let mut blend = None;
         if mode == FrameMode::Pem {
@@ -290,6 +294,22 @@ impl Renderer {
                         passes.push(Box::new(pass));
                     }
                 } else if !self.reflectors.is_empty() {
+                    let area = self
+                        .reflectors
+                        .iter()
+                        .fold(Some(vk::Rect2D::default()), |a, r| {
+                            union(
+                                a,
+                                screen_bounds(
+                                    view_proj,
+                                    r.bounds.0,
+                                    r.bounds.1,
+                                    self.width,
+                                    self.height,
+                                ),
+                            )
+                        });
+                    let later = Target { area, ..later };
                     passes.push(Box::new(self.mirror.pass(
                         &self.gpu,
                         self.reflectors.iter().map(|r| &r.draw).collect(),

@@ -77,6 +77,7 @@ impl Pass for EmCapturePass<'_> {
                 layer: face,
                 clear: true,
                 front_face: vk::FrontFace::CLOCKWISE,
+                area: None,
             };
             let view_proj = face_view_proj(face, self.cube.origin, self.near, self.far);
             target.render(self.room_device(), cmd, || {

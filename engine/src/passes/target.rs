@@ -17,6 +17,11 @@ pub struct Target<'a> {
     /// Winding of front faces as this target's projection sees them: cube
     /// faces are mirror images (see `cube.rs`), so they flip it.
     pub front_face: vk::FrontFace,
+    /// Render only inside this rectangle (None: the whole level). On a
+    /// tiler like lavapipe every pass loads and stores each tile of its
+    /// render area, so a pass that draws one object limits it to that
+    /// object's screen bounds.
+    pub area: Option<vk::Rect2D>,
 }
 
 impl Target<'_> {
@@ -57,10 +62,10 @@ impl Target<'_> {
                 },
             });
         let extent = self.extent();
-        let area = vk::Rect2D {
+        let area = self.area.unwrap_or(vk::Rect2D {
             offset: vk::Offset2D::default(),
             extent,
-        };
+        });
         let info = vk::RenderingInfo::default()
             .render_area(area)
             .layer_count(1)
@@ -106,5 +111,149 @@ pub fn draw_mesh(
         }
         d.cmd_bind_index_buffer(cmd, mesh.indices.raw, 0, vk::IndexType::UINT32);
         d.cmd_draw_indexed(cmd, mesh.index_count, 1, 0, 0, 0);
+    }
+}
+
+/// The pixels the world-space box `min..max` can cover under `view_proj`
+/// in a `width × height` target, with a one-pixel margin; None when the
+/// box reaches behind the eye (then only the whole target is safe) and an
+/// empty rectangle when it lies outside the view.
+pub fn screen_bounds(
+    view_proj: glam::Mat4,
+    min: glam::Vec3,
+    max: glam::Vec3,
+    width: u32,
+    height: u32,
+) -> Option<vk::Rect2D> {
+    let (mut lo, mut hi) = (
+        glam::Vec2::splat(f32::INFINITY),
+        glam::Vec2::splat(f32::NEG_INFINITY),
+    );
+    for i in 0..8 {
+        let corner = glam::Vec3::new(
+            if i & 1 == 0 { min.x } else { max.x },
+            if i & 2 == 0 { min.y } else { max.y },
+            if i & 4 == 0 { min.z } else { max.z },
+        );
+        let clip = view_proj * corner.extend(1.0);
+        if !(clip.w > 1e-6) {
+            return None;
+        }
+        let ndc = glam::Vec2::new(clip.x, clip.y) / clip.w;
+        lo = lo.min(ndc);
+        hi = hi.max(ndc);
+    }
+    let size = glam::Vec2::new(width as f32, height as f32);
+    let to_pixels = |ndc: glam::Vec2| (ndc * 0.5 + 0.5) * size;
+    let (p0, p1) = (to_pixels(lo) - 1.0, to_pixels(hi) + 1.0);
+    let x0 = p0.x.floor().clamp(0.0, size.x) as u32;
+    let y0 = p0.y.floor().clamp(0.0, size.y) as u32;
+    let x1 = p1.x.ceil().clamp(0.0, size.x) as u32;
+    let y1 = p1.y.ceil().clamp(0.0, size.y) as u32;
+    Some(vk::Rect2D {
+        offset: vk::Offset2D {
+            x: x0 as i32,
+            y: y0 as i32,
+        },
+        extent: vk::Extent2D {
+            width: x1.saturating_sub(x0),
+            height: y1.saturating_sub(y0),
+        },
+    })
+}
+
+/// The smallest rectangle holding both (None = the whole target wins).
+pub fn union(a: Option<vk::Rect2D>, b: Option<vk::Rect2D>) -> Option<vk::Rect2D> {
+    let (a, b) = (a?, b?);
+    if a.extent.width == 0 || a.extent.height == 0 {
+        return Some(b);
+    }
+    if b.extent.width == 0 || b.extent.height == 0 {
+        return Some(a);
+    }
+    let x0 = a.offset.x.min(b.offset.x);
+    let y0 = a.offset.y.min(b.offset.y);
+    let x1 = (a.offset.x + a.extent.width as i32).max(b.offset.x + b.extent.width as i32);
+    let y1 = (a.offset.y + a.extent.height as i32).max(b.offset.y + b.extent.height as i32);
+    Some(vk::Rect2D {
+        offset: vk::Offset2D { x: x0, y: y0 },
+        extent: vk::Extent2D {
+            width: (x1 - x0) as u32,
+            height: (y1 - y0) as u32,
+        },
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{Mat4, Vec3};
+
+    fn view_proj() -> Mat4 {
+        glam::camera::rh::proj::vulkan::perspective(1.0, 4.0 / 3.0, 0.1, 100.0)
+            * glam::camera::rh::view::look_to_mat4(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z, Vec3::Y)
+    }
+
+    #[test]
+    fn bounds_cover_the_projected_box_and_stay_in_the_target() {
+        let r = screen_bounds(view_proj(), Vec3::splat(-0.5), Vec3::splat(0.5), 640, 480)
+            .expect("in front of the eye");
+        // Centred, inside the target, smaller than it.
+        let cx = r.offset.x as f32 + r.extent.width as f32 / 2.0;
+        assert!((cx - 320.0).abs() <= 1.0, "{r:?}");
+        assert!(r.extent.width > 10 && r.extent.width < 640, "{r:?}");
+        assert!(r.offset.x as u32 + r.extent.width <= 640);
+        assert!(r.offset.y as u32 + r.extent.height <= 480);
+        // Partly off screen: clamped; wholly off screen: empty.
+        let r = screen_bounds(
+            view_proj(),
+            Vec3::new(1.0, -0.2, -0.2),
+            Vec3::new(9.0, 0.2, 0.2),
+            640,
+            480,
+        )
+        .expect("in front");
+        assert_eq!(r.offset.x as u32 + r.extent.width, 640);
+        let r = screen_bounds(
+            view_proj(),
+            Vec3::new(50.0, 0.0, 0.0),
+            Vec3::new(51.0, 1.0, 1.0),
+            640,
+            480,
+        )
+        .expect("in front");
+        assert_eq!(r.extent.width, 0);
+        // Reaching behind the eye: the whole target.
+        assert!(
+            screen_bounds(
+                view_proj(),
+                Vec3::splat(-1.0),
+                Vec3::new(1.0, 1.0, 9.0),
+                640,
+                480
+            )
+            .is_none()
+        );
+        // Non-finite input never yields a rectangle outside the target.
+        assert!(screen_bounds(view_proj(), Vec3::splat(f32::NAN), Vec3::ONE, 640, 480).is_none());
+    }
+
+    #[test]
+    fn union_of_rectangles() {
+        let rect = |x, y, w, h| vk::Rect2D {
+            offset: vk::Offset2D { x, y },
+            extent: vk::Extent2D {
+                width: w,
+                height: h,
+            },
+        };
+        let u = union(Some(rect(0, 0, 10, 10)), Some(rect(20, 5, 5, 20))).expect("both");
+        assert_eq!(
+            (u.offset.x, u.offset.y, u.extent.width, u.extent.height),
+            (0, 0, 25, 25)
+        );
+        assert!(union(None, Some(rect(0, 0, 1, 1))).is_none());
+        let e = union(Some(rect(0, 0, 0, 0)), Some(rect(3, 3, 2, 2))).expect("both");
+        assert_eq!(e.offset.x, 3);
     }
 }

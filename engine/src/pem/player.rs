@@ -16,7 +16,7 @@ use crate::gpu_scene::GpuScene;
 use crate::graph::Executor;
 use crate::passes::mirror::fresnel_lut_image;
 use crate::passes::pem::{PemDraw, PemPass, PemPipelines, Shading};
-use crate::passes::target::Target;
+use crate::passes::target::{Target, screen_bounds, union};
 use crate::passes::upload::{Upload, UploadPass};
 use ash::vk;
 use glam::{Mat4, Vec3};
@@ -99,6 +99,8 @@ struct Reflector {
     positions: Vec<Vec3>,
     normals: Vec<Vec3>,
     origin: Vec3,
+    /// World-space bounds: what the draw passes' render area must cover.
+    bounds: (Vec3, Vec3),
     distant: EmGeometry,
     local: EmGeometry,
     /// Triangles on the convex hull first, then the rest.
@@ -219,6 +221,7 @@ impl PemPlayer {
                 positions: o.mesh.positions.clone(),
                 normals: o.mesh.normals.clone(),
                 origin,
+                bounds: o.mesh.bounds(),
                 distant: EmGeometry::Box {
                     min: room_min,
                     max: room_max,
@@ -463,6 +466,22 @@ impl PemPlayer {
         view_proj: Mat4,
     ) -> GpuResult<Vec<PemPass<'a>>> {
         let mut passes = Vec::new();
+        let extent = target.extent();
+        let area = self
+            .reflectors
+            .iter()
+            .fold(Some(vk::Rect2D::default()), |a, r| {
+                union(
+                    a,
+                    screen_bounds(
+                        view_proj,
+                        r.bounds.0,
+                        r.bounds.1,
+                        extent.width,
+                        extent.height,
+                    ),
+                )
+            });
         let mut samples = vec![(blend.first, 1.0, false, "pem")];
         if let Some((s, w)) = blend.second {
             samples.push((s, w, true, "pem_blend"));
@@ -517,6 +536,7 @@ impl PemPlayer {
                 sampled,
                 target: Target {
                     clear: false,
+                    area,
                     ..target
                 },
                 view_proj,

@@ -134,7 +134,7 @@ mod tests {
     #[test]
     fn views_beyond_the_orbit_clamp_to_its_ends() {
         let o = orbit();
-        for (angle, expected) in [(-5.0, 0), (-170.0, 0), (99.0, 99), (140.0, 99), (200.0, 99)] {
+        for (angle, expected) in [(-5.0, 0), (-100.0, 0), (99.0, 99), (140.0, 99), (200.0, 99)] {
             let b = sample_blend(&o, o.eye(angle, 0.0), 1, true);
             assert_eq!(
                 b,
