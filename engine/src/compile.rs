@@ -57,7 +57,7 @@ pub fn map_source(
     if args.pem.maps == Maps::Exr || sphere {
         return Ok(MapSource::exr(&paths.infer_dir));
     }
-    if !paths.container.is_file() {
+    if !paths.container.is_file() || older_than_maps(&paths.container, scene, &paths.infer_dir) {
         let encode = |bytes: Option<u64>| {
             crate::codec_cmd::encode(&EncodeArgs {
                 scene: args.scene.clone(),
@@ -82,6 +82,23 @@ pub fn map_source(
         eprint!("{text}");
     }
     MapSource::container(scene, &paths.container)
+}
+
+/// Whether some map the container holds was written after it (re-inferred).
+fn older_than_maps(container: &Path, scene: &Scene, dir: &Path) -> bool {
+    let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
+    let Some(built) = modified(container) else {
+        return true;
+    };
+    let layers = [MapLayer::Distant, MapLayer::Local, MapLayer::Ptm];
+    scene.objects.iter().filter(|o| o.em.is_some()).any(|o| {
+        (0..scene.orbit.samples).any(|k| {
+            layers
+                .iter()
+                .filter_map(|&l| modified(&sample_path(dir, k, &o.name, l)))
+                .any(|t| t > built)
+        })
+    })
 }
 
 /// Every sample has every map `layers` names.

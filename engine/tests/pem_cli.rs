@@ -96,6 +96,15 @@ fn main_job_compiles_what_is_missing_then_plays_every_mode() {
         text(&again)
     );
 
+    // A re-inferred map (newer than the container) is re-encoded first.
+    std::thread::sleep(std::time::Duration::from_millis(20));
+    let map = out.join("infer/sample_0001/teapot.specular_distant.exr");
+    let bytes = std::fs::read(&map).expect("map");
+    std::fs::write(&map, bytes).expect("rewrite map");
+    let stale = play(&scene, &out, &["--no-capture"]);
+    assert!(stale.status.success(), "{}", text(&stale));
+    assert!(text(&stale).contains("ratio"), "not re-encoded: {}", text(&stale));
+
     // Every mode and knob plays cleanly (sphere PEMs need `infer --sphere`).
     for extra in [
         &["--mode", "ptm"][..],
