@@ -105,9 +105,11 @@ fn main_job_compiles_what_is_missing_then_plays_every_mode() {
     assert!(stale.status.success(), "{}", text(&stale));
     assert!(text(&stale).contains("ratio"), "not re-encoded: {}", text(&stale));
 
-    // Every mode and knob plays cleanly (sphere PEMs need `infer --sphere`).
+    // Every mode and knob plays cleanly (sphere PEMs are inferred on first use).
     for extra in [
         &["--mode", "ptm"][..],
+        &["--mode", "sphere-pem"],
+        &["--mode", "trace", "--trace-spp", "1"],
         &["--mode", "static-em"],
         &["--no-blend", "--distant-only"],
         &["--maps", "exr", "--filtering", "nearest", "--em-size", "4"],
