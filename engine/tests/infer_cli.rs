@@ -269,6 +269,26 @@ fn sphere_em_is_added_to_an_inferred_pem_without_redoing_its_maps() {
     let report = json(&out.join("report.json"));
     assert_eq!(report["sample"].as_u64(), Some(1));
     assert_eq!(layer_names(&report).len(), 4, "{report}");
+
+    // A sample report that is not one stops the run before any work, and
+    // says which file.
+    let bad = out.join("sample_0000/report.json");
+    std::fs::write(&bad, "{ not json").expect("write");
+    let map = out.join("sample_0000/teapot.specular_sphere.exr");
+    let before = std::fs::metadata(&map)
+        .and_then(|m| m.modified())
+        .expect("mtime");
+    let o = engine(&[&base[..], &["--sample", "0", "--sphere"]].concat());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && !err.contains("panicked"), "{err}");
+    assert!(
+        err.contains("sample_0000") && err.contains("not a sample report"),
+        "{err}"
+    );
+    let after = std::fs::metadata(&map)
+        .and_then(|m| m.modified())
+        .expect("mtime");
+    assert_eq!(before, after, "a map was rewritten");
 }
 
 #[test]

@@ -136,6 +136,9 @@ pub fn infer(args: &InferArgs) -> Result<String> {
         let eye = tracer.sample_eye(k)?;
         let dir = out.join(format!("sample_{k:04}"));
         prepare_output(&dir)?;
+        let report_path = dir.join("report.json");
+        // The sample's earlier report, read before the first map inferred.
+        let mut old_report = None;
         let mut fresh = Vec::new();
         let mut warm_started = false;
         for job in &jobs {
@@ -147,6 +150,9 @@ pub fn infer(args: &InferArgs) -> Result<String> {
                 skipped += 1;
                 bar.inc(1);
                 continue;
+            }
+            if old_report.is_none() {
+                old_report = Some(SampleReport::read(&report_path, k)?);
             }
             let mesh = &job.object.mesh;
             let (pixels, lookup) = match job.kind {
@@ -234,10 +240,9 @@ pub fn infer(args: &InferArgs) -> Result<String> {
             bar.inc(1);
         }
         if !fresh.is_empty() {
-            let path = dir.join("report.json");
-            let report = SampleReport::merged(&path, k, fresh, warm_started, &order)?;
-            std::fs::write(&path, serde_json::to_string_pretty(&report)?)
-                .with_context(|| format!("writing {}", path.display()))?;
+            let report = SampleReport::merged(old_report.flatten(), k, fresh, warm_started, &order);
+            std::fs::write(&report_path, serde_json::to_string_pretty(&report)?)
+                .with_context(|| format!("writing {}", report_path.display()))?;
             reports.push(report);
         }
     }

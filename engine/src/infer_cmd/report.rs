@@ -44,39 +44,45 @@ pub struct SampleReport {
 }
 
 impl SampleReport {
+    /// The report already in `path` for sample `sample`: `None` when there
+    /// is none, an error naming the file when it cannot be read or is not
+    /// that sample's report (checked before inferring anything, so a bad
+    /// file costs no work).
+    pub(super) fn read(path: &Path, sample: u32) -> Result<Option<SampleReport>> {
+        let bytes = match std::fs::read(path) {
+            Ok(bytes) => bytes,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+            Err(e) => return Err(e).with_context(|| format!("reading {}", path.display())),
+        };
+        let old: SampleReport = serde_json::from_slice(&bytes).with_context(|| {
+            format!(
+                "{}: not a sample report (move it away to start the report afresh)",
+                path.display()
+            )
+        })?;
+        if old.sample != sample {
+            bail!(
+                "{}: reports sample {}, expected {sample}",
+                path.display(),
+                old.sample
+            );
+        }
+        Ok(Some(old))
+    }
+
     /// Sample `sample`'s report after this run inferred `fresh` layers:
-    /// they replace the same-named layers of the report already in
-    /// `path` (if any), whose other layers — maps skipped as up to date, or
-    /// not asked for this time — are kept. Layers follow `order` (job
-    /// names; others last, as they were); the totals are recomputed over
-    /// every layer, as a full run computes them.
+    /// they replace the same-named layers of the earlier report `old` (if
+    /// any), whose other layers — maps skipped as up to date, or not asked
+    /// for this time — are kept. Layers follow `order` (job names; others
+    /// last, as they were); the totals are recomputed over every layer, as
+    /// a full run computes them.
     pub(super) fn merged(
-        path: &Path,
+        old: Option<SampleReport>,
         sample: u32,
         fresh: Vec<LayerReport>,
         warm_started: bool,
         order: &[String],
-    ) -> Result<SampleReport> {
-        let old = match std::fs::read(path) {
-            Ok(bytes) => {
-                let old: SampleReport = serde_json::from_slice(&bytes).with_context(|| {
-                    format!(
-                        "{}: not a sample report (move it away to start the report afresh)",
-                        path.display()
-                    )
-                })?;
-                if old.sample != sample {
-                    bail!(
-                        "{}: reports sample {}, expected {sample}",
-                        path.display(),
-                        old.sample
-                    );
-                }
-                Some(old)
-            }
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
-            Err(e) => return Err(e).with_context(|| format!("reading {}", path.display())),
-        };
+    ) -> SampleReport {
         let (mut layers, old_warm) =
             old.map_or((Vec::new(), false), |o| (o.layers, o.warm_started));
         // Kept layers may have been warm-started by the earlier run.
@@ -92,7 +98,7 @@ impl SampleReport {
         }
         let rank = |l: &LayerReport| order.iter().position(|n| *n == l.name);
         layers.sort_by_key(|l| rank(l).unwrap_or(usize::MAX));
-        Ok(SampleReport {
+        SampleReport {
             sample,
             probe_renders: layers.iter().map(|l| l.probe_renders).sum(),
             a_vs_render_psnr_db: layers
@@ -102,7 +108,7 @@ impl SampleReport {
             solve_s: layers.iter().map(|l| l.solve_s).sum(),
             warm_started: warm_started || old_warm,
             layers,
-        })
+        }
     }
 }
 
