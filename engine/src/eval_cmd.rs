@@ -18,7 +18,7 @@ use clap::Parser;
 use inference::scene::Scene;
 use inference::trace::TraceSettings;
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 /// The rows: a label and the play flags it stands for.
@@ -297,7 +297,7 @@ fn play_args(args: &EvalArgs, data: &Path, flags: &str) -> Result<PlayArgs> {
 
 /// One picture: each mode's frame cropped around the reflector, side by side.
 fn side_by_side(
-    path: &PathBuf,
+    path: &Path,
     pictures: &[(String, Vec<[f32; 4]>)],
     mask: &[bool],
     width: u32,

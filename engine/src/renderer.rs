@@ -8,7 +8,7 @@ use crate::passes::em_capture::{CubeTarget, EmCapturePass, MipPass};
 use crate::passes::mirror::{MirrorDraw, MirrorRenderer};
 use crate::passes::readback::ReadbackPass;
 use crate::passes::room::{RoomRenderer, RoomStyle};
-use crate::passes::target::{Target, screen_bounds, union};
+use crate::passes::target::{Target, area_of};
 use crate::pem::player::{PemPlayer, PemSettings};
 use crate::pem::samples::{SampleBlend, sample_blend};
 use crate::pem::source::MapSource;
@@ -294,21 +294,12 @@ impl Renderer {
                         passes.push(Box::new(pass));
                     }
                 } else if !self.reflectors.is_empty() {
-                    let area = self
-                        .reflectors
-                        .iter()
-                        .fold(Some(vk::Rect2D::default()), |a, r| {
-                            union(
-                                a,
-                                screen_bounds(
-                                    view_proj,
-                                    r.bounds.0,
-                                    r.bounds.1,
-                                    self.width,
-                                    self.height,
-                                ),
-                            )
-                        });
+                    let area = area_of(
+                        view_proj,
+                        self.reflectors.iter().map(|r| r.bounds),
+                        self.width,
+                        self.height,
+                    );
                     let later = Target { area, ..later };
                     passes.push(Box::new(self.mirror.pass(
                         &self.gpu,

@@ -103,7 +103,11 @@ fn main_job_compiles_what_is_missing_then_plays_every_mode() {
     std::fs::write(&map, bytes).expect("rewrite map");
     let stale = play(&scene, &out, &["--no-capture"]);
     assert!(stale.status.success(), "{}", text(&stale));
-    assert!(text(&stale).contains("ratio"), "not re-encoded: {}", text(&stale));
+    assert!(
+        text(&stale).contains("ratio"),
+        "not re-encoded: {}",
+        text(&stale)
+    );
 
     // Every mode and knob plays cleanly (sphere PEMs are inferred on first use).
     for extra in [

@@ -136,7 +136,7 @@ pub fn screen_bounds(
             if i & 4 == 0 { min.z } else { max.z },
         );
         let clip = view_proj * corner.extend(1.0);
-        if !(clip.w > 1e-6) {
+        if clip.w.is_nan() || clip.w <= 1e-6 {
             return None;
         }
         let ndc = glam::Vec2::new(clip.x, clip.y) / clip.w;
@@ -160,6 +160,20 @@ pub fn screen_bounds(
             height: y1.saturating_sub(y0),
         },
     })
+}
+
+/// The render area covering every box of `bounds` (None: the whole target).
+pub fn area_of(
+    view_proj: glam::Mat4,
+    bounds: impl IntoIterator<Item = (glam::Vec3, glam::Vec3)>,
+    width: u32,
+    height: u32,
+) -> Option<vk::Rect2D> {
+    bounds
+        .into_iter()
+        .try_fold(vk::Rect2D::default(), |a, (min, max)| {
+            union(Some(a), screen_bounds(view_proj, min, max, width, height))
+        })
 }
 
 /// The smallest rectangle holding both (None = the whole target wins).

@@ -58,7 +58,7 @@ mod tests {
         // Every view finite, elevation never negative, beyond the end clamps.
         for i in 0..frames + 3 {
             let (a, e) = path_view(&o, i, frames);
-            assert!(a.is_finite() && e.is_finite() && e >= 0.0 && e <= RISE_DEG);
+            assert!(a.is_finite() && e.is_finite() && (0.0..=RISE_DEG).contains(&e));
         }
         assert_eq!(path_view(&o, 5, 1), (0.0, 0.0));
     }

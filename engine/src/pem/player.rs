@@ -16,7 +16,7 @@ use crate::gpu_scene::GpuScene;
 use crate::graph::Executor;
 use crate::passes::mirror::fresnel_lut_image;
 use crate::passes::pem::{PemDraw, PemPass, PemPipelines, Shading};
-use crate::passes::target::{Target, screen_bounds, union};
+use crate::passes::target::{Target, area_of};
 use crate::passes::upload::{Upload, UploadPass};
 use ash::vk;
 use glam::{Mat4, Vec3};
@@ -467,21 +467,12 @@ impl PemPlayer {
     ) -> GpuResult<Vec<PemPass<'a>>> {
         let mut passes = Vec::new();
         let extent = target.extent();
-        let area = self
-            .reflectors
-            .iter()
-            .fold(Some(vk::Rect2D::default()), |a, r| {
-                union(
-                    a,
-                    screen_bounds(
-                        view_proj,
-                        r.bounds.0,
-                        r.bounds.1,
-                        extent.width,
-                        extent.height,
-                    ),
-                )
-            });
+        let area = area_of(
+            view_proj,
+            self.reflectors.iter().map(|r| r.bounds),
+            extent.width,
+            extent.height,
+        );
         let mut samples = vec![(blend.first, 1.0, false, "pem")];
         if let Some((s, w)) = blend.second {
             samples.push((s, w, true, "pem_blend"));

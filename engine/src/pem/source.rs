@@ -67,8 +67,8 @@ pub struct MapSource {
 enum Kind {
     Container {
         path: PathBuf,
-        container: codec::Container,
-        cache: codec::DecodeCache,
+        container: Box<codec::Container>,
+        cache: Box<codec::DecodeCache>,
         /// (object name, layer) → container texture (object index).
         index: Vec<(String, &'static str, u32)>,
     },
@@ -129,8 +129,8 @@ impl MapSource {
         Ok(Self {
             kind: Kind::Container {
                 path: path.to_owned(),
-                container,
-                cache: codec::DecodeCache::default(),
+                container: Box::new(container),
+                cache: Box::default(),
                 index,
             },
             last_read_ms: 0.0,
@@ -152,9 +152,11 @@ impl MapSource {
         let kind = match &self.kind {
             Kind::Container { path, index, .. } => Kind::Container {
                 path: path.clone(),
-                container: codec::Container::open(path)
-                    .with_context(|| format!("opening map container {}", path.display()))?,
-                cache: codec::DecodeCache::default(),
+                container: Box::new(
+                    codec::Container::open(path)
+                        .with_context(|| format!("opening map container {}", path.display()))?,
+                ),
+                cache: Box::default(),
                 index: index.clone(),
             },
             Kind::Exr { dir } => Kind::Exr { dir: dir.clone() },
