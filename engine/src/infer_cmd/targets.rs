@@ -76,6 +76,21 @@ pub(super) fn specular_pixels(
     object: &str,
     pixel_count: usize,
 ) -> Result<Vec<[f32; 4]>> {
+    Ok(local_over_distant(layers, object, pixel_count, true)?
+        .into_iter()
+        .map(|[r, g, b]| [r, g, b, 1.0])
+        .collect())
+}
+
+/// `local over distant` per pixel: `rgb_L·α_L + (1 − α_L)·rgb_D`, the
+/// distant layer alone where the object has no local layer (unless
+/// `require_local`).
+fn local_over_distant(
+    layers: &[output::ExrLayer],
+    object: &str,
+    pixel_count: usize,
+    require_local: bool,
+) -> Result<Vec<[f32; 3]>> {
     let distant = target_pixels(
         layers,
         &format!("{object}.specular_distant"),
@@ -87,13 +102,18 @@ pub(super) fn specular_pixels(
         &format!("{object}.specular_local"),
         true,
         pixel_count,
-    )?;
+    );
+    let local = if require_local {
+        Some(local?)
+    } else {
+        local.ok()
+    };
     Ok(distant
         .iter()
-        .zip(&local)
-        .map(|(d, l)| {
-            let c = |k: usize| l[k] + (1.0 - l[3]) * d[k];
-            [c(0), c(1), c(2), 1.0]
+        .enumerate()
+        .map(|(i, d)| {
+            let l = local.as_ref().map_or([0.0; 4], |l| l[i]);
+            std::array::from_fn(|k| l[k] + (1.0 - l[3]) * d[k])
         })
         .collect())
 }
@@ -106,26 +126,12 @@ pub(crate) fn composite_pixels(
     pixel_count: usize,
 ) -> Result<Vec<[f32; 4]>> {
     let fresnel = target_pixels(layers, &format!("{object}.fresnel"), false, pixel_count)?;
-    let distant = target_pixels(
-        layers,
-        &format!("{object}.specular_distant"),
-        false,
-        pixel_count,
-    )?;
-    let local = target_pixels(
-        layers,
-        &format!("{object}.specular_local"),
-        true,
-        pixel_count,
-    )
-    .ok();
+    let specular = local_over_distant(layers, object, pixel_count, false)?;
     let diffuse = target_pixels(layers, &format!("{object}.diffuse"), false, pixel_count).ok();
     Ok((0..pixel_count)
         .map(|i| {
-            let (f, d) = (fresnel[i], distant[i]);
-            let l = local.as_ref().map_or([0.0; 4], |l| l[i]);
             let base = diffuse.as_ref().map_or([0.0; 4], |v| v[i]);
-            let c = |k: usize| base[k] + f[k] * (l[k] + (1.0 - l[3]) * d[k]);
+            let c = |k: usize| base[k] + fresnel[i][k] * specular[i][k];
             [c(0), c(1), c(2), 1.0]
         })
         .collect())

@@ -161,13 +161,9 @@ impl Pass for MirrorPass<'_> {
         "mirror"
     }
     fn accesses(&self) -> Vec<Access<'_>> {
-        let mut accesses = vec![
-            Access::level(self.target.color, self.target.level, Usage::ColorTarget),
-            Access::level(self.target.depth, self.target.level, Usage::DepthTarget),
-            Access::whole(&self.renderer.lut, Usage::Sampled),
-        ];
-        accesses.extend(self.cubes.iter().map(|c| Access::whole(c, Usage::Sampled)));
-        accesses
+        let mut sampled = vec![&self.renderer.lut];
+        sampled.extend(self.cubes.iter().copied());
+        self.target.accesses(&sampled)
     }
     fn record(&self, cmd: vk::CommandBuffer) -> GpuResult<()> {
         let r = self.renderer;

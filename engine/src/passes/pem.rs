@@ -8,7 +8,7 @@
 use super::target::Target;
 use crate::backend::{Buffer, Device, GpuResult, Image, Pipeline, PipelineDesc};
 use crate::gpu_scene::GpuMesh;
-use crate::graph::{Access, Pass, Usage};
+use crate::graph::{Access, Pass};
 use crate::shader_interface::{
     LOCAL_TEXGEN_BINDING, PEM_ATTRIBUTES, PTM_ATTRIBUTES, PemPush, TEXGEN_BINDING, Vertex, spirv,
 };
@@ -130,16 +130,7 @@ impl Pass for PemPass<'_> {
         self.name
     }
     fn accesses(&self) -> Vec<Access<'_>> {
-        let mut accesses = vec![
-            Access::level(self.target.color, self.target.level, Usage::ColorTarget),
-            Access::level(self.target.depth, self.target.level, Usage::DepthTarget),
-        ];
-        accesses.extend(
-            self.sampled
-                .iter()
-                .map(|i| Access::whole(i, Usage::Sampled)),
-        );
-        accesses
+        self.target.accesses(&self.sampled)
     }
     fn record(&self, cmd: vk::CommandBuffer) -> GpuResult<()> {
         self.target.render(self.device, cmd, || {

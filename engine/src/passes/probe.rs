@@ -4,7 +4,7 @@
 use super::target::{Target, draw_mesh};
 use crate::backend::{Buffer, Device, GpuResult, Image, Pipeline};
 use crate::gpu_scene::GpuMesh;
-use crate::graph::{Access, Pass, Usage};
+use crate::graph::{Access, Pass};
 use ash::vk;
 
 pub struct ProbePass<'a> {
@@ -25,16 +25,7 @@ impl Pass for ProbePass<'_> {
         "probe"
     }
     fn accesses(&self) -> Vec<Access<'_>> {
-        let mut accesses = vec![
-            Access::level(self.target.color, 0, Usage::ColorTarget),
-            Access::level(self.target.depth, 0, Usage::DepthTarget),
-        ];
-        accesses.extend(
-            self.sampled
-                .iter()
-                .map(|i| Access::whole(i, Usage::Sampled)),
-        );
-        accesses
+        self.target.accesses(&self.sampled)
     }
     fn record(&self, cmd: vk::CommandBuffer) -> GpuResult<()> {
         self.target.render(self.device, cmd, || {

@@ -5,7 +5,7 @@
 use super::target::{Target, draw_mesh};
 use crate::backend::{Binding, Buffer, Device, GpuResult, Pipeline, PipelineDesc};
 use crate::gpu_scene::GpuScene;
-use crate::graph::{Access, Pass, Usage};
+use crate::graph::{Access, Pass};
 use crate::shader_interface::{RoomLight, RoomPush, Vertex, spirv};
 use ash::vk;
 use glam::{Mat4, Vec4};
@@ -193,10 +193,7 @@ impl Pass for RoomPass<'_> {
         self.name
     }
     fn accesses(&self) -> Vec<Access<'_>> {
-        vec![
-            Access::level(self.target.color, self.target.level, Usage::ColorTarget),
-            Access::level(self.target.depth, self.target.level, Usage::DepthTarget),
-        ]
+        self.target.accesses(&[])
     }
     fn record(&self, cmd: vk::CommandBuffer) -> GpuResult<()> {
         self.target.render(&self.renderer.device, cmd, || {

@@ -3,6 +3,7 @@
 
 use crate::backend::{Buffer, Device, GpuResult, Image};
 use crate::gpu_scene::GpuMesh;
+use crate::graph::{Access, Usage};
 use ash::vk;
 
 /// A colour + depth pair to render into (one MIP level, one layer).
@@ -24,7 +25,18 @@ pub struct Target<'a> {
     pub area: Option<vk::Rect2D>,
 }
 
-impl Target<'_> {
+impl<'a> Target<'a> {
+    /// What drawing into this target declares: its colour and depth level,
+    /// then every image in `sampled`.
+    pub fn accesses(&self, sampled: &[&'a Image]) -> Vec<Access<'a>> {
+        let mut accesses = vec![
+            Access::level(self.color, self.level, Usage::ColorTarget),
+            Access::level(self.depth, self.level, Usage::DepthTarget),
+        ];
+        accesses.extend(sampled.iter().map(|i| Access::whole(i, Usage::Sampled)));
+        accesses
+    }
+
     pub fn extent(&self) -> vk::Extent2D {
         let (width, height) = self.color.desc.mip_extent(self.level);
         vk::Extent2D { width, height }
