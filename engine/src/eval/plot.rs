@@ -144,7 +144,7 @@ pub fn xy_chart(path: &Path, spec: &ChartSpec) -> Result<()> {
     let drawn = if spec.log_x {
         draw(&mut rgb, spec, padded_log(xs()).log_scale(), y)
     } else {
-        draw(&mut rgb, spec, padded_linear(xs(), 0.05), y)
+        draw(&mut rgb, spec, padded_linear_sides(xs(), 0.05, 0.18), y)
     };
     drawn.with_context(|| format!("drawing {}", path.display()))?;
     let mut png = Vec::new();
@@ -234,17 +234,23 @@ where
 /// `[min, max]` of `values` widened by `margin` of the span each side (a
 /// single value by 10 % of itself, or 1); `0..1` when there are none.
 fn padded_linear(values: impl Iterator<Item = f64>, margin: f64) -> Range<f64> {
+    padded_linear_sides(values, margin, margin)
+}
+
+/// As [`padded_linear`] with its own margin on the high side (room for
+/// point labels, which are drawn to the right of their points).
+fn padded_linear_sides(values: impl Iterator<Item = f64>, low: f64, high: f64) -> Range<f64> {
     let Some((lo, hi)) = min_max(values) else {
         return 0.0..1.0;
     };
-    let pad = if hi > lo {
-        (hi - lo) * margin
+    let span = if hi > lo {
+        hi - lo
     } else if lo != 0.0 {
-        lo.abs() * 0.1
+        lo.abs()
     } else {
-        1.0
+        10.0
     };
-    (lo - pad)..(hi + pad)
+    (lo - span * low)..(hi + span * high)
 }
 
 /// As [`padded_linear`] for positive values, by factors: `1..10` when none.
