@@ -20,8 +20,9 @@ pub struct Cli {
 
 #[derive(Subcommand, Debug)]
 pub enum Command {
-    /// Measure the static-EM frame against the bare one-texture pass,
-    /// interleaved in one run, and write bench.json.
+    /// Measure the bare, static-EM and layered-PEM frames, the PEM built up
+    /// pass by pass, at the same views between samples, interleaved in one
+    /// run (--frames = frames per view); writes bench.json.
     Bench(PlayArgs),
     /// Infer each reflector's layered environment maps for orbit samples by
     /// least squares against the traced layers (tracing them if missing),
