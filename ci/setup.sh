@@ -13,6 +13,7 @@ packages=(
   libshaderc-dev          # libshaderc_combined.a
   glslang-dev             # static glslang archives shaderc_combined needs
   spirv-tools             # libSPIRV-Tools*.a
+  g++                     # nv-flip-sys builds NVIDIA's FLIP (C++) for engine eval
 )
 
 missing=()
