@@ -109,6 +109,29 @@ fn main_job_compiles_what_is_missing_then_plays_every_mode() {
         text(&stale)
     );
 
+    // The bench measures every variant at the same views (maps compiled above).
+    let o = engine(&[
+        "bench",
+        "--scene",
+        scene.to_str().expect("utf-8"),
+        "--size",
+        "64x48",
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+        "--out",
+        out.to_str().expect("utf-8"),
+        "--validate",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let bench: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("bench.json")).expect("bench.json"))
+            .expect("JSON");
+    let rows = bench["rows"].as_array().expect("rows");
+    assert_eq!(rows.len(), 6, "{bench}");
+    assert!(rows.iter().all(|r| r["frame_ms_median"].as_f64().is_some_and(|v| v > 0.0)));
+
     // Every mode and knob plays cleanly (sphere PEMs are inferred on first use).
     for extra in [
         &["--mode", "ptm"][..],
