@@ -1,6 +1,7 @@
 //! Leaf decode time the way `codec-report` measures it (playback along the
 //! parameter path, default cache lifetimes, f16 output, an untimed pass
-//! first), per texture, plus a hash of every decoded texel (f32 and f16
+//! first), per texture — wall time and this thread's CPU time, which a
+//! shared machine disturbs less — plus a hash of every decoded texel (f32 and f16
 //! outputs) so two builds can be checked for identical results.
 //!
 //! `cargo run --release -p codec --example decode_timing -- [CONTAINER] [--reps N] [--hash] [--texture I]`
@@ -19,6 +20,26 @@ fn fnv(h: &mut u64, bytes: impl IntoIterator<Item = u8>) {
         *h ^= b as u64;
         *h = h.wrapping_mul(0x100_0000_01b3);
     }
+}
+
+/// This thread's CPU time in ms.
+fn cpu_ms() -> f64 {
+    let mut t = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `t` is a valid timespec for the call to fill.
+    unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut t) };
+    t.tv_sec as f64 * 1e3 + t.tv_nsec as f64 * 1e-6
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len() as f64
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -44,33 +65,35 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             Container::from_bytes(bytes)?
         }
     };
-    let mut all = Vec::new();
+    let (mut all, mut all_cpu) = (Vec::new(), Vec::new());
     for (ti, t) in c.textures().iter().enumerate() {
         if only.is_some_and(|o| o != ti) {
             continue;
         }
         let mut out = vec![f16::ZERO; t.layout.texels() * 4];
         let mut cache = DecodeCache::default();
-        let mut times = Vec::new();
+        let (mut times, mut cpu) = (Vec::new(), Vec::new());
         for pass in 0..=reps {
             for s1 in 0..t.grid.n1 {
                 for s0 in 0..t.grid.n0 {
-                    let start = Instant::now();
+                    let (start, c0) = (Instant::now(), cpu_ms());
                     cache.decode_leaf_all(&c, t.id.object, t.id.layer, [s0, s1], &mut out)?;
                     let ms = start.elapsed().as_secs_f64() * 1e3;
+                    let c1 = cpu_ms();
                     cache.end_frame();
                     if pass > 0 {
                         times.push(ms);
+                        cpu.push(c1 - c0);
                     }
                 }
             }
             cache.clear();
         }
         all.extend_from_slice(&times);
-        times.sort_by(f64::total_cmp);
+        all_cpu.extend_from_slice(&cpu);
         let l = t.layout;
         print!(
-            "texture ({}, {}) {}x{}x{} ch {} mips {}: median {:.3} ms over {} decodes",
+            "texture ({}, {}) {}x{}x{} ch {} mips {}: median {:.3} ms wall, {:.3} ms cpu (mean {:.3}) over {} decodes",
             t.id.object,
             t.id.layer,
             l.width,
@@ -78,7 +101,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             l.faces,
             l.channels,
             l.mips,
-            times[times.len() / 2],
+            median(&mut times),
+            median(&mut cpu),
+            mean(&cpu),
             times.len()
         );
         if hash {
@@ -102,10 +127,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         println!();
     }
-    all.sort_by(f64::total_cmp);
     println!(
-        "all: median {:.3} ms over {} decodes",
-        all[all.len() / 2],
+        "all: median {:.3} ms wall, {:.3} ms cpu over {} decodes",
+        median(&mut all),
+        median(&mut all_cpu),
         all.len()
     );
     Ok(())
