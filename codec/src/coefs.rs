@@ -255,11 +255,51 @@ fn decode_mag(r: &mut Reader, cc: &mut ClassCtx, band: usize) -> Result<u32, &'s
 /// Decodes one image coded by [`encode_image`] and *adds* it to `out`
 /// (`channels` planes of `w × h`, planar). Bad data gives an error, never a
 /// panic or an out-of-range write.
+///
+/// Runs as AVX2 code where the CPU has it (chosen at run time; the
+/// arithmetic is the same operations in the same order, and Rust never
+/// fuses multiply-adds, so results are bit-identical either way).
 #[allow(clippy::too_many_arguments)]
 pub fn decode_image_add(
     r: &mut Reader,
     ctx: &mut Contexts,
-    dct: &mut Dct8,
+    dct: &Dct8,
+    w: usize,
+    h: usize,
+    channels: usize,
+    step: f32,
+    out: &mut [f32],
+) -> Result<(), &'static str> {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2, checked just above.
+        return unsafe { decode_image_add_avx2(r, ctx, dct, w, h, channels, step, out) };
+    }
+    decode_image_add_impl(r, ctx, dct, w, h, channels, step, out)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn decode_image_add_avx2(
+    r: &mut Reader,
+    ctx: &mut Contexts,
+    dct: &Dct8,
+    w: usize,
+    h: usize,
+    channels: usize,
+    step: f32,
+    out: &mut [f32],
+) -> Result<(), &'static str> {
+    decode_image_add_impl(r, ctx, dct, w, h, channels, step, out)
+}
+
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn decode_image_add_impl(
+    r: &mut Reader,
+    ctx: &mut Contexts,
+    dct: &Dct8,
     w: usize,
     h: usize,
     channels: usize,
@@ -272,6 +312,7 @@ pub fn decode_image_add(
     let (bw, bh) = block_grid(w, h);
     let mut coded = vec![false; bw];
     let mut dc_above = vec![0i32; bw];
+    // Dequantised coefficients in raster order; all zero between blocks.
     let mut blk = [0.0f32; NN];
     for c in 0..channels {
         let cc = &mut ctx.class[class_of(c)];
@@ -281,51 +322,46 @@ pub fn decode_image_add(
         for by in 0..bh {
             let mut left_coded = false;
             let mut dc_left = 0;
+            let y0 = by * N;
+            let ys = N.min(h - y0);
             for bx in 0..bw {
                 let pred = if bx == 0 { dc_above[0] } else { dc_left };
                 let nctx = left_coded as usize + coded[bx] as usize;
                 let is_coded = r.bit(&mut cc.coded[nctx]);
-                let mut q = [0i32; NN];
-                let mut any_ac = false;
-                if is_coded {
-                    any_ac = decode_block(r, cc, &mut q)?;
-                }
-                let dc = q[0].checked_add(pred).ok_or("DC overflow")?;
-                q[0] = dc;
+                let (q0, any_ac) = if is_coded {
+                    decode_block(r, cc, step, &mut blk)?
+                } else {
+                    (0, false)
+                };
+                let dc = q0.checked_add(pred).ok_or("DC overflow")?;
                 left_coded = is_coded;
                 coded[bx] = is_coded;
                 dc_left = dc;
                 dc_above[bx] = dc;
                 let x0 = bx * N;
-                let y0 = by * N;
                 let xs = N.min(w - x0);
-                let ys = N.min(h - y0);
+                let rows = plane[y0 * w + x0..].chunks_mut(w).take(ys);
                 if !any_ac {
                     if dc == 0 {
                         continue;
                     }
                     // DC-only block: a constant (orthonormal DC gain is 1/8).
                     let v = dc as f32 * step * 0.125;
-                    for y in 0..ys {
-                        plane[(y0 + y) * w + x0..][..xs]
-                            .iter_mut()
-                            .for_each(|p| *p += v);
+                    for row in rows {
+                        row[..xs].iter_mut().for_each(|p| *p += v);
                     }
                     continue;
                 }
-                blk.iter_mut().for_each(|v| *v = 0.0);
-                for (i, &zz) in ZIGZAG.iter().enumerate() {
-                    if q[i] != 0 {
-                        blk[zz] = q[i] as f32 * step;
-                    }
+                if dc != 0 {
+                    blk[0] = dc as f32 * step;
                 }
                 dct.inverse(&mut blk);
-                for y in 0..ys {
-                    let row = &mut plane[(y0 + y) * w + x0..][..xs];
-                    for (p, v) in row.iter_mut().zip(&blk[y * N..]) {
+                for (row, src) in rows.zip(blk.chunks_exact(N)) {
+                    for (p, v) in row[..xs].iter_mut().zip(src) {
                         *p += v;
                     }
                 }
+                blk = [0.0; NN];
             }
         }
     }
@@ -335,14 +371,19 @@ pub fn decode_image_add(
     Ok(())
 }
 
-/// Returns whether any AC coefficient is nonzero.
+/// Decodes one coded block: writes its dequantised AC coefficients into
+/// `blk` (raster order, which must be all zero) and returns the quantised
+/// DC residual and whether any AC coefficient is nonzero.
+#[inline(always)]
 fn decode_block(
     r: &mut Reader,
     cc: &mut ClassCtx,
-    q: &mut [i32; NN],
-) -> Result<bool, &'static str> {
+    step: f32,
+    blk: &mut [f32; NN],
+) -> Result<(i32, bool), &'static str> {
+    let mut q0 = 0;
     let mut any_ac = false;
-    for (i, qi) in q.iter_mut().enumerate() {
+    for (i, &zz) in ZIGZAG.iter().enumerate() {
         let sig = if i < NN - 1 {
             r.bit(&mut cc.sig[i])
         } else {
@@ -353,8 +394,13 @@ fn decode_block(
         }
         let m = decode_mag(r, cc, i.min(1))? + 1;
         let m = i32::try_from(m).map_err(|_| "magnitude overflow")?;
-        *qi = if r.bypass() { -m } else { m };
-        any_ac |= i > 0;
+        let v = if r.bypass() { -m } else { m };
+        if i == 0 {
+            q0 = v;
+        } else {
+            blk[zz] = v as f32 * step;
+            any_ac = true;
+        }
         if i == NN - 1 || r.bit(&mut cc.last[i]) {
             break;
         }
@@ -362,7 +408,7 @@ fn decode_block(
             return Err("range decoder rejected the data");
         }
     }
-    Ok(any_ac)
+    Ok((q0, any_ac))
 }
 
 #[cfg(test)]
