@@ -275,7 +275,7 @@ pub fn decode_image_add(
         // SAFETY: the CPU supports AVX2, checked just above.
         return unsafe { decode_image_add_avx2(r, ctx, dct, w, h, channels, step, out) };
     }
-    decode_image_add_impl(r, ctx, dct, w, h, channels, step, out)
+    decode_image_add_impl::<false>(r, ctx, dct, w, h, channels, step, out)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -291,12 +291,13 @@ unsafe fn decode_image_add_avx2(
     step: f32,
     out: &mut [f32],
 ) -> Result<(), &'static str> {
-    decode_image_add_impl(r, ctx, dct, w, h, channels, step, out)
+    decode_image_add_impl::<true>(r, ctx, dct, w, h, channels, step, out)
 }
 
+/// `AVX2`: only ever instantiated as `true` inside [`decode_image_add_avx2`].
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn decode_image_add_impl(
+fn decode_image_add_impl<const AVX2: bool>(
     r: &mut Reader,
     ctx: &mut Contexts,
     dct: &Dct8,
@@ -355,6 +356,15 @@ fn decode_image_add_impl(
                 if dc != 0 {
                     blk[0] = dc as f32 * step;
                 }
+                #[cfg(target_arch = "x86_64")]
+                if AVX2 {
+                    // SAFETY: AVX2 code is only instantiated behind the
+                    // run-time check in `decode_image_add`.
+                    unsafe { crate::dct::inverse_avx2(dct, &mut blk) };
+                } else {
+                    dct.inverse(&mut blk);
+                }
+                #[cfg(not(target_arch = "x86_64"))]
                 dct.inverse(&mut blk);
                 for (row, src) in rows.zip(blk.chunks_exact(N)) {
                     for (p, v) in row[..xs].iter_mut().zip(src) {

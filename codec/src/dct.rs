@@ -83,60 +83,201 @@ impl Twiddles {
 /// once (the columns, then the rows of the transposed block).
 type Lanes = [f32; N];
 
-#[inline(always)]
-fn lanes(f: impl Fn(usize) -> f32) -> Lanes {
-    std::array::from_fn(f)
+macro_rules! lanewise {
+    ($out:ident[$l:ident] = $e:expr) => {
+        for $l in 0..N {
+            $out[$l] = $e;
+        }
+    };
 }
 
 /// Orthonormal inverse DCT (scaling, then rustdct's `Type2And3Butterfly8`
 /// DCT-III, operation for operation) of the 8 signals whose k-th
-/// coefficients are `v[k]`, lane-wise. Every lane computes exactly what
-/// rustdct computes for one signal, so results are bit-identical to it.
+/// coefficients are `v[k]`, lane-wise, in place. Every lane computes
+/// exactly what rustdct computes for one signal, so results are
+/// bit-identical to it.
 #[inline(always)]
-fn idct8_lanes(v: &[Lanes; N], tw: &Twiddles) -> [Lanes; N] {
+fn idct8_lanes(v: &mut [Lanes; N], tw: &Twiddles) {
     const F: f32 = std::f32::consts::FRAC_1_SQRT_2;
-    let x: [Lanes; N] = std::array::from_fn(|k| {
-        let s = if k == 0 { S0X2 } else { SK };
-        lanes(|l| v[k][l] * s)
-    });
-    // Evens: the length-4 DCT-III of [x0, x2, x4, x6].
-    let half_0 = lanes(|l| x[0][l] * 0.5);
-    let frac_1 = lanes(|l| x[4][l] * F);
-    let e0 = lanes(|l| half_0[l] + frac_1[l]);
-    let e2 = lanes(|l| half_0[l] - frac_1[l]);
-    let (r4, i4) = tw.t4;
-    let lower = lanes(|l| x[2][l] * r4 + x[6][l] * i4);
-    let upper = lanes(|l| x[2][l] * i4 - x[6][l] * r4);
-    let ev = [
-        lanes(|l| e0[l] + lower[l]),
-        lanes(|l| e2[l] + upper[l]),
-        lanes(|l| e2[l] - upper[l]),
-        lanes(|l| e0[l] - lower[l]),
-    ];
-    // Odds: a length-2 DCT-III and DST-III, then the twiddled merge.
-    let n1a = lanes(|l| (x[1][l] * 2.0) * 0.5);
-    let n1b = lanes(|l| (x[3][l] + x[5][l]) * F);
-    let n1 = [lanes(|l| n1a[l] + n1b[l]), lanes(|l| n1a[l] - n1b[l])];
-    let n3a = lanes(|l| (x[3][l] - x[5][l]) * F);
-    let n3b = lanes(|l| (x[7][l] * 2.0) * 0.5);
-    let n3 = [lanes(|l| n3a[l] + n3b[l]), lanes(|l| n3a[l] - n3b[l])];
-    let mut out = [[0.0f32; N]; N];
-    for i in 0..2 {
-        let (re, im) = tw.t8[i];
-        let lower4 = lanes(|l| n1[i][l] * re + n3[i][l] * im);
-        let upper4 = lanes(|l| n1[i][l] * im - n3[i][l] * re);
-        let (lo3, up3) = (ev[i], ev[3 - i]);
-        out[i] = lanes(|l| lo3[l] + lower4[l]);
-        out[7 - i] = lanes(|l| lo3[l] - lower4[l]);
-        out[3 - i] = lanes(|l| up3[l] + upper4[l]);
-        out[4 + i] = lanes(|l| up3[l] - upper4[l]);
+    let [x0, x1, x2, x3, x4, x5, x6, x7] = v;
+    for l in 0..N {
+        x0[l] *= S0X2;
     }
-    out
+    for x in [&mut *x1, x2, x3, x4, x5, x6, x7] {
+        for l in 0..N {
+            x[l] *= SK;
+        }
+    }
+    let (x0, x1, x2, x3, x4, x5, x6, x7) = (*x0, *x1, *x2, *x3, *x4, *x5, *x6, *x7);
+    let mut t = [[0.0f32; N]; 16];
+    let [
+        e0,
+        e1,
+        e2,
+        e3,
+        ev0,
+        ev1,
+        ev2,
+        ev3,
+        n1a,
+        n1b,
+        n3a,
+        n3b,
+        o0,
+        o1,
+        o2,
+        o3,
+    ] = &mut t;
+    // Evens: the length-4 DCT-III of [x0, x2, x4, x6].
+    let (r4, i4) = tw.t4;
+    lanewise!(e0[l] = x0[l] * 0.5 + x4[l] * F);
+    lanewise!(e2[l] = x0[l] * 0.5 - x4[l] * F);
+    lanewise!(e1[l] = x2[l] * r4 + x6[l] * i4);
+    lanewise!(e3[l] = x2[l] * i4 - x6[l] * r4);
+    lanewise!(ev0[l] = e0[l] + e1[l]);
+    lanewise!(ev1[l] = e2[l] + e3[l]);
+    lanewise!(ev2[l] = e2[l] - e3[l]);
+    lanewise!(ev3[l] = e0[l] - e1[l]);
+    // Odds: a length-2 DCT-III and DST-III, then the twiddled merge.
+    lanewise!(n1a[l] = (x1[l] * 2.0) * 0.5 + (x3[l] + x5[l]) * F);
+    lanewise!(n1b[l] = (x1[l] * 2.0) * 0.5 - (x3[l] + x5[l]) * F);
+    lanewise!(n3a[l] = (x3[l] - x5[l]) * F + (x7[l] * 2.0) * 0.5);
+    lanewise!(n3b[l] = (x3[l] - x5[l]) * F - (x7[l] * 2.0) * 0.5);
+    let ((r0, i0), (r1, i1)) = (tw.t8[0], tw.t8[1]);
+    lanewise!(o0[l] = n1a[l] * r0 + n3a[l] * i0);
+    lanewise!(o1[l] = n1a[l] * i0 - n3a[l] * r0);
+    lanewise!(o2[l] = n1b[l] * r1 + n3b[l] * i1);
+    lanewise!(o3[l] = n1b[l] * i1 - n3b[l] * r1);
+    let [y0, y1, y2, y3, y4, y5, y6, y7] = v;
+    lanewise!(y0[l] = ev0[l] + o0[l]);
+    lanewise!(y7[l] = ev0[l] - o0[l]);
+    lanewise!(y3[l] = ev3[l] + o1[l]);
+    lanewise!(y4[l] = ev3[l] - o1[l]);
+    lanewise!(y1[l] = ev1[l] + o2[l]);
+    lanewise!(y6[l] = ev1[l] - o2[l]);
+    lanewise!(y2[l] = ev2[l] + o3[l]);
+    lanewise!(y5[l] = ev2[l] - o3[l]);
 }
 
 #[inline(always)]
-fn transpose(m: &[Lanes; N]) -> [Lanes; N] {
-    std::array::from_fn(|i| std::array::from_fn(|j| m[j][i]))
+fn transpose(m: &mut [Lanes; N]) {
+    for i in 0..N {
+        for j in i + 1..N {
+            let t = m[i][j];
+            m[i][j] = m[j][i];
+            m[j][i] = t;
+        }
+    }
+}
+
+/// The same inverse as [`Dct8::inverse`] (the same operations in the
+/// same order on every lane, so bit-identical), on AVX registers: one row
+/// per register for the column pass, an 8×8 transpose, the row pass, and
+/// the transpose back.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(crate) unsafe fn inverse_avx2(dct: &Dct8, b: &mut [f32; NN]) {
+    use std::arch::x86_64::*;
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn pass(x: &mut [__m256; N], tw: &Twiddles) {
+        // Arithmetic intrinsics are safe here from Rust 1.87 on; the block
+        // keeps the declared MSRV (1.85) building.
+        #[allow(unused_unsafe)]
+        unsafe {
+            let c = _mm256_set1_ps;
+            let (mul, add, sub) = (_mm256_mul_ps, _mm256_add_ps, _mm256_sub_ps);
+            let f = c(std::f32::consts::FRAC_1_SQRT_2);
+            let (half, two) = (c(0.5), c(2.0));
+            x[0] = mul(x[0], c(S0X2));
+            for v in &mut x[1..] {
+                *v = mul(*v, c(SK));
+            }
+            let (r4, i4) = (c(tw.t4.0), c(tw.t4.1));
+            let e0 = add(mul(x[0], half), mul(x[4], f));
+            let e2 = sub(mul(x[0], half), mul(x[4], f));
+            let e1 = add(mul(x[2], r4), mul(x[6], i4));
+            let e3 = sub(mul(x[2], i4), mul(x[6], r4));
+            let ev0 = add(e0, e1);
+            let ev1 = add(e2, e3);
+            let ev2 = sub(e2, e3);
+            let ev3 = sub(e0, e1);
+            let h1 = mul(mul(x[1], two), half);
+            let s35 = mul(add(x[3], x[5]), f);
+            let d35 = mul(sub(x[3], x[5]), f);
+            let h7 = mul(mul(x[7], two), half);
+            let n1a = add(h1, s35);
+            let n1b = sub(h1, s35);
+            let n3a = add(d35, h7);
+            let n3b = sub(d35, h7);
+            let (r0, i0) = (c(tw.t8[0].0), c(tw.t8[0].1));
+            let (r1, i1) = (c(tw.t8[1].0), c(tw.t8[1].1));
+            let o0 = add(mul(n1a, r0), mul(n3a, i0));
+            let o1 = sub(mul(n1a, i0), mul(n3a, r0));
+            let o2 = add(mul(n1b, r1), mul(n3b, i1));
+            let o3 = sub(mul(n1b, i1), mul(n3b, r1));
+            *x = [
+                add(ev0, o0),
+                add(ev1, o2),
+                add(ev2, o3),
+                add(ev3, o1),
+                sub(ev3, o1),
+                sub(ev2, o3),
+                sub(ev1, o2),
+                sub(ev0, o0),
+            ];
+        }
+    }
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn transpose(r: &mut [__m256; N]) {
+        #[allow(unused_unsafe)]
+        unsafe {
+            let t0 = _mm256_unpacklo_ps(r[0], r[1]);
+            let t1 = _mm256_unpackhi_ps(r[0], r[1]);
+            let t2 = _mm256_unpacklo_ps(r[2], r[3]);
+            let t3 = _mm256_unpackhi_ps(r[2], r[3]);
+            let t4 = _mm256_unpacklo_ps(r[4], r[5]);
+            let t5 = _mm256_unpackhi_ps(r[4], r[5]);
+            let t6 = _mm256_unpacklo_ps(r[6], r[7]);
+            let t7 = _mm256_unpackhi_ps(r[6], r[7]);
+            let u0 = _mm256_shuffle_ps::<0x44>(t0, t2);
+            let u1 = _mm256_shuffle_ps::<0xEE>(t0, t2);
+            let u2 = _mm256_shuffle_ps::<0x44>(t1, t3);
+            let u3 = _mm256_shuffle_ps::<0xEE>(t1, t3);
+            let u4 = _mm256_shuffle_ps::<0x44>(t4, t6);
+            let u5 = _mm256_shuffle_ps::<0xEE>(t4, t6);
+            let u6 = _mm256_shuffle_ps::<0x44>(t5, t7);
+            let u7 = _mm256_shuffle_ps::<0xEE>(t5, t7);
+            *r = [
+                _mm256_permute2f128_ps::<0x20>(u0, u4),
+                _mm256_permute2f128_ps::<0x20>(u1, u5),
+                _mm256_permute2f128_ps::<0x20>(u2, u6),
+                _mm256_permute2f128_ps::<0x20>(u3, u7),
+                _mm256_permute2f128_ps::<0x31>(u0, u4),
+                _mm256_permute2f128_ps::<0x31>(u1, u5),
+                _mm256_permute2f128_ps::<0x31>(u2, u6),
+                _mm256_permute2f128_ps::<0x31>(u3, u7),
+            ];
+        }
+    }
+    // SAFETY: AVX2 is available (the caller's contract); every load and
+    // store is 8 floats inside the 64-float block.
+    unsafe {
+        let p = b.as_mut_ptr();
+        let mut r: [__m256; N] = std::array::from_fn(|y| _mm256_loadu_ps(p.add(y * N)));
+        pass(&mut r, &dct.tw);
+        transpose(&mut r);
+        pass(&mut r, &dct.tw);
+        transpose(&mut r);
+        for (y, v) in r.iter().enumerate() {
+            _mm256_storeu_ps(p.add(y * N), *v);
+        }
+    }
 }
 
 impl Dct8 {
@@ -152,14 +293,19 @@ impl Dct8 {
 
     /// Inverse of [`Dct8::forward`]: columns, then rows, each the scaled
     /// DCT-III of rustdct (bit-identical to it), eight signals at a time.
-    #[inline]
+    #[inline(always)]
     pub fn inverse(&self, b: &mut [f32; NN]) {
-        let rows: [Lanes; N] = std::array::from_fn(|y| std::array::from_fn(|x| b[y * N + x]));
+        let mut m = [[0.0f32; N]; N];
+        for (row, src) in m.iter_mut().zip(b.chunks_exact(N)) {
+            row.copy_from_slice(src);
+        }
         // Row vectors as lanes: the column transforms, all 8 at once.
-        let cols = idct8_lanes(&rows, &self.tw);
+        idct8_lanes(&mut m, &self.tw);
         // Transposed, the row transforms run the same way.
-        let out = transpose(&idct8_lanes(&transpose(&cols), &self.tw));
-        for (dst, src) in b.chunks_exact_mut(N).zip(&out) {
+        transpose(&mut m);
+        idct8_lanes(&mut m, &self.tw);
+        transpose(&mut m);
+        for (dst, src) in b.chunks_exact_mut(N).zip(&m) {
             dst.copy_from_slice(src);
         }
     }
