@@ -10,10 +10,14 @@
 //!
 //! What is cached for a node is the *prefix sum* of the levels from the
 //! root down to that node (its decoded leaf-so-far), not the node's detail
-//! alone: a leaf then costs one image addition (its own level) instead of
-//! one per level, with the same per-level lifetimes. The MIP reconstruction
-//! and the inverse colour/gamma transform are fused into one pass that
-//! writes the caller's slice (the engine's mapped staging buffer) directly.
+//! alone: a level costs one copy of its parent's prefix (still in cache
+//! when the decoder adds its own blocks to it) and the leaf's write pass
+//! reads one image, with the same per-level lifetimes. The MIP
+//! reconstruction and the inverse colour/gamma transform are fused into one
+//! pass that writes the caller's slice (the engine's mapped staging buffer)
+//! directly, on AVX2/F16C where the CPU has them. Results are bit-identical
+//! to the straightforward order of operations (parent + detail, + MIP
+//! prediction) the codec was first written with.
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -34,6 +38,18 @@ use crate::pyramid::Plan;
 pub trait OutTexel: Copy + Send {
     /// Converts `src` into `dst` (same length).
     fn convert(src: &[f32], dst: &mut [Self]);
+    /// A faster, bit-identical γ = 2 write of the first texels where the
+    /// CPU allows (see `write_rgba`); returns how many it wrote.
+    #[inline]
+    fn write_gamma2(
+        _img: &[f32],
+        _pred: Option<&[f32]>,
+        _n: usize,
+        _ch: usize,
+        _out: &mut [Self],
+    ) -> usize {
+        0
+    }
 }
 impl OutTexel for f32 {
     #[inline]
@@ -46,6 +62,22 @@ impl OutTexel for f16 {
     fn convert(src: &[f32], dst: &mut [Self]) {
         // SIMD (F16C) when the CPU has it.
         dst.convert_from_f32_slice(src);
+    }
+    #[inline]
+    fn write_gamma2(
+        img: &[f32],
+        pred: Option<&[f32]>,
+        n: usize,
+        ch: usize,
+        out: &mut [Self],
+    ) -> usize {
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("f16c") {
+            // SAFETY: both features were just detected.
+            return unsafe { write_gamma2_f16_avx2(img, pred, n, ch, out) };
+        }
+        let _ = (img, pred, n, ch, out);
+        0
     }
 }
 
@@ -120,7 +152,6 @@ pub struct DecodeCache {
     pool: Vec<Vec<f32>>,
     pred: Vec<f32>,
     pred_next: Vec<f32>,
-    sum0: Vec<f32>,
     stats: CacheStats,
 }
 
@@ -141,7 +172,6 @@ impl DecodeCache {
             pool: Vec::new(),
             pred: Vec::new(),
             pred_next: Vec::new(),
-            sum0: Vec::new(),
             stats: CacheStats::default(),
         }
     }
@@ -306,18 +336,18 @@ impl DecodeCache {
             what: "block vanished from the cache".into(),
         })?;
         cb.last_used = frame;
-        let plan = cb.plan.clone();
         let lb = tex.log2b();
-        let n_levels = plan.levels.len();
+        let n_levels = cb.plan.levels.len();
         let path: Vec<ImageKey> = (0..n_levels)
             .map(|level| ImageKey {
                 block,
                 level: level as u8,
-                node: plan.node_of(level, local, lb) as u16,
+                node: cb.plan.node_of(level, local, lb) as u16,
                 face: face as u8,
             })
             .collect();
         let leaf_key = path[n_levels - 1];
+        let leaf_cached = self.images.contains_key(&leaf_key);
         // Deepest cached prefix above the leaf; touching it touches its ancestors.
         let deepest = (0..n_levels - 1)
             .rev()
@@ -332,17 +362,16 @@ impl DecodeCache {
             }
         }
         let start = deepest.map_or(0, |d| d + 1);
-        let leaf_cached = self.images.contains_key(&leaf_key);
         self.stats.hits += deepest.map_or(0, |d| d as u64 + 1) + leaf_cached as u64;
-        self.stats.misses += (n_levels - 1 - start) as u64 + !leaf_cached as u64;
-        if start < n_levels - 1 || !leaf_cached {
+        if !leaf_cached {
+            self.stats.misses += (n_levels - start) as u64;
             // Take the bytes out while decoding (the decoder borrows self).
             let bytes = self
                 .blocks
                 .get_mut(&block)
                 .map(|b| std::mem::take(&mut b.bytes))
                 .unwrap_or_default();
-            let result = self.decode_path(tex, &bytes, block, &path, deepest, leaf_cached);
+            let result = self.decode_path(tex, &bytes, block, &path, start);
             if let Some(b) = self.blocks.get_mut(&block) {
                 b.bytes = bytes;
             }
@@ -352,14 +381,8 @@ impl DecodeCache {
             block,
             what: "decoded image vanished from the cache".into(),
         };
-        let parent = &self
-            .images
-            .get(&path[n_levels - 2])
-            .ok_or_else(missing)?
-            .data;
-        let detail = &self.images.get(&leaf_key).ok_or_else(missing)?.data;
-        // Leaf = parent prefix + leaf detail; MIP m also adds the decimated
-        // finest level (box is linear: box(p + d) = box(p) + box(d)).
+        let leaf = &self.images.get(&leaf_key).ok_or_else(missing)?.data;
+        // MIP m adds the decimated finest level (the leaf's own MIP 0).
         let l = &tex.layout;
         let ch = l.channels as usize;
         let gamma = Gamma(c.gamma);
@@ -367,14 +390,13 @@ impl DecodeCache {
         for mip in 0..=last_mip {
             let (w, h) = l.mip_size(mip);
             let n = w * h;
-            let range = off..off + n * ch;
-            let (Some(p), Some(d)) = (parent.get(range.clone()), detail.get(range)) else {
+            let Some(img) = leaf.get(off..off + n * ch) else {
                 return Err(missing());
             };
             if mip == 1 {
                 let (pw, ph) = l.mip_size(0);
                 self.pred.resize(n * ch, 0.0);
-                box_down(&self.sum0, pw, ph, ch, &mut self.pred);
+                box_down(&leaf[..pw * ph * ch], pw, ph, ch, &mut self.pred);
             } else if mip > 1 {
                 let (pw, ph) = l.mip_size(mip - 1);
                 self.pred_next.resize(n * ch, 0.0);
@@ -386,33 +408,23 @@ impl DecodeCache {
                     got: 0,
                     expected: n * 4,
                 })?;
-                let pred = if mip > 0 {
-                    Some(&self.pred[..n * ch])
-                } else {
-                    None
-                };
-                let keep = (mip == 0 && last_mip > 0).then_some(&mut self.sum0);
-                write_rgba(gamma, [p, d], pred, n, ch, o, keep);
-            } else if mip == 0 && last_mip > 0 {
-                self.sum0.clear();
-                self.sum0.extend(p.iter().zip(d).map(|(a, b)| a + b));
+                let pred = (mip > 0).then(|| &self.pred[..n * ch]);
+                write_rgba(gamma, img, pred, n, ch, o);
             }
             off += n * ch;
         }
         Ok(())
     }
 
-    /// Decodes the prefix sums below level `deepest` (cached) down to the
-    /// leaf's parent, caching each, and the leaf's own detail image unless
-    /// `leaf_cached`.
+    /// Decodes the prefix sums of `path[start..]` (the leaf's included),
+    /// each from its parent's (cached) prefix, caching each.
     fn decode_path(
         &mut self,
         tex: &TextureInfo,
         bytes: &[u8],
         block: usize,
         path: &[ImageKey],
-        deepest: Option<usize>,
-        leaf_cached: bool,
+        start: usize,
     ) -> Result<()> {
         let view = BlockView::parse(bytes, tex, block)?;
         let n_levels = path.len();
@@ -421,31 +433,24 @@ impl DecodeCache {
         let len: usize = (0..l.mips)
             .map(|m| l.face_texels(m) * l.channels as usize)
             .sum();
-        let start = deepest.map_or(0, |d| d + 1);
-        if start < n_levels - 1 {
-            let mut cur = self.take_buffer(len);
-            match deepest.and_then(|d| self.images.get(&path[d])) {
-                Some(e) => cur.copy_from_slice(&e.data),
-                None => cur.fill(0.0),
-            }
-            for (level, key) in path.iter().enumerate().take(n_levels - 1).skip(start) {
-                self.decode_stream_add(tex, &view, block, *key, &mut cur)?;
-                let data = if level + 2 < n_levels {
-                    // A pooled buffer, not a fresh allocation (first touch faults).
-                    let mut copy = self.take_buffer(len);
-                    copy.copy_from_slice(&cur);
-                    copy
-                } else {
-                    std::mem::take(&mut cur)
-                };
-                self.insert(*key, data, n_levels - 1 - level, frame);
-            }
-        }
-        if !leaf_cached {
-            let mut detail = self.take_buffer(len);
-            detail.fill(0.0);
-            self.decode_stream_add(tex, &view, block, path[n_levels - 1], &mut detail)?;
-            self.insert(path[n_levels - 1], detail, 0, frame);
+        for (level, key) in path.iter().enumerate().skip(start) {
+            // A pooled buffer, not a fresh allocation (first touch faults).
+            let mut dst = self.take_buffer(len);
+            let src = match level {
+                0 => None,
+                _ => Some(
+                    &self
+                        .images
+                        .get(&path[level - 1])
+                        .ok_or(CodecError::BadBlock {
+                            block,
+                            what: "parent prefix vanished from the cache".into(),
+                        })?
+                        .data[..],
+                ),
+            };
+            decode_stream(&self.dct, tex, &view, block, *key, src, &mut dst)?;
+            self.insert(*key, dst, n_levels - 1 - level, frame);
         }
         Ok(())
     }
@@ -471,99 +476,106 @@ impl DecodeCache {
         v.resize(len, 0.0);
         v
     }
-
-    /// Decodes stream `k` and adds it into `acc` (one face, all MIPs, planar).
-    fn decode_stream_add(
-        &mut self,
-        tex: &TextureInfo,
-        view: &BlockView,
-        block: usize,
-        k: ImageKey,
-        acc: &mut [f32],
-    ) -> Result<()> {
-        let l = &tex.layout;
-        let ch = l.channels as usize;
-        let si = BlockView::stream_index(
-            &view.plan,
-            l.faces,
-            k.level as usize,
-            k.node as usize,
-            k.face as u32,
-        );
-        let corrupt = |what| CodecError::CorruptStream {
-            block,
-            stream: si,
-            what,
-        };
-        let (steps, bytes) = *view
-            .streams
-            .get(si)
-            .ok_or(corrupt("stream index out of range"))?;
-        if steps.iter().all(|&s| s == 0) {
-            return Ok(());
-        }
-        let mut r = Reader::new(bytes).ok_or(corrupt("stream is not whole words"))?;
-        let mut ctx = Contexts::default();
-        let mut off = 0;
-        for mip in 0..l.mips {
-            let (w, h) = l.mip_size(mip);
-            let n = w * h * ch;
-            let idx = *steps.get(mip as usize).ok_or(corrupt("missing step"))?;
-            let dst = acc
-                .get_mut(off..off + n)
-                .ok_or(corrupt("image larger than its buffer"))?;
-            if idx != 0 {
-                decode_image_add(&mut r, &mut ctx, &mut self.dct, w, h, ch, step_of(idx), dst)
-                    .map_err(corrupt)?;
-            }
-            off += n;
-        }
-        Ok(())
-    }
 }
 
-/// Planar coding-domain image (parent prefix + leaf detail, + optional
-/// MIP prediction) → interleaved linear RGBA, converted to `T` in bulk.
-/// With `keep`, the planar sums (before the colour transform) are stored
-/// there too: the next MIP level's prediction is decimated from them.
-#[allow(clippy::too_many_arguments)]
+/// Writes `dst` = `src` (the parent's prefix sum; zero at the root) + the
+/// image decoded from stream `k` (one face, all MIPs, planar). Image by
+/// image: a copy, then the decoder adds its blocks while the copy is still
+/// in cache.
+fn decode_stream(
+    dct: &Dct8,
+    tex: &TextureInfo,
+    view: &BlockView,
+    block: usize,
+    k: ImageKey,
+    src: Option<&[f32]>,
+    dst: &mut [f32],
+) -> Result<()> {
+    let l = &tex.layout;
+    let ch = l.channels as usize;
+    let si = BlockView::stream_index(
+        &view.plan,
+        l.faces,
+        k.level as usize,
+        k.node as usize,
+        k.face as u32,
+    );
+    let corrupt = |what| CodecError::CorruptStream {
+        block,
+        stream: si,
+        what,
+    };
+    let (steps, bytes) = *view
+        .streams
+        .get(si)
+        .ok_or(corrupt("stream index out of range"))?;
+    let mut reader = if steps.iter().all(|&s| s == 0) {
+        None
+    } else {
+        Some((
+            Reader::new(bytes).ok_or(corrupt("stream is not whole words"))?,
+            Contexts::default(),
+        ))
+    };
+    let mut off = 0;
+    for mip in 0..l.mips {
+        let (w, h) = l.mip_size(mip);
+        let n = w * h * ch;
+        let d = dst
+            .get_mut(off..off + n)
+            .ok_or(corrupt("image larger than its buffer"))?;
+        match src {
+            Some(s) => d.copy_from_slice(
+                s.get(off..off + n)
+                    .ok_or(corrupt("image larger than its parent"))?,
+            ),
+            None => d.fill(0.0),
+        }
+        if let Some((r, ctx)) = &mut reader {
+            let idx = *steps.get(mip as usize).ok_or(corrupt("missing step"))?;
+            if idx != 0 {
+                decode_image_add(r, ctx, dct, w, h, ch, step_of(idx), d).map_err(corrupt)?;
+            }
+        }
+        off += n;
+    }
+    Ok(())
+}
+
+/// Planar coding-domain image (the leaf's prefix sum, + the MIP
+/// prediction above MIP 0) → interleaved linear RGBA, converted to `T`.
 fn write_rgba<T: OutTexel>(
     g: Gamma,
-    img: [&[f32]; 2],
+    img: &[f32],
     pred: Option<&[f32]>,
     n: usize,
     ch: usize,
     out: &mut [T],
-    keep: Option<&mut Vec<f32>>,
 ) {
-    let keep = keep.map(|k| {
-        k.clear();
-        k.resize(n * ch, 0.0);
-        &mut k[..]
-    });
     if g.0 == 2.0 {
-        write_rgba_with(|v: f32| v * v.abs(), img, pred, n, ch, out, keep)
+        let done = T::write_gamma2(img, pred, n, ch, out);
+        write_rgba_with(|v: f32| v * v.abs(), img, pred, n, ch, out, done)
     } else {
-        write_rgba_with(|v: f32| g.inverse(v), img, pred, n, ch, out, keep)
+        write_rgba_with(|v: f32| g.inverse(v), img, pred, n, ch, out, 0)
     }
 }
 
+/// The portable write, from texel `from` on.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 fn write_rgba_with<T: OutTexel>(
     inv: impl Fn(f32) -> f32,
-    img: [&[f32]; 2],
+    img: &[f32],
     pred: Option<&[f32]>,
     n: usize,
     ch: usize,
     out: &mut [T],
-    mut keep: Option<&mut [f32]>,
+    from: usize,
 ) {
     const CHUNK: usize = 1024;
     let mut tmp = [0.0f32; CHUNK * 4];
     let mut sum = [[0.0f32; CHUNK]; 4];
-    for (chunk_i, dst) in out[..n * 4].chunks_mut(CHUNK * 4).enumerate() {
-        let base = chunk_i * CHUNK;
+    for (chunk_i, dst) in out[from * 4..n * 4].chunks_mut(CHUNK * 4).enumerate() {
+        let base = from + chunk_i * CHUNK;
         let m = dst.len() / 4;
         // Planes (+ prediction) for this chunk, then the colour transform.
         for (c, s) in sum.iter_mut().enumerate() {
@@ -572,17 +584,11 @@ fn write_rgba_with<T: OutTexel>(
                 s.fill(1.0);
                 continue;
             }
-            let (a, b) = (&img[0][c * n + base..][..m], &img[1][c * n + base..][..m]);
-            s.iter_mut()
-                .zip(a.iter().zip(b))
-                .for_each(|(o, (x, y))| *o = x + y);
+            s.copy_from_slice(&img[c * n + base..][..m]);
             if let Some(p) = pred {
                 s.iter_mut()
                     .zip(&p[c * n + base..][..m])
                     .for_each(|(a, b)| *a += b);
-            }
-            if let Some(k) = keep.as_deref_mut() {
-                k[c * n + base..][..m].copy_from_slice(s);
             }
         }
         // Colour transform in place (planar, vectorisable), then interleave.
@@ -602,6 +608,70 @@ fn write_rgba_with<T: OutTexel>(
     }
 }
 
+/// [`write_rgba`] for γ = 2 into f16, eight texels at a time on AVX2/F16C
+/// (the same operations in the same order as the portable path, and the
+/// same round-to-nearest-even conversion as `half`, so the same bits).
+/// Returns how many texels it wrote (a multiple of 8; the rest is left to
+/// the portable path).
+///
+/// # Safety
+/// The CPU must support AVX2 and F16C.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,f16c")]
+unsafe fn write_gamma2_f16_avx2(
+    img: &[f32],
+    pred: Option<&[f32]>,
+    n: usize,
+    ch: usize,
+    out: &mut [f16],
+) -> usize {
+    use std::arch::x86_64::*;
+    let n8 = n / 8 * 8;
+    let planes = &img[..n * ch];
+    let pred = pred.map(|p| &p[..n * ch]);
+    let out = &mut out[..n8 * 4];
+    // SAFETY: AVX2/F16C are available (the caller's contract); every load
+    // reads 8 floats at `c·n + i` with `i + 8 ≤ n8 ≤ n` inside the planes
+    // (length-checked above), every store writes 8 halves at `4i + 8j`,
+    // `j < 4`, inside `out[..4·n8]`.
+    unsafe {
+        let sign = _mm256_set1_ps(-0.0);
+        let inv = |v: __m256| _mm256_mul_ps(v, _mm256_andnot_ps(sign, v));
+        let load = |c: usize, i: usize| {
+            let v = _mm256_loadu_ps(planes.as_ptr().add(c * n + i));
+            match pred {
+                Some(p) => _mm256_add_ps(v, _mm256_loadu_ps(p.as_ptr().add(c * n + i))),
+                None => v,
+            }
+        };
+        let o = out.as_mut_ptr() as *mut __m128i;
+        for i in (0..n8).step_by(8) {
+            let (y, co, cg) = (load(0, i), load(1, i), load(2, i));
+            let a = if ch > 3 {
+                load(3, i)
+            } else {
+                _mm256_set1_ps(1.0)
+            };
+            let t = _mm256_sub_ps(y, cg);
+            let r = inv(_mm256_add_ps(t, co));
+            let g = inv(_mm256_add_ps(y, cg));
+            let b = inv(_mm256_sub_ps(t, co));
+            let [r, g, b, a] =
+                [r, g, b, a].map(|v| _mm256_cvtps_ph::<_MM_FROUND_TO_NEAREST_INT>(v));
+            let rg_lo = _mm_unpacklo_epi16(r, g);
+            let rg_hi = _mm_unpackhi_epi16(r, g);
+            let ba_lo = _mm_unpacklo_epi16(b, a);
+            let ba_hi = _mm_unpackhi_epi16(b, a);
+            let q = o.add(i / 2);
+            _mm_storeu_si128(q, _mm_unpacklo_epi32(rg_lo, ba_lo));
+            _mm_storeu_si128(q.add(1), _mm_unpackhi_epi32(rg_lo, ba_lo));
+            _mm_storeu_si128(q.add(2), _mm_unpacklo_epi32(rg_hi, ba_hi));
+            _mm_storeu_si128(q.add(3), _mm_unpackhi_epi32(rg_hi, ba_hi));
+        }
+    }
+    n8
+}
+
 /// Convenience: decode one whole leaf without keeping a cache.
 pub fn decode_leaf_all<T: OutTexel>(
     c: &Container,
@@ -615,3 +685,32 @@ pub fn decode_leaf_all<T: OutTexel>(
 
 /// Shared handle type for engines that decode on several threads.
 pub type SharedContainer = Arc<Container>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fast_f16_write_matches_the_portable_one() {
+        let mut seed = 3u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 40) as f32 / (1u64 << 24) as f32 - 0.3) * 40.0
+        };
+        // Lengths with and without an 8-texel tail; RGB and RGBA; with and
+        // without a MIP prediction; values spanning f16's range and beyond.
+        for (n, ch, with_pred) in [(64, 3, false), (67, 4, true), (5, 3, true), (1, 4, false)] {
+            let img: Vec<f32> = (0..n * ch).map(|_| next()).collect();
+            let pred: Vec<f32> = (0..n * ch).map(|_| next() * 0.1).collect();
+            let pred = with_pred.then_some(&pred[..]);
+            let mut fast = vec![f16::ZERO; n * 4];
+            let mut portable = vec![f16::ZERO; n * 4];
+            write_rgba(Gamma(2.0), &img, pred, n, ch, &mut fast);
+            write_rgba_with(|v: f32| v * v.abs(), &img, pred, n, ch, &mut portable, 0);
+            let bits = |v: &[f16]| v.iter().map(|h| h.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&fast), bits(&portable), "n {n}, ch {ch}");
+        }
+    }
+}
