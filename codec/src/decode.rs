@@ -193,13 +193,13 @@ impl DecodeCache {
         self.stats.evictions += (before - self.images.len()) as u64;
     }
 
-    /// Drops every cached image into the buffer pool (kept for reuse).
+    /// Drops every cached image into the buffer pool (kept for reuse): all
+    /// of them, beyond [`POOL_MAX`] — the memory was resident anyway, and
+    /// decoding again after a clear then allocates (and faults) nothing.
     pub fn clear(&mut self) {
         let pool = &mut self.pool;
         for (_, mut e) in self.images.drain() {
-            if pool.len() < POOL_MAX {
-                pool.push(std::mem::take(&mut e.data));
-            }
+            pool.push(std::mem::take(&mut e.data));
         }
         self.blocks.clear();
     }
@@ -393,13 +393,16 @@ impl DecodeCache {
             let Some(img) = leaf.get(off..off + n * ch) else {
                 return Err(missing());
             };
+            // (The buffers only grow: shrinking and regrowing would zero them.)
             if mip == 1 {
                 let (pw, ph) = l.mip_size(0);
-                self.pred.resize(n * ch, 0.0);
+                if self.pred.len() < n * ch {
+                    self.pred.resize(n * ch, 0.0);
+                    self.pred_next.resize(n * ch, 0.0);
+                }
                 box_down(&leaf[..pw * ph * ch], pw, ph, ch, &mut self.pred);
             } else if mip > 1 {
                 let (pw, ph) = l.mip_size(mip - 1);
-                self.pred_next.resize(n * ch, 0.0);
                 box_down(&self.pred, pw, ph, ch, &mut self.pred_next);
                 std::mem::swap(&mut self.pred, &mut self.pred_next);
             }
@@ -571,7 +574,10 @@ fn write_rgba_with<T: OutTexel>(
     out: &mut [T],
     from: usize,
 ) {
-    const CHUNK: usize = 1024;
+    const CHUNK: usize = 256;
+    if from >= n {
+        return;
+    }
     let mut tmp = [0.0f32; CHUNK * 4];
     let mut sum = [[0.0f32; CHUNK]; 4];
     for (chunk_i, dst) in out[from * 4..n * 4].chunks_mut(CHUNK * 4).enumerate() {
