@@ -119,7 +119,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     c16.decode_leaf_all(&c, t.id.object, t.id.layer, s, &mut out)?;
                     c32.end_frame();
                     c16.end_frame();
-                    fnv(&mut h32, out32.iter().flat_map(|v| v.to_bits().to_le_bytes()));
+                    fnv(
+                        &mut h32,
+                        out32.iter().flat_map(|v| v.to_bits().to_le_bytes()),
+                    );
                     fnv(&mut h16, out.iter().flat_map(|v| v.to_bits().to_le_bytes()));
                 }
             }

@@ -252,52 +252,51 @@ fn decode_mag(r: &mut Reader, cc: &mut ClassCtx, band: usize) -> Result<u32, &'s
     Ok(v - 1 + UNARY as u32)
 }
 
+/// Where [`decode_image`] puts each decoded block of plane `c`, whose
+/// texels are `x0..x0 + xs` × `y0..y0 + ys` (`xs`, `ys` ≤ 8 at the image's
+/// right and bottom edges).
+pub trait BlockSink {
+    /// A DC-only block: the constant `v`.
+    fn constant(&mut self, c: usize, x0: usize, y0: usize, xs: usize, ys: usize, v: f32);
+    /// An inverse-transformed block (raster 8×8; its top-left `xs × ys` used).
+    fn block(&mut self, c: usize, x0: usize, y0: usize, xs: usize, ys: usize, b: &[f32; NN]);
+}
+
+/// Adds every block into `channels` planes of `w × h` (planar).
+pub struct AddToPlanes<'a> {
+    pub out: &'a mut [f32],
+    pub w: usize,
+    pub h: usize,
+}
+
+impl BlockSink for AddToPlanes<'_> {
+    #[inline(always)]
+    fn constant(&mut self, c: usize, x0: usize, y0: usize, xs: usize, ys: usize, v: f32) {
+        let (w, h) = (self.w, self.h);
+        let plane = &mut self.out[c * w * h..][..w * h];
+        for row in plane[y0 * w + x0..].chunks_mut(w).take(ys) {
+            row[..xs].iter_mut().for_each(|p| *p += v);
+        }
+    }
+    #[inline(always)]
+    fn block(&mut self, c: usize, x0: usize, y0: usize, xs: usize, ys: usize, b: &[f32; NN]) {
+        let (w, h) = (self.w, self.h);
+        let plane = &mut self.out[c * w * h..][..w * h];
+        for (row, src) in plane[y0 * w + x0..]
+            .chunks_mut(w)
+            .take(ys)
+            .zip(b.chunks_exact(N))
+        {
+            row[..xs].iter_mut().zip(src).for_each(|(p, v)| *p += v);
+        }
+    }
+}
+
 /// Decodes one image coded by [`encode_image`] and *adds* it to `out`
 /// (`channels` planes of `w × h`, planar). Bad data gives an error, never a
 /// panic or an out-of-range write.
-///
-/// Runs as AVX2 code where the CPU has it (chosen at run time; the
-/// arithmetic is the same operations in the same order, and Rust never
-/// fuses multiply-adds, so results are bit-identical either way).
 #[allow(clippy::too_many_arguments)]
 pub fn decode_image_add(
-    r: &mut Reader,
-    ctx: &mut Contexts,
-    dct: &Dct8,
-    w: usize,
-    h: usize,
-    channels: usize,
-    step: f32,
-    out: &mut [f32],
-) -> Result<(), &'static str> {
-    #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU supports AVX2, checked just above.
-        return unsafe { decode_image_add_avx2(r, ctx, dct, w, h, channels, step, out) };
-    }
-    decode_image_add_impl::<false>(r, ctx, dct, w, h, channels, step, out)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[allow(clippy::too_many_arguments)]
-unsafe fn decode_image_add_avx2(
-    r: &mut Reader,
-    ctx: &mut Contexts,
-    dct: &Dct8,
-    w: usize,
-    h: usize,
-    channels: usize,
-    step: f32,
-    out: &mut [f32],
-) -> Result<(), &'static str> {
-    decode_image_add_impl::<true>(r, ctx, dct, w, h, channels, step, out)
-}
-
-/// `AVX2`: only ever instantiated as `true` inside [`decode_image_add_avx2`].
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn decode_image_add_impl<const AVX2: bool>(
     r: &mut Reader,
     ctx: &mut Contexts,
     dct: &Dct8,
@@ -310,6 +309,74 @@ fn decode_image_add_impl<const AVX2: bool>(
     if out.len() < channels * w * h {
         return Err("output too small");
     }
+    decode_image(
+        r,
+        ctx,
+        dct,
+        w,
+        h,
+        channels,
+        step,
+        &mut AddToPlanes { out, w, h },
+    )
+}
+
+/// Decodes one image coded by [`encode_image`] (`channels` planes of
+/// `w × h`) block by block into `sink`: the blocks the stream codes, each
+/// a constant or an inverse-transformed 8×8 block, in plane, then raster
+/// block order. Bad data gives an error, never a panic.
+///
+/// Runs as AVX2 code where the CPU has it (chosen at run time; the
+/// arithmetic is the same operations in the same order, and Rust never
+/// fuses multiply-adds, so results are bit-identical either way).
+#[allow(clippy::too_many_arguments)]
+pub fn decode_image<S: BlockSink>(
+    r: &mut Reader,
+    ctx: &mut Contexts,
+    dct: &Dct8,
+    w: usize,
+    h: usize,
+    channels: usize,
+    step: f32,
+    sink: &mut S,
+) -> Result<(), &'static str> {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2, checked just above.
+        return unsafe { decode_image_avx2(r, ctx, dct, w, h, channels, step, sink) };
+    }
+    decode_image_impl::<S, false>(r, ctx, dct, w, h, channels, step, sink)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn decode_image_avx2<S: BlockSink>(
+    r: &mut Reader,
+    ctx: &mut Contexts,
+    dct: &Dct8,
+    w: usize,
+    h: usize,
+    channels: usize,
+    step: f32,
+    sink: &mut S,
+) -> Result<(), &'static str> {
+    decode_image_impl::<S, true>(r, ctx, dct, w, h, channels, step, sink)
+}
+
+/// `AVX2`: only ever instantiated as `true` inside [`decode_image_avx2`].
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn decode_image_impl<S: BlockSink, const AVX2: bool>(
+    r: &mut Reader,
+    ctx: &mut Contexts,
+    dct: &Dct8,
+    w: usize,
+    h: usize,
+    channels: usize,
+    step: f32,
+    sink: &mut S,
+) -> Result<(), &'static str> {
     let (bw, bh) = block_grid(w, h);
     let mut coded = vec![false; bw];
     let mut dc_above = vec![0i32; bw];
@@ -317,7 +384,6 @@ fn decode_image_add_impl<const AVX2: bool>(
     let mut blk = [0.0f32; NN];
     for c in 0..channels {
         let cc = &mut ctx.class[class_of(c)];
-        let plane = &mut out[c * w * h..][..w * h];
         coded.iter_mut().for_each(|v| *v = false);
         dc_above.iter_mut().for_each(|v| *v = 0);
         for by in 0..bh {
@@ -341,15 +407,10 @@ fn decode_image_add_impl<const AVX2: bool>(
                 dc_above[bx] = dc;
                 let x0 = bx * N;
                 let xs = N.min(w - x0);
-                let rows = plane[y0 * w + x0..].chunks_mut(w).take(ys);
                 if !any_ac {
-                    if dc == 0 {
-                        continue;
-                    }
-                    // DC-only block: a constant (orthonormal DC gain is 1/8).
-                    let v = dc as f32 * step * 0.125;
-                    for row in rows {
-                        row[..xs].iter_mut().for_each(|p| *p += v);
+                    if dc != 0 {
+                        // DC-only block: a constant (orthonormal DC gain is 1/8).
+                        sink.constant(c, x0, y0, xs, ys, dc as f32 * step * 0.125);
                     }
                     continue;
                 }
@@ -359,18 +420,14 @@ fn decode_image_add_impl<const AVX2: bool>(
                 #[cfg(target_arch = "x86_64")]
                 if AVX2 {
                     // SAFETY: AVX2 code is only instantiated behind the
-                    // run-time check in `decode_image_add`.
+                    // run-time check in `decode_image`.
                     unsafe { crate::dct::inverse_avx2(dct, &mut blk) };
                 } else {
                     dct.inverse(&mut blk);
                 }
                 #[cfg(not(target_arch = "x86_64"))]
                 dct.inverse(&mut blk);
-                for (row, src) in rows.zip(blk.chunks_exact(N)) {
-                    for (p, v) in row[..xs].iter_mut().zip(src) {
-                        *p += v;
-                    }
-                }
+                sink.block(c, x0, y0, xs, ys, &blk);
                 blk = [0.0; NN];
             }
         }

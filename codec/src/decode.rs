@@ -8,16 +8,17 @@
 //! `TextureInfo::stagger`), so different objects cross block boundaries on
 //! different frames and the misses spread out.
 //!
-//! What is cached for a node is the *prefix sum* of the levels from the
-//! root down to that node (its decoded leaf-so-far), not the node's detail
-//! alone: a level costs one copy of its parent's prefix (still in cache
-//! when the decoder adds its own blocks to it) and the leaf's write pass
-//! reads one image, with the same per-level lifetimes. The MIP
-//! reconstruction and the inverse colour/gamma transform are fused into one
-//! pass that writes the caller's slice (the engine's mapped staging buffer)
-//! directly, on AVX2/F16C where the CPU has them. Results are bit-identical
-//! to the straightforward order of operations (parent + detail, + MIP
-//! prediction) the codec was first written with.
+//! What is cached for a node is its level's image of one face, kept
+//! *sparse* ([`SparseImage`]: only the blocks the stream coded, as
+//! constants or 8×8 blocks — most blocks of a detail level are not coded).
+//! A leaf is summed from its levels' blocks, root first, into a reused
+//! face-sized buffer that stays in cache, then the MIP reconstruction and
+//! the inverse colour/gamma transform write the caller's slice (the
+//! engine's mapped staging buffer) directly, on AVX2/F16C where the CPU has
+//! them. No full-size image is copied through memory per level, and the
+//! resident cache is a fraction of full-size images. Results are
+//! bit-identical to summing dense level images in the same order (root,
+//! …, leaf, then the MIP prediction), which is what the codec first did.
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -25,7 +26,7 @@ use std::sync::Arc;
 use half::f16;
 use half::slice::HalfFloatSliceExt;
 
-use crate::coefs::{Contexts, decode_image_add, step_of};
+use crate::coefs::{Contexts, decode_image, step_of};
 use crate::container::{BlockView, Container, TextureInfo};
 use crate::dct::Dct8;
 use crate::domain::Gamma;
@@ -33,6 +34,7 @@ use crate::entropy::Reader;
 use crate::error::{CodecError, Result};
 use crate::planes::box_down;
 use crate::pyramid::Plan;
+use crate::sparse::SparseImage;
 
 /// A texel component type the decoder can write: `f32` or `half::f16`.
 pub trait OutTexel: Copy + Send {
@@ -101,9 +103,8 @@ impl Lifetimes {
     }
 }
 
-/// Evicted image buffers kept for reuse: fresh ones page-fault on first
-/// touch, which costs more than decoding (notably in VMs). Bounded by what
-/// was resident anyway.
+/// Evicted images kept for reuse (their allocations): fresh ones
+/// page-fault on first touch. Bounded by what was resident anyway.
 const POOL_MAX: usize = 256;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -115,8 +116,8 @@ struct ImageKey {
 }
 
 struct Entry {
-    /// All MIP levels of one face, planar channels.
-    data: Vec<f32>,
+    /// One level's coded blocks, all MIP levels of one face.
+    data: SparseImage,
     last_used: u64,
     lifetime: u64,
 }
@@ -149,7 +150,9 @@ pub struct DecodeCache {
     images: HashMap<ImageKey, Entry>,
     blocks: HashMap<usize, CachedBlock>,
     dct: Dct8,
-    pool: Vec<Vec<f32>>,
+    pool: Vec<SparseImage>,
+    /// The leaf being summed: one face, all MIPs, planar (stays in cache).
+    sum: Vec<f32>,
     pred: Vec<f32>,
     pred_next: Vec<f32>,
     stats: CacheStats,
@@ -170,6 +173,7 @@ impl DecodeCache {
             blocks: HashMap::new(),
             dct: Dct8::default(),
             pool: Vec::new(),
+            sum: Vec::new(),
             pred: Vec::new(),
             pred_next: Vec::new(),
             stats: CacheStats::default(),
@@ -207,7 +211,7 @@ impl DecodeCache {
     pub fn stats(&self) -> CacheStats {
         CacheStats {
             resident_images: self.images.len(),
-            resident_bytes: self.images.values().map(|e| e.data.len() * 4).sum(),
+            resident_bytes: self.images.values().map(|e| e.data.bytes()).sum(),
             ..self.stats
         }
     }
@@ -302,8 +306,8 @@ impl DecodeCache {
         )
     }
 
-    /// Finds or decodes the leaf prefix sum for one face, then writes the
-    /// MIP levels for which `dest` gives a range of `out`.
+    /// Finds or decodes the level images of one face's path, sums them,
+    /// then writes the MIP levels for which `dest` gives a range of `out`.
     #[allow(clippy::too_many_arguments)]
     fn decode_face<T: OutTexel>(
         &mut self,
@@ -346,119 +350,113 @@ impl DecodeCache {
                 face: face as u8,
             })
             .collect();
-        let leaf_key = path[n_levels - 1];
-        let leaf_cached = self.images.contains_key(&leaf_key);
-        // Deepest cached prefix above the leaf; touching it touches its ancestors.
-        let deepest = (0..n_levels - 1)
-            .rev()
-            .find(|&l| self.images.contains_key(&path[l]));
-        for k in path
-            .iter()
-            .take(deepest.map_or(0, |d| d + 1))
-            .chain([&leaf_key])
-        {
-            if let Some(e) = self.images.get_mut(k) {
-                e.last_used = frame;
+        let mut missing = Vec::new();
+        for (level, k) in path.iter().enumerate() {
+            match self.images.get_mut(k) {
+                Some(e) => {
+                    e.last_used = frame;
+                    self.stats.hits += 1;
+                }
+                None => missing.push(level),
             }
         }
-        let start = deepest.map_or(0, |d| d + 1);
-        self.stats.hits += deepest.map_or(0, |d| d as u64 + 1) + leaf_cached as u64;
-        if !leaf_cached {
-            self.stats.misses += (n_levels - start) as u64;
+        if !missing.is_empty() {
+            self.stats.misses += missing.len() as u64;
             // Take the bytes out while decoding (the decoder borrows self).
             let bytes = self
                 .blocks
                 .get_mut(&block)
                 .map(|b| std::mem::take(&mut b.bytes))
                 .unwrap_or_default();
-            let result = self.decode_path(tex, &bytes, block, &path, start);
+            let result = self.decode_levels(tex, &bytes, block, &path, &missing);
             if let Some(b) = self.blocks.get_mut(&block) {
                 b.bytes = bytes;
             }
             result?;
         }
-        let missing = || CodecError::BadBlock {
+        let vanished = || CodecError::BadBlock {
             block,
             what: "decoded image vanished from the cache".into(),
         };
-        let leaf = &self.images.get(&leaf_key).ok_or_else(missing)?.data;
-        // MIP m adds the decimated finest level (the leaf's own MIP 0).
+        let levels = path
+            .iter()
+            .map(|k| self.images.get(k).map(|e| &e.data))
+            .collect::<Option<Vec<_>>>()
+            .ok_or_else(vanished)?;
         let l = &tex.layout;
         let ch = l.channels as usize;
+        let len: usize = (0..l.mips).map(|m| l.face_texels(m) * ch).sum();
+        // (These buffers only grow: shrinking and regrowing would zero them.)
+        if self.sum.len() < len {
+            self.sum.resize(len, 0.0);
+        }
         let gamma = Gamma(c.gamma);
         let mut off = 0;
         for mip in 0..=last_mip {
             let (w, h) = l.mip_size(mip);
             let n = w * h;
-            let Some(img) = leaf.get(off..off + n * ch) else {
-                return Err(missing());
-            };
-            // (The buffers only grow: shrinking and regrowing would zero them.)
+            let dst = dest(mip);
+            let img = &mut self.sum[off..off + n * ch];
+            // MIP 0 is needed for the prediction of the others.
+            if dst.is_some() || (mip == 0 && last_mip > 0) {
+                // Root first, then each finer level: the order of the sums.
+                for (c, plane) in img.chunks_exact_mut(n).enumerate() {
+                    plane.fill(0.0);
+                    for lv in &levels {
+                        lv.add_plane(mip as usize * ch + c, plane, w);
+                    }
+                }
+            }
+            // MIP m adds the decimated finest level (the leaf's own MIP 0).
             if mip == 1 {
                 let (pw, ph) = l.mip_size(0);
                 if self.pred.len() < n * ch {
                     self.pred.resize(n * ch, 0.0);
                     self.pred_next.resize(n * ch, 0.0);
                 }
-                box_down(&leaf[..pw * ph * ch], pw, ph, ch, &mut self.pred);
+                box_down(&self.sum[..pw * ph * ch], pw, ph, ch, &mut self.pred);
             } else if mip > 1 {
                 let (pw, ph) = l.mip_size(mip - 1);
                 box_down(&self.pred, pw, ph, ch, &mut self.pred_next);
                 std::mem::swap(&mut self.pred, &mut self.pred_next);
             }
-            if let Some(r) = dest(mip) {
+            if let Some(r) = dst {
                 let o = out.get_mut(r).ok_or(CodecError::OutputSize {
                     got: 0,
                     expected: n * 4,
                 })?;
                 let pred = (mip > 0).then(|| &self.pred[..n * ch]);
-                write_rgba(gamma, img, pred, n, ch, o);
+                write_rgba(gamma, &self.sum[off..off + n * ch], pred, n, ch, o);
             }
             off += n * ch;
         }
         Ok(())
     }
 
-    /// Decodes the prefix sums of `path[start..]` (the leaf's included),
-    /// each from its parent's (cached) prefix, caching each.
-    fn decode_path(
+    /// Decodes the level images `path[level]` for each of `levels` and
+    /// caches them.
+    fn decode_levels(
         &mut self,
         tex: &TextureInfo,
         bytes: &[u8],
         block: usize,
         path: &[ImageKey],
-        start: usize,
+        levels: &[usize],
     ) -> Result<()> {
         let view = BlockView::parse(bytes, tex, block)?;
         let n_levels = path.len();
         let frame = self.frame;
-        let l = &tex.layout;
-        let len: usize = (0..l.mips)
-            .map(|m| l.face_texels(m) * l.channels as usize)
-            .sum();
-        for (level, key) in path.iter().enumerate().skip(start) {
-            // A pooled buffer, not a fresh allocation (first touch faults).
-            let mut dst = self.take_buffer(len);
-            let src = match level {
-                0 => None,
-                _ => Some(
-                    &self
-                        .images
-                        .get(&path[level - 1])
-                        .ok_or(CodecError::BadBlock {
-                            block,
-                            what: "parent prefix vanished from the cache".into(),
-                        })?
-                        .data[..],
-                ),
-            };
-            decode_stream(&self.dct, tex, &view, block, *key, src, &mut dst)?;
-            self.insert(*key, dst, n_levels - 1 - level, frame);
+        for &level in levels {
+            let key = path[level];
+            let mut img = self.pool.pop().unwrap_or_default();
+            img.clear();
+            decode_level(&self.dct, tex, &view, block, key, &mut img)?;
+            self.insert(key, img, n_levels - 1 - level, frame);
         }
         Ok(())
     }
 
-    fn insert(&mut self, key: ImageKey, data: Vec<f32>, up: usize, frame: u64) {
+    fn insert(&mut self, key: ImageKey, data: SparseImage, up: usize, frame: u64) {
         self.images.insert(
             key,
             Entry {
@@ -468,31 +466,16 @@ impl DecodeCache {
             },
         );
     }
-
-    /// A buffer of `len` floats from the pool of evicted images (contents
-    /// unspecified), or a new one.
-    fn take_buffer(&mut self, len: usize) -> Vec<f32> {
-        let mut v = match self.pool.iter().position(|b| b.capacity() >= len) {
-            Some(i) => self.pool.swap_remove(i),
-            None => Vec::with_capacity(len),
-        };
-        v.resize(len, 0.0);
-        v
-    }
 }
 
-/// Writes `dst` = `src` (the parent's prefix sum; zero at the root) + the
-/// image decoded from stream `k` (one face, all MIPs, planar). Image by
-/// image: a copy, then the decoder adds its blocks while the copy is still
-/// in cache.
-fn decode_stream(
+/// Decodes stream `k` (one level's image of one face, all MIPs) into `img`.
+fn decode_level(
     dct: &Dct8,
     tex: &TextureInfo,
     view: &BlockView,
     block: usize,
     k: ImageKey,
-    src: Option<&[f32]>,
-    dst: &mut [f32],
+    img: &mut SparseImage,
 ) -> Result<()> {
     let l = &tex.layout;
     let ch = l.channels as usize;
@@ -512,40 +495,24 @@ fn decode_stream(
         .streams
         .get(si)
         .ok_or(corrupt("stream index out of range"))?;
-    let mut reader = if steps.iter().all(|&s| s == 0) {
-        None
-    } else {
-        Some((
-            Reader::new(bytes).ok_or(corrupt("stream is not whole words"))?,
-            Contexts::default(),
-        ))
-    };
-    let mut off = 0;
-    for mip in 0..l.mips {
-        let (w, h) = l.mip_size(mip);
-        let n = w * h * ch;
-        let d = dst
-            .get_mut(off..off + n)
-            .ok_or(corrupt("image larger than its buffer"))?;
-        match src {
-            Some(s) => d.copy_from_slice(
-                s.get(off..off + n)
-                    .ok_or(corrupt("image larger than its parent"))?,
-            ),
-            None => d.fill(0.0),
-        }
-        if let Some((r, ctx)) = &mut reader {
+    if steps.iter().any(|&s| s != 0) {
+        let mut r = Reader::new(bytes).ok_or(corrupt("stream is not whole words"))?;
+        let mut ctx = Contexts::default();
+        for mip in 0..l.mips {
+            let (w, h) = l.mip_size(mip);
             let idx = *steps.get(mip as usize).ok_or(corrupt("missing step"))?;
             if idx != 0 {
-                decode_image_add(r, ctx, dct, w, h, ch, step_of(idx), d).map_err(corrupt)?;
+                let mut sink = img.sink(mip as usize, ch);
+                decode_image(&mut r, &mut ctx, dct, w, h, ch, step_of(idx), &mut sink)
+                    .map_err(corrupt)?;
             }
         }
-        off += n;
     }
+    img.finish(l.mips as usize * ch);
     Ok(())
 }
 
-/// Planar coding-domain image (the leaf's prefix sum, + the MIP
+/// Planar coding-domain image (the leaf's sum of levels, + the MIP
 /// prediction above MIP 0) → interleaved linear RGBA, converted to `T`.
 fn write_rgba<T: OutTexel>(
     g: Gamma,

@@ -51,6 +51,7 @@ pub mod pyramid;
 pub mod quality;
 pub mod rate;
 pub mod report;
+pub mod sparse;
 pub mod synth;
 
 pub use container::{Container, FORMAT_VERSION, TextureInfo};
