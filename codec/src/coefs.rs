@@ -232,6 +232,7 @@ fn encode_mag<S: BitSink>(sink: &mut S, cc: &mut ClassCtx, band: usize, m: u32) 
     }
 }
 
+#[inline(always)]
 fn decode_mag(r: &mut Reader, cc: &mut ClassCtx, band: usize) -> Result<u32, &'static str> {
     for k in 0..UNARY {
         if !r.bit(&mut cc.mag[band][k]) {
@@ -368,6 +369,26 @@ unsafe fn decode_image_avx2<S: BlockSink>(
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn decode_image_impl<S: BlockSink, const AVX2: bool>(
+    r: &mut Reader,
+    ctx: &mut Contexts,
+    dct: &Dct8,
+    w: usize,
+    h: usize,
+    channels: usize,
+    step: f32,
+    sink: &mut S,
+) -> Result<(), &'static str> {
+    // The decoder's state in a local, so it lives in registers rather than
+    // being stored through `r` at every decision.
+    let mut rd = r.clone();
+    let result = decode_image_body::<S, AVX2>(&mut rd, ctx, dct, w, h, channels, step, sink);
+    *r = rd;
+    result
+}
+
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn decode_image_body<S: BlockSink, const AVX2: bool>(
     r: &mut Reader,
     ctx: &mut Contexts,
     dct: &Dct8,

@@ -170,6 +170,7 @@ impl BitSink for Writer {
 /// for step — initial state, renormalisation, zero padding past the end, and
 /// the "invalid data" condition — which `tests::matches_constriction` checks
 /// on real and garbage streams. This loop is the decoder's hottest.
+#[derive(Clone)]
 pub struct Reader<'a> {
     /// Words not yet read (little-endian u32 each).
     words: &'a [u8],
