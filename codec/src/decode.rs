@@ -153,6 +153,8 @@ pub struct DecodeCache {
     pool: Vec<SparseImage>,
     /// The leaf being summed: one face, all MIPs, planar (stays in cache).
     sum: Vec<f32>,
+    /// One block row of MIP 0, planar.
+    strip: Vec<f32>,
     pred: Vec<f32>,
     pred_next: Vec<f32>,
     stats: CacheStats,
@@ -174,6 +176,7 @@ impl DecodeCache {
             dct: Dct8::default(),
             pool: Vec::new(),
             sum: Vec::new(),
+            strip: Vec::new(),
             pred: Vec::new(),
             pred_next: Vec::new(),
             stats: CacheStats::default(),
@@ -396,9 +399,40 @@ impl DecodeCache {
             let (w, h) = l.mip_size(mip);
             let n = w * h;
             let dst = dest(mip);
-            let img = &mut self.sum[off..off + n * ch];
             // MIP 0 is needed for the prediction of the others.
-            if dst.is_some() || (mip == 0 && last_mip > 0) {
+            let needed = dst.is_some() || (mip == 0 && last_mip > 0);
+            if mip == 0 && needed && (last_mip == 0 || (w % 2 == 0 && h % 2 == 0)) {
+                // The largest image by strips of one block row: its sums, its
+                // write and the MIP 1 prediction from them stay in L1.
+                let o = match dst {
+                    Some(r) => Some(out.get_mut(r).ok_or(CodecError::OutputSize {
+                        got: 0,
+                        expected: n * 4,
+                    })?),
+                    None => None,
+                };
+                if last_mip > 0 {
+                    let (w1, h1) = l.mip_size(1);
+                    if self.pred.len() < w1 * h1 * ch {
+                        self.pred.resize(w1 * h1 * ch, 0.0);
+                        self.pred_next.resize(w1 * h1 * ch, 0.0);
+                    }
+                }
+                write_mip0_by_strips(
+                    &levels,
+                    gamma,
+                    w,
+                    h,
+                    ch,
+                    &mut self.strip,
+                    (last_mip > 0).then_some(&mut self.pred[..]),
+                    o,
+                );
+                off += n * ch;
+                continue;
+            }
+            let img = &mut self.sum[off..off + n * ch];
+            if needed {
                 // Root first, then each finer level: the order of the sums.
                 for (c, plane) in img.chunks_exact_mut(n).enumerate() {
                     plane.fill(0.0);
@@ -408,7 +442,7 @@ impl DecodeCache {
                 }
             }
             // MIP m adds the decimated finest level (the leaf's own MIP 0).
-            if mip == 1 {
+            if mip == 1 && !strips_done_mip1(l, last_mip) {
                 let (pw, ph) = l.mip_size(0);
                 if self.pred.len() < n * ch {
                     self.pred.resize(n * ch, 0.0);
@@ -465,6 +499,57 @@ impl DecodeCache {
                 lifetime: self.life.frames(up),
             },
         );
+    }
+}
+
+/// Whether MIP 0 went by strips, which leaves MIP 1's prediction made.
+fn strips_done_mip1(l: &crate::input::LeafLayout, last_mip: u32) -> bool {
+    let (w, h) = l.mip_size(0);
+    last_mip > 0 && w % 2 == 0 && h % 2 == 0
+}
+
+/// MIP 0 of one face, one block row (8 texel rows) at a time: the sum of
+/// the levels' blocks (root first), written to `out` if given, and, with
+/// `pred1`, box-decimated into the MIP 1 prediction (`w`, `h` even then).
+/// The same operations per texel as summing and decimating whole images.
+#[allow(clippy::too_many_arguments)]
+fn write_mip0_by_strips<T: OutTexel>(
+    levels: &[&SparseImage],
+    gamma: Gamma,
+    w: usize,
+    h: usize,
+    ch: usize,
+    strip: &mut Vec<f32>,
+    mut pred1: Option<&mut [f32]>,
+    mut out: Option<&mut [T]>,
+) {
+    const N: usize = crate::dct::N;
+    if strip.len() < ch * N * w {
+        strip.resize(ch * N * w, 0.0);
+    }
+    // Per level and channel: the blocks of MIP 0's plane not yet added.
+    let mut todo: Vec<std::ops::Range<u32>> = levels
+        .iter()
+        .flat_map(|lv| (0..ch).map(|c| lv.plane_range(c)))
+        .collect();
+    let (w1, h1) = (w / 2, h / 2);
+    for y0 in (0..h).step_by(N) {
+        let ys = N.min(h - y0);
+        let ns = ys * w;
+        let strip = &mut strip[..ch * ns];
+        for (c, plane) in strip.chunks_exact_mut(ns).enumerate() {
+            plane.fill(0.0);
+            for (li, lv) in levels.iter().enumerate() {
+                lv.add_row(&mut todo[li * ch + c], y0, plane, w);
+            }
+            if let Some(p) = pred1.as_deref_mut() {
+                let p = &mut p[c * w1 * h1 + (y0 / 2) * w1..][..(ys / 2) * w1];
+                box_down(plane, w, ys, 1, p);
+            }
+        }
+        if let Some(o) = out.as_deref_mut() {
+            write_rgba(gamma, strip, None, ns, ch, &mut o[y0 * w * 4..][..ns * 4]);
+        }
     }
 }
 

@@ -71,6 +71,40 @@ impl SparseImage {
             + self.values.capacity() * 4
     }
 
+    /// The blocks of plane `k` (empty past the planes filled), for
+    /// [`SparseImage::add_row`].
+    pub fn plane_range(&self, k: usize) -> std::ops::Range<u32> {
+        match (self.starts.get(k), self.starts.get(k + 1)) {
+            (Some(&a), Some(&b)) => a..b,
+            _ => 0..0,
+        }
+    }
+
+    /// Adds the blocks at the front of `todo` (from [`SparseImage::plane_range`])
+    /// that lie in the block row starting at texel row `y0` into `strip`,
+    /// that row's texels (`w` wide), and drops them from `todo`. Rows must
+    /// be visited top to bottom.
+    #[inline]
+    pub fn add_row(&self, todo: &mut std::ops::Range<u32>, y0: usize, strip: &mut [f32], w: usize) {
+        let from = todo.start as usize;
+        let mut to = from;
+        let recs = &self.recs[..(todo.end as usize).min(self.recs.len())];
+        while to < recs.len() && recs[to].y0 as usize <= y0 {
+            to += 1;
+        }
+        todo.start = to as u32;
+        let recs = &recs[from..to];
+        if recs.is_empty() {
+            return;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2, checked just above.
+            return unsafe { add_avx2(recs, &self.values, strip, w, y0) };
+        }
+        add(recs, &self.values, strip, w, y0)
+    }
+
     /// Adds plane `k`'s blocks into `plane` (`w` texels wide). Planes past
     /// the ones filled add nothing. AVX2 code where the CPU has it (the
     /// same additions, so the same results).
@@ -86,22 +120,27 @@ impl SparseImage {
         #[cfg(target_arch = "x86_64")]
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU supports AVX2, checked just above.
-            return unsafe { add_avx2(recs, &self.values, plane, w) };
+            return unsafe { add_avx2(recs, &self.values, plane, w, 0) };
         }
-        add(recs, &self.values, plane, w)
+        add(recs, &self.values, plane, w, 0)
     }
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn add_avx2(recs: &[Rec], values: &[f32], plane: &mut [f32], w: usize) {
-    add(recs, values, plane, w)
+unsafe fn add_avx2(recs: &[Rec], values: &[f32], plane: &mut [f32], w: usize, y_origin: usize) {
+    add(recs, values, plane, w, y_origin)
 }
 
+/// Adds `recs` into `plane`, whose first row is texel row `y_origin`
+/// (blocks above it, which the decoder never leaves, are skipped).
 #[inline(always)]
-fn add(recs: &[Rec], values: &[f32], plane: &mut [f32], w: usize) {
+fn add(recs: &[Rec], values: &[f32], plane: &mut [f32], w: usize, y_origin: usize) {
     for r in recs {
-        let (x0, y0, xs, ys) = (r.x0 as usize, r.y0 as usize, r.xs as usize, r.ys as usize);
+        let (x0, xs, ys) = (r.x0 as usize, r.xs as usize, r.ys as usize);
+        let Some(y0) = (r.y0 as usize).checked_sub(y_origin) else {
+            continue;
+        };
         let base = y0 * w + x0;
         if xs == N && ys == N {
             // Whole blocks (almost all of them): fixed-size rows.
