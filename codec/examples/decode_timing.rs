@@ -73,6 +73,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut out = vec![f16::ZERO; t.layout.texels() * 4];
         let mut cache = DecodeCache::default();
         let (mut times, mut cpu) = (Vec::new(), Vec::new());
+        let (mut peak_images, mut peak_bytes) = (0, 0);
         for pass in 0..=reps {
             for s1 in 0..t.grid.n1 {
                 for s0 in 0..t.grid.n0 {
@@ -87,13 +88,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     }
                 }
             }
+            peak_images = peak_images.max(cache.stats().resident_images);
+            peak_bytes = peak_bytes.max(cache.stats().resident_bytes);
             cache.clear();
         }
         all.extend_from_slice(&times);
         all_cpu.extend_from_slice(&cpu);
         let l = t.layout;
         print!(
-            "texture ({}, {}) {}x{}x{} ch {} mips {}: median {:.3} ms wall, {:.3} ms cpu (mean {:.3}) over {} decodes",
+            "texture ({}, {}) {}x{}x{} ch {} mips {}: median {:.3} ms wall, {:.3} ms cpu (mean {:.3}) over {} decodes; cache at the end {} images, {:.1} MB",
             t.id.object,
             t.id.layer,
             l.width,
@@ -104,7 +107,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             median(&mut times),
             median(&mut cpu),
             mean(&cpu),
-            times.len()
+            times.len(),
+            peak_images,
+            peak_bytes as f64 / 1e6
         );
         if hash {
             let mut h32 = 0xcbf2_9ce4_8422_2325u64;
