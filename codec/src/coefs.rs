@@ -529,7 +529,7 @@ mod tests {
         decode_image_add(
             &mut r,
             &mut Contexts::default(),
-            &mut dct,
+            &dct,
             w,
             h,
             ch,

@@ -100,13 +100,9 @@ macro_rules! lanewise {
 fn idct8_lanes(v: &mut [Lanes; N], tw: &Twiddles) {
     const F: f32 = std::f32::consts::FRAC_1_SQRT_2;
     let [x0, x1, x2, x3, x4, x5, x6, x7] = v;
-    for l in 0..N {
-        x0[l] *= S0X2;
-    }
+    x0.iter_mut().for_each(|v| *v *= S0X2);
     for x in [&mut *x1, x2, x3, x4, x5, x6, x7] {
-        for l in 0..N {
-            x[l] *= SK;
-        }
+        x.iter_mut().for_each(|v| *v *= SK);
     }
     let (x0, x1, x2, x3, x4, x5, x6, x7) = (*x0, *x1, *x2, *x3, *x4, *x5, *x6, *x7);
     let mut t = [[0.0f32; N]; 16];
@@ -160,6 +156,7 @@ fn idct8_lanes(v: &mut [Lanes; N], tw: &Twiddles) {
 }
 
 #[inline(always)]
+#[allow(clippy::needless_range_loop)] // the index pairs are the point
 fn transpose(m: &mut [Lanes; N]) {
     for i in 0..N {
         for j in i + 1..N {

@@ -23,6 +23,20 @@ struct Rec {
     dc: f32,
 }
 
+impl Rec {
+    #[inline(always)]
+    fn new(x0: usize, y0: usize, xs: usize, ys: usize, at: u32, dc: f32) -> Self {
+        Self {
+            x0: x0 as u32,
+            y0: y0 as u32,
+            xs: xs as u8,
+            ys: ys as u8,
+            at,
+            dc,
+        }
+    }
+}
+
 const CONSTANT: u32 = u32::MAX;
 
 /// The coded blocks of one face's images, per (MIP, channel) plane.
@@ -185,29 +199,22 @@ pub struct SparseSink<'a> {
 
 impl SparseSink<'_> {
     #[inline(always)]
-    fn push(&mut self, c: usize, x0: usize, y0: usize, xs: usize, ys: usize, at: u32, dc: f32) {
+    fn push(&mut self, c: usize, rec: Rec) {
         self.img.open_until(self.base + c);
-        self.img.recs.push(Rec {
-            x0: x0 as u32,
-            y0: y0 as u32,
-            xs: xs as u8,
-            ys: ys as u8,
-            at,
-            dc,
-        });
+        self.img.recs.push(rec);
     }
 }
 
 impl BlockSink for SparseSink<'_> {
     #[inline(always)]
     fn constant(&mut self, c: usize, x0: usize, y0: usize, xs: usize, ys: usize, v: f32) {
-        self.push(c, x0, y0, xs, ys, CONSTANT, v);
+        self.push(c, Rec::new(x0, y0, xs, ys, CONSTANT, v));
     }
     #[inline(always)]
     fn block(&mut self, c: usize, x0: usize, y0: usize, xs: usize, ys: usize, b: &[f32; NN]) {
         let at = self.img.values.len() as u32;
         self.img.values.extend_from_slice(b);
-        self.push(c, x0, y0, xs, ys, at, 0.0);
+        self.push(c, Rec::new(x0, y0, xs, ys, at, 0.0));
     }
 }
 
