@@ -51,8 +51,9 @@ pub struct CurvePoint {
 }
 
 /// A ratio-against-PSNR curve: `metric` says which PSNR (`"texture"`: the
-/// codec's texture PSNR, [`PSNR_DEFINITION`]; `"frames"`: rendered or
-/// decoded frames against the traced ones, see the report's notes).
+/// codec's texture PSNR, [`PSNR_DEFINITION`]; `"frames_vs_traced"` and
+/// `"frames_vs_uncompressed"`: frames against the traced images or against
+/// the same frames made from uncompressed data; see the report's notes).
 #[derive(Clone, Debug, Serialize)]
 pub struct Curve {
     pub name: String,
@@ -96,6 +97,10 @@ pub struct CodecReport {
     /// PSNR of rendered frames against the gold standard: filled in by the
     /// engine, which renders them; `None` here.
     pub frames_psnr_db: Option<f64>,
+    /// The same frames against the uncompressed maps rendered the same
+    /// way: what compression alone costs on screen (engine; `None` here).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frames_vs_uncompressed_psnr_db: Option<f64>,
     pub bytes: u64,
     pub raw_bytes: u64,
     /// Median wall time to decode one leaf (all faces and MIPs) into an f16
@@ -196,6 +201,7 @@ pub fn report(c: &Container, reference: &EncodeInput, opts: &ReportOptions) -> R
         ratio_vs_8bit: raw as f64 / 4.0 / bytes as f64,
         psnr_db: total.psnr_db(),
         frames_psnr_db: None,
+        frames_vs_uncompressed_psnr_db: None,
         bytes,
         raw_bytes: raw,
         decode_ms_median: median,
