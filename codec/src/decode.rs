@@ -8,12 +8,17 @@
 //! `TextureInfo::stagger`), so different objects cross block boundaries on
 //! different frames and the misses spread out.
 //!
-//! What is cached for a node is the *prefix sum* of the levels from the
-//! root down to that node (its decoded leaf-so-far), not the node's detail
-//! alone: a leaf then costs one image addition (its own level) instead of
-//! one per level, with the same per-level lifetimes. The MIP reconstruction
-//! and the inverse colour/gamma transform are fused into one pass that
-//! writes the caller's slice (the engine's mapped staging buffer) directly.
+//! What is cached for a node is its level's image of one face, kept
+//! *sparse* ([`SparseImage`]: only the blocks the stream coded, as
+//! constants or 8×8 blocks — most blocks of a detail level are not coded).
+//! A leaf is summed from its levels' blocks, root first, into a reused
+//! face-sized buffer that stays in cache, then the MIP reconstruction and
+//! the inverse colour/gamma transform write the caller's slice (the
+//! engine's mapped staging buffer) directly, on AVX2/F16C where the CPU has
+//! them. No full-size image is copied through memory per level, and the
+//! resident cache is a fraction of full-size images. Results are
+//! bit-identical to summing dense level images in the same order (root,
+//! …, leaf, then the MIP prediction), which is what the codec first did.
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -21,7 +26,7 @@ use std::sync::Arc;
 use half::f16;
 use half::slice::HalfFloatSliceExt;
 
-use crate::coefs::{Contexts, decode_image_add, step_of};
+use crate::coefs::{Contexts, decode_image, step_of};
 use crate::container::{BlockView, Container, TextureInfo};
 use crate::dct::Dct8;
 use crate::domain::Gamma;
@@ -29,11 +34,24 @@ use crate::entropy::Reader;
 use crate::error::{CodecError, Result};
 use crate::planes::box_down;
 use crate::pyramid::Plan;
+use crate::sparse::SparseImage;
 
 /// A texel component type the decoder can write: `f32` or `half::f16`.
 pub trait OutTexel: Copy + Send {
     /// Converts `src` into `dst` (same length).
     fn convert(src: &[f32], dst: &mut [Self]);
+    /// A faster, bit-identical γ = 2 write of the first texels where the
+    /// CPU allows (see `write_rgba`); returns how many it wrote.
+    #[inline]
+    fn write_gamma2(
+        _img: &[f32],
+        _pred: Option<&[f32]>,
+        _n: usize,
+        _ch: usize,
+        _out: &mut [Self],
+    ) -> usize {
+        0
+    }
 }
 impl OutTexel for f32 {
     #[inline]
@@ -46,6 +64,22 @@ impl OutTexel for f16 {
     fn convert(src: &[f32], dst: &mut [Self]) {
         // SIMD (F16C) when the CPU has it.
         dst.convert_from_f32_slice(src);
+    }
+    #[inline]
+    fn write_gamma2(
+        img: &[f32],
+        pred: Option<&[f32]>,
+        n: usize,
+        ch: usize,
+        out: &mut [Self],
+    ) -> usize {
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("f16c") {
+            // SAFETY: both features were just detected.
+            return unsafe { write_gamma2_f16_avx2(img, pred, n, ch, out) };
+        }
+        let _ = (img, pred, n, ch, out);
+        0
     }
 }
 
@@ -69,9 +103,8 @@ impl Lifetimes {
     }
 }
 
-/// Evicted image buffers kept for reuse: fresh ones page-fault on first
-/// touch, which costs more than decoding (notably in VMs). Bounded by what
-/// was resident anyway.
+/// Evicted images kept for reuse (their allocations): fresh ones
+/// page-fault on first touch. Bounded by what was resident anyway.
 const POOL_MAX: usize = 256;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -83,8 +116,8 @@ struct ImageKey {
 }
 
 struct Entry {
-    /// All MIP levels of one face, planar channels.
-    data: Vec<f32>,
+    /// One level's coded blocks, all MIP levels of one face.
+    data: SparseImage,
     last_used: u64,
     lifetime: u64,
 }
@@ -117,10 +150,13 @@ pub struct DecodeCache {
     images: HashMap<ImageKey, Entry>,
     blocks: HashMap<usize, CachedBlock>,
     dct: Dct8,
-    pool: Vec<Vec<f32>>,
+    pool: Vec<SparseImage>,
+    /// The leaf being summed: one face, all MIPs, planar (stays in cache).
+    sum: Vec<f32>,
+    /// One block row of MIP 0, planar.
+    strip: Vec<f32>,
     pred: Vec<f32>,
     pred_next: Vec<f32>,
-    sum0: Vec<f32>,
     stats: CacheStats,
 }
 
@@ -139,9 +175,10 @@ impl DecodeCache {
             blocks: HashMap::new(),
             dct: Dct8::default(),
             pool: Vec::new(),
+            sum: Vec::new(),
+            strip: Vec::new(),
             pred: Vec::new(),
             pred_next: Vec::new(),
-            sum0: Vec::new(),
             stats: CacheStats::default(),
         }
     }
@@ -163,13 +200,13 @@ impl DecodeCache {
         self.stats.evictions += (before - self.images.len()) as u64;
     }
 
-    /// Drops every cached image into the buffer pool (kept for reuse).
+    /// Drops every cached image into the buffer pool (kept for reuse): all
+    /// of them, beyond [`POOL_MAX`] — the memory was resident anyway, and
+    /// decoding again after a clear then allocates (and faults) nothing.
     pub fn clear(&mut self) {
         let pool = &mut self.pool;
         for (_, mut e) in self.images.drain() {
-            if pool.len() < POOL_MAX {
-                pool.push(std::mem::take(&mut e.data));
-            }
+            pool.push(std::mem::take(&mut e.data));
         }
         self.blocks.clear();
     }
@@ -177,7 +214,7 @@ impl DecodeCache {
     pub fn stats(&self) -> CacheStats {
         CacheStats {
             resident_images: self.images.len(),
-            resident_bytes: self.images.values().map(|e| e.data.len() * 4).sum(),
+            resident_bytes: self.images.values().map(|e| e.data.bytes()).sum(),
             ..self.stats
         }
     }
@@ -272,8 +309,8 @@ impl DecodeCache {
         )
     }
 
-    /// Finds or decodes the leaf prefix sum for one face, then writes the
-    /// MIP levels for which `dest` gives a range of `out`.
+    /// Finds or decodes the level images of one face's path, sums them,
+    /// then writes the MIP levels for which `dest` gives a range of `out`.
     #[allow(clippy::too_many_arguments)]
     fn decode_face<T: OutTexel>(
         &mut self,
@@ -306,151 +343,154 @@ impl DecodeCache {
             what: "block vanished from the cache".into(),
         })?;
         cb.last_used = frame;
-        let plan = cb.plan.clone();
         let lb = tex.log2b();
-        let n_levels = plan.levels.len();
+        let n_levels = cb.plan.levels.len();
         let path: Vec<ImageKey> = (0..n_levels)
             .map(|level| ImageKey {
                 block,
                 level: level as u8,
-                node: plan.node_of(level, local, lb) as u16,
+                node: cb.plan.node_of(level, local, lb) as u16,
                 face: face as u8,
             })
             .collect();
-        let leaf_key = path[n_levels - 1];
-        // Deepest cached prefix above the leaf; touching it touches its ancestors.
-        let deepest = (0..n_levels - 1)
-            .rev()
-            .find(|&l| self.images.contains_key(&path[l]));
-        for k in path
-            .iter()
-            .take(deepest.map_or(0, |d| d + 1))
-            .chain([&leaf_key])
-        {
-            if let Some(e) = self.images.get_mut(k) {
-                e.last_used = frame;
+        let mut missing = Vec::new();
+        for (level, k) in path.iter().enumerate() {
+            match self.images.get_mut(k) {
+                Some(e) => {
+                    e.last_used = frame;
+                    self.stats.hits += 1;
+                }
+                None => missing.push(level),
             }
         }
-        let start = deepest.map_or(0, |d| d + 1);
-        let leaf_cached = self.images.contains_key(&leaf_key);
-        self.stats.hits += deepest.map_or(0, |d| d as u64 + 1) + leaf_cached as u64;
-        self.stats.misses += (n_levels - 1 - start) as u64 + !leaf_cached as u64;
-        if start < n_levels - 1 || !leaf_cached {
+        if !missing.is_empty() {
+            self.stats.misses += missing.len() as u64;
             // Take the bytes out while decoding (the decoder borrows self).
             let bytes = self
                 .blocks
                 .get_mut(&block)
                 .map(|b| std::mem::take(&mut b.bytes))
                 .unwrap_or_default();
-            let result = self.decode_path(tex, &bytes, block, &path, deepest, leaf_cached);
+            let result = self.decode_levels(tex, &bytes, block, &path, &missing);
             if let Some(b) = self.blocks.get_mut(&block) {
                 b.bytes = bytes;
             }
             result?;
         }
-        let missing = || CodecError::BadBlock {
+        let vanished = || CodecError::BadBlock {
             block,
             what: "decoded image vanished from the cache".into(),
         };
-        let parent = &self
-            .images
-            .get(&path[n_levels - 2])
-            .ok_or_else(missing)?
-            .data;
-        let detail = &self.images.get(&leaf_key).ok_or_else(missing)?.data;
-        // Leaf = parent prefix + leaf detail; MIP m also adds the decimated
-        // finest level (box is linear: box(p + d) = box(p) + box(d)).
+        let levels = path
+            .iter()
+            .map(|k| self.images.get(k).map(|e| &e.data))
+            .collect::<Option<Vec<_>>>()
+            .ok_or_else(vanished)?;
         let l = &tex.layout;
         let ch = l.channels as usize;
+        let len: usize = (0..l.mips).map(|m| l.face_texels(m) * ch).sum();
+        // (These buffers only grow: shrinking and regrowing would zero them.)
+        if self.sum.len() < len {
+            self.sum.resize(len, 0.0);
+        }
         let gamma = Gamma(c.gamma);
         let mut off = 0;
         for mip in 0..=last_mip {
             let (w, h) = l.mip_size(mip);
             let n = w * h;
-            let range = off..off + n * ch;
-            let (Some(p), Some(d)) = (parent.get(range.clone()), detail.get(range)) else {
-                return Err(missing());
-            };
-            if mip == 1 {
+            let dst = dest(mip);
+            // MIP 0 is needed for the prediction of the others.
+            let needed = dst.is_some() || (mip == 0 && last_mip > 0);
+            if mip == 0 && needed && (last_mip == 0 || (w % 2 == 0 && h % 2 == 0)) {
+                // The largest image by strips of one block row: its sums, its
+                // write and the MIP 1 prediction from them stay in L1.
+                let o = match dst {
+                    Some(r) => Some(out.get_mut(r).ok_or(CodecError::OutputSize {
+                        got: 0,
+                        expected: n * 4,
+                    })?),
+                    None => None,
+                };
+                if last_mip > 0 {
+                    let (w1, h1) = l.mip_size(1);
+                    if self.pred.len() < w1 * h1 * ch {
+                        self.pred.resize(w1 * h1 * ch, 0.0);
+                        self.pred_next.resize(w1 * h1 * ch, 0.0);
+                    }
+                }
+                write_mip0_by_strips(
+                    &levels,
+                    gamma,
+                    w,
+                    h,
+                    ch,
+                    &mut self.strip,
+                    (last_mip > 0).then_some(&mut self.pred[..]),
+                    o,
+                );
+                off += n * ch;
+                continue;
+            }
+            let img = &mut self.sum[off..off + n * ch];
+            if needed {
+                // Root first, then each finer level: the order of the sums.
+                for (c, plane) in img.chunks_exact_mut(n).enumerate() {
+                    plane.fill(0.0);
+                    for lv in &levels {
+                        lv.add_plane(mip as usize * ch + c, plane, w);
+                    }
+                }
+            }
+            // MIP m adds the decimated finest level (the leaf's own MIP 0).
+            if mip == 1 && !strips_done_mip1(l, last_mip) {
                 let (pw, ph) = l.mip_size(0);
-                self.pred.resize(n * ch, 0.0);
-                box_down(&self.sum0, pw, ph, ch, &mut self.pred);
+                if self.pred.len() < n * ch {
+                    self.pred.resize(n * ch, 0.0);
+                    self.pred_next.resize(n * ch, 0.0);
+                }
+                box_down(&self.sum[..pw * ph * ch], pw, ph, ch, &mut self.pred);
             } else if mip > 1 {
                 let (pw, ph) = l.mip_size(mip - 1);
-                self.pred_next.resize(n * ch, 0.0);
                 box_down(&self.pred, pw, ph, ch, &mut self.pred_next);
                 std::mem::swap(&mut self.pred, &mut self.pred_next);
             }
-            if let Some(r) = dest(mip) {
+            if let Some(r) = dst {
                 let o = out.get_mut(r).ok_or(CodecError::OutputSize {
                     got: 0,
                     expected: n * 4,
                 })?;
-                let pred = if mip > 0 {
-                    Some(&self.pred[..n * ch])
-                } else {
-                    None
-                };
-                let keep = (mip == 0 && last_mip > 0).then_some(&mut self.sum0);
-                write_rgba(gamma, [p, d], pred, n, ch, o, keep);
-            } else if mip == 0 && last_mip > 0 {
-                self.sum0.clear();
-                self.sum0.extend(p.iter().zip(d).map(|(a, b)| a + b));
+                let pred = (mip > 0).then(|| &self.pred[..n * ch]);
+                write_rgba(gamma, &self.sum[off..off + n * ch], pred, n, ch, o);
             }
             off += n * ch;
         }
         Ok(())
     }
 
-    /// Decodes the prefix sums below level `deepest` (cached) down to the
-    /// leaf's parent, caching each, and the leaf's own detail image unless
-    /// `leaf_cached`.
-    fn decode_path(
+    /// Decodes the level images `path[level]` for each of `levels` and
+    /// caches them.
+    fn decode_levels(
         &mut self,
         tex: &TextureInfo,
         bytes: &[u8],
         block: usize,
         path: &[ImageKey],
-        deepest: Option<usize>,
-        leaf_cached: bool,
+        levels: &[usize],
     ) -> Result<()> {
         let view = BlockView::parse(bytes, tex, block)?;
         let n_levels = path.len();
         let frame = self.frame;
-        let l = &tex.layout;
-        let len: usize = (0..l.mips)
-            .map(|m| l.face_texels(m) * l.channels as usize)
-            .sum();
-        let start = deepest.map_or(0, |d| d + 1);
-        if start < n_levels - 1 {
-            let mut cur = self.take_buffer(len);
-            match deepest.and_then(|d| self.images.get(&path[d])) {
-                Some(e) => cur.copy_from_slice(&e.data),
-                None => cur.fill(0.0),
-            }
-            for (level, key) in path.iter().enumerate().take(n_levels - 1).skip(start) {
-                self.decode_stream_add(tex, &view, block, *key, &mut cur)?;
-                let data = if level + 2 < n_levels {
-                    // A pooled buffer, not a fresh allocation (first touch faults).
-                    let mut copy = self.take_buffer(len);
-                    copy.copy_from_slice(&cur);
-                    copy
-                } else {
-                    std::mem::take(&mut cur)
-                };
-                self.insert(*key, data, n_levels - 1 - level, frame);
-            }
-        }
-        if !leaf_cached {
-            let mut detail = self.take_buffer(len);
-            detail.fill(0.0);
-            self.decode_stream_add(tex, &view, block, path[n_levels - 1], &mut detail)?;
-            self.insert(path[n_levels - 1], detail, 0, frame);
+        for &level in levels {
+            let key = path[level];
+            let mut img = self.pool.pop().unwrap_or_default();
+            img.clear();
+            decode_level(&self.dct, tex, &view, block, key, &mut img)?;
+            self.insert(key, img, n_levels - 1 - level, frame);
         }
         Ok(())
     }
 
-    fn insert(&mut self, key: ImageKey, data: Vec<f32>, up: usize, frame: u64) {
+    fn insert(&mut self, key: ImageKey, data: SparseImage, up: usize, frame: u64) {
         self.images.insert(
             key,
             Entry {
@@ -460,110 +500,140 @@ impl DecodeCache {
             },
         );
     }
+}
 
-    /// A buffer of `len` floats from the pool of evicted images (contents
-    /// unspecified), or a new one.
-    fn take_buffer(&mut self, len: usize) -> Vec<f32> {
-        let mut v = match self.pool.iter().position(|b| b.capacity() >= len) {
-            Some(i) => self.pool.swap_remove(i),
-            None => Vec::with_capacity(len),
-        };
-        v.resize(len, 0.0);
-        v
+/// Whether MIP 0 went by strips, which leaves MIP 1's prediction made.
+fn strips_done_mip1(l: &crate::input::LeafLayout, last_mip: u32) -> bool {
+    let (w, h) = l.mip_size(0);
+    last_mip > 0 && w % 2 == 0 && h % 2 == 0
+}
+
+/// MIP 0 of one face, one block row (8 texel rows) at a time: the sum of
+/// the levels' blocks (root first), written to `out` if given, and, with
+/// `pred1`, box-decimated into the MIP 1 prediction (`w`, `h` even then).
+/// The same operations per texel as summing and decimating whole images.
+#[allow(clippy::too_many_arguments)]
+fn write_mip0_by_strips<T: OutTexel>(
+    levels: &[&SparseImage],
+    gamma: Gamma,
+    w: usize,
+    h: usize,
+    ch: usize,
+    strip: &mut Vec<f32>,
+    mut pred1: Option<&mut [f32]>,
+    mut out: Option<&mut [T]>,
+) {
+    const N: usize = crate::dct::N;
+    if strip.len() < ch * N * w {
+        strip.resize(ch * N * w, 0.0);
     }
-
-    /// Decodes stream `k` and adds it into `acc` (one face, all MIPs, planar).
-    fn decode_stream_add(
-        &mut self,
-        tex: &TextureInfo,
-        view: &BlockView,
-        block: usize,
-        k: ImageKey,
-        acc: &mut [f32],
-    ) -> Result<()> {
-        let l = &tex.layout;
-        let ch = l.channels as usize;
-        let si = BlockView::stream_index(
-            &view.plan,
-            l.faces,
-            k.level as usize,
-            k.node as usize,
-            k.face as u32,
-        );
-        let corrupt = |what| CodecError::CorruptStream {
-            block,
-            stream: si,
-            what,
-        };
-        let (steps, bytes) = *view
-            .streams
-            .get(si)
-            .ok_or(corrupt("stream index out of range"))?;
-        if steps.iter().all(|&s| s == 0) {
-            return Ok(());
+    // Per level and channel: the blocks of MIP 0's plane not yet added.
+    let mut todo: Vec<std::ops::Range<u32>> = levels
+        .iter()
+        .flat_map(|lv| (0..ch).map(|c| lv.plane_range(c)))
+        .collect();
+    let (w1, h1) = (w / 2, h / 2);
+    for y0 in (0..h).step_by(N) {
+        let ys = N.min(h - y0);
+        let ns = ys * w;
+        let strip = &mut strip[..ch * ns];
+        for (c, plane) in strip.chunks_exact_mut(ns).enumerate() {
+            plane.fill(0.0);
+            for (li, lv) in levels.iter().enumerate() {
+                lv.add_row(&mut todo[li * ch + c], y0, plane, w);
+            }
+            if let Some(p) = pred1.as_deref_mut() {
+                let p = &mut p[c * w1 * h1 + (y0 / 2) * w1..][..(ys / 2) * w1];
+                box_down(plane, w, ys, 1, p);
+            }
         }
+        if let Some(o) = out.as_deref_mut() {
+            write_rgba(gamma, strip, None, ns, ch, &mut o[y0 * w * 4..][..ns * 4]);
+        }
+    }
+}
+
+/// Decodes stream `k` (one level's image of one face, all MIPs) into `img`.
+fn decode_level(
+    dct: &Dct8,
+    tex: &TextureInfo,
+    view: &BlockView,
+    block: usize,
+    k: ImageKey,
+    img: &mut SparseImage,
+) -> Result<()> {
+    let l = &tex.layout;
+    let ch = l.channels as usize;
+    let si = BlockView::stream_index(
+        &view.plan,
+        l.faces,
+        k.level as usize,
+        k.node as usize,
+        k.face as u32,
+    );
+    let corrupt = |what| CodecError::CorruptStream {
+        block,
+        stream: si,
+        what,
+    };
+    let (steps, bytes) = *view
+        .streams
+        .get(si)
+        .ok_or(corrupt("stream index out of range"))?;
+    if steps.iter().any(|&s| s != 0) {
         let mut r = Reader::new(bytes).ok_or(corrupt("stream is not whole words"))?;
         let mut ctx = Contexts::default();
-        let mut off = 0;
         for mip in 0..l.mips {
             let (w, h) = l.mip_size(mip);
-            let n = w * h * ch;
             let idx = *steps.get(mip as usize).ok_or(corrupt("missing step"))?;
-            let dst = acc
-                .get_mut(off..off + n)
-                .ok_or(corrupt("image larger than its buffer"))?;
             if idx != 0 {
-                decode_image_add(&mut r, &mut ctx, &mut self.dct, w, h, ch, step_of(idx), dst)
+                let mut sink = img.sink(mip as usize, ch);
+                decode_image(&mut r, &mut ctx, dct, w, h, ch, step_of(idx), &mut sink)
                     .map_err(corrupt)?;
             }
-            off += n;
         }
-        Ok(())
     }
+    img.finish(l.mips as usize * ch);
+    Ok(())
 }
 
-/// Planar coding-domain image (parent prefix + leaf detail, + optional
-/// MIP prediction) → interleaved linear RGBA, converted to `T` in bulk.
-/// With `keep`, the planar sums (before the colour transform) are stored
-/// there too: the next MIP level's prediction is decimated from them.
-#[allow(clippy::too_many_arguments)]
+/// Planar coding-domain image (the leaf's sum of levels, + the MIP
+/// prediction above MIP 0) → interleaved linear RGBA, converted to `T`.
 fn write_rgba<T: OutTexel>(
     g: Gamma,
-    img: [&[f32]; 2],
+    img: &[f32],
     pred: Option<&[f32]>,
     n: usize,
     ch: usize,
     out: &mut [T],
-    keep: Option<&mut Vec<f32>>,
 ) {
-    let keep = keep.map(|k| {
-        k.clear();
-        k.resize(n * ch, 0.0);
-        &mut k[..]
-    });
     if g.0 == 2.0 {
-        write_rgba_with(|v: f32| v * v.abs(), img, pred, n, ch, out, keep)
+        let done = T::write_gamma2(img, pred, n, ch, out);
+        write_rgba_with(|v: f32| v * v.abs(), img, pred, n, ch, out, done)
     } else {
-        write_rgba_with(|v: f32| g.inverse(v), img, pred, n, ch, out, keep)
+        write_rgba_with(|v: f32| g.inverse(v), img, pred, n, ch, out, 0)
     }
 }
 
+/// The portable write, from texel `from` on.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 fn write_rgba_with<T: OutTexel>(
     inv: impl Fn(f32) -> f32,
-    img: [&[f32]; 2],
+    img: &[f32],
     pred: Option<&[f32]>,
     n: usize,
     ch: usize,
     out: &mut [T],
-    mut keep: Option<&mut [f32]>,
+    from: usize,
 ) {
-    const CHUNK: usize = 1024;
+    const CHUNK: usize = 256;
+    if from >= n {
+        return;
+    }
     let mut tmp = [0.0f32; CHUNK * 4];
     let mut sum = [[0.0f32; CHUNK]; 4];
-    for (chunk_i, dst) in out[..n * 4].chunks_mut(CHUNK * 4).enumerate() {
-        let base = chunk_i * CHUNK;
+    for (chunk_i, dst) in out[from * 4..n * 4].chunks_mut(CHUNK * 4).enumerate() {
+        let base = from + chunk_i * CHUNK;
         let m = dst.len() / 4;
         // Planes (+ prediction) for this chunk, then the colour transform.
         for (c, s) in sum.iter_mut().enumerate() {
@@ -572,17 +642,11 @@ fn write_rgba_with<T: OutTexel>(
                 s.fill(1.0);
                 continue;
             }
-            let (a, b) = (&img[0][c * n + base..][..m], &img[1][c * n + base..][..m]);
-            s.iter_mut()
-                .zip(a.iter().zip(b))
-                .for_each(|(o, (x, y))| *o = x + y);
+            s.copy_from_slice(&img[c * n + base..][..m]);
             if let Some(p) = pred {
                 s.iter_mut()
                     .zip(&p[c * n + base..][..m])
                     .for_each(|(a, b)| *a += b);
-            }
-            if let Some(k) = keep.as_deref_mut() {
-                k[c * n + base..][..m].copy_from_slice(s);
             }
         }
         // Colour transform in place (planar, vectorisable), then interleave.
@@ -602,6 +666,70 @@ fn write_rgba_with<T: OutTexel>(
     }
 }
 
+/// [`write_rgba`] for γ = 2 into f16, eight texels at a time on AVX2/F16C
+/// (the same operations in the same order as the portable path, and the
+/// same round-to-nearest-even conversion as `half`, so the same bits).
+/// Returns how many texels it wrote (a multiple of 8; the rest is left to
+/// the portable path).
+///
+/// # Safety
+/// The CPU must support AVX2 and F16C.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,f16c")]
+unsafe fn write_gamma2_f16_avx2(
+    img: &[f32],
+    pred: Option<&[f32]>,
+    n: usize,
+    ch: usize,
+    out: &mut [f16],
+) -> usize {
+    use std::arch::x86_64::*;
+    let n8 = n / 8 * 8;
+    let planes = &img[..n * ch];
+    let pred = pred.map(|p| &p[..n * ch]);
+    let out = &mut out[..n8 * 4];
+    // SAFETY: AVX2/F16C are available (the caller's contract); every load
+    // reads 8 floats at `c·n + i` with `i + 8 ≤ n8 ≤ n` inside the planes
+    // (length-checked above), every store writes 8 halves at `4i + 8j`,
+    // `j < 4`, inside `out[..4·n8]`.
+    unsafe {
+        let sign = _mm256_set1_ps(-0.0);
+        let inv = |v: __m256| _mm256_mul_ps(v, _mm256_andnot_ps(sign, v));
+        let load = |c: usize, i: usize| {
+            let v = _mm256_loadu_ps(planes.as_ptr().add(c * n + i));
+            match pred {
+                Some(p) => _mm256_add_ps(v, _mm256_loadu_ps(p.as_ptr().add(c * n + i))),
+                None => v,
+            }
+        };
+        let o = out.as_mut_ptr() as *mut __m128i;
+        for i in (0..n8).step_by(8) {
+            let (y, co, cg) = (load(0, i), load(1, i), load(2, i));
+            let a = if ch > 3 {
+                load(3, i)
+            } else {
+                _mm256_set1_ps(1.0)
+            };
+            let t = _mm256_sub_ps(y, cg);
+            let r = inv(_mm256_add_ps(t, co));
+            let g = inv(_mm256_add_ps(y, cg));
+            let b = inv(_mm256_sub_ps(t, co));
+            let [r, g, b, a] =
+                [r, g, b, a].map(|v| _mm256_cvtps_ph::<_MM_FROUND_TO_NEAREST_INT>(v));
+            let rg_lo = _mm_unpacklo_epi16(r, g);
+            let rg_hi = _mm_unpackhi_epi16(r, g);
+            let ba_lo = _mm_unpacklo_epi16(b, a);
+            let ba_hi = _mm_unpackhi_epi16(b, a);
+            let q = o.add(i / 2);
+            _mm_storeu_si128(q, _mm_unpacklo_epi32(rg_lo, ba_lo));
+            _mm_storeu_si128(q.add(1), _mm_unpackhi_epi32(rg_lo, ba_lo));
+            _mm_storeu_si128(q.add(2), _mm_unpacklo_epi32(rg_hi, ba_hi));
+            _mm_storeu_si128(q.add(3), _mm_unpackhi_epi32(rg_hi, ba_hi));
+        }
+    }
+    n8
+}
+
 /// Convenience: decode one whole leaf without keeping a cache.
 pub fn decode_leaf_all<T: OutTexel>(
     c: &Container,
@@ -615,3 +743,32 @@ pub fn decode_leaf_all<T: OutTexel>(
 
 /// Shared handle type for engines that decode on several threads.
 pub type SharedContainer = Arc<Container>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fast_f16_write_matches_the_portable_one() {
+        let mut seed = 3u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 40) as f32 / (1u64 << 24) as f32 - 0.3) * 40.0
+        };
+        // Lengths with and without an 8-texel tail; RGB and RGBA; with and
+        // without a MIP prediction; values spanning f16's range and beyond.
+        for (n, ch, with_pred) in [(64, 3, false), (67, 4, true), (5, 3, true), (1, 4, false)] {
+            let img: Vec<f32> = (0..n * ch).map(|_| next()).collect();
+            let pred: Vec<f32> = (0..n * ch).map(|_| next() * 0.1).collect();
+            let pred = with_pred.then_some(&pred[..]);
+            let mut fast = vec![f16::ZERO; n * 4];
+            let mut portable = vec![f16::ZERO; n * 4];
+            write_rgba(Gamma(2.0), &img, pred, n, ch, &mut fast);
+            write_rgba_with(|v: f32| v * v.abs(), &img, pred, n, ch, &mut portable, 0);
+            let bits = |v: &[f16]| v.iter().map(|h| h.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&fast), bits(&portable), "n {n}, ch {ch}");
+        }
+    }
+}

@@ -281,6 +281,18 @@ pub fn encode(
     target: Target,
     opts: &EncodeOptions,
 ) -> Result<(Vec<u8>, EncodeReport)> {
+    let mut all = encode_targets(input, &[target], opts)?;
+    Ok(all.remove(0))
+}
+
+/// [`encode`] at several targets, analysing the input (pyramids, DCT,
+/// rate/distortion curves — nearly all of the work) once: each result is
+/// the container [`encode`] gives for that target alone.
+pub fn encode_targets(
+    input: &EncodeInput,
+    targets: &[Target],
+    opts: &EncodeOptions,
+) -> Result<Vec<(Vec<u8>, EncodeReport)>> {
     input.validate()?;
     if !(opts.gamma.is_finite() && (1.0..=4.0).contains(&opts.gamma)) {
         return Err(CodecError::BadRequest(format!(
@@ -294,12 +306,18 @@ pub fn encode(
             opts.alpha_cap
         )));
     }
+    if targets.is_empty() {
+        return Err(CodecError::BadRequest("no target".into()));
+    }
     let raw = input.raw_bytes();
-    let budget = match target {
-        Target::Ratio(r) if r.is_finite() && r > 0.0 => (raw as f64 / r).floor() as u64,
-        Target::Bytes(b) if b > 0 => b,
-        other => return Err(CodecError::BadRequest(format!("invalid target {other:?}"))),
-    };
+    let budgets = targets
+        .iter()
+        .map(|&target| match target {
+            Target::Ratio(r) if r.is_finite() && r > 0.0 => Ok((raw as f64 / r).floor() as u64),
+            Target::Bytes(b) if b > 0 => Ok(b),
+            other => Err(CodecError::BadRequest(format!("invalid target {other:?}"))),
+        })
+        .collect::<Result<Vec<u64>>>()?;
     let infos = texture_infos(input, opts);
     let mut jobs_spec = Vec::new();
     for (ti, info) in infos.iter().enumerate() {
@@ -319,7 +337,7 @@ pub fn encode(
             .iter()
             .map(|j| block_table_bytes(&infos[j.tex], &j.plan))
             .sum::<u64>();
-    if budget < fixed {
+    if let Some(&budget) = budgets.iter().find(|&&b| b < fixed) {
         return Err(CodecError::BudgetTooSmall {
             budget,
             minimum: fixed,
@@ -348,15 +366,32 @@ pub fn encode(
         .iter()
         .flat_map(|j| j.atoms.iter().map(|a| a.rd.clone()))
         .collect();
+    budgets
+        .iter()
+        .map(|&budget| fit_budget(&jobs, &infos, &rds, &weights, raw, budget, fixed, opts))
+        .collect()
+}
 
+/// Allocates and writes one container within `budget` bytes.
+#[allow(clippy::too_many_arguments)]
+fn fit_budget(
+    jobs: &[BlockJob],
+    infos: &[TextureInfo],
+    rds: &[AtomRd],
+    weights: &[TexWeight],
+    raw: u64,
+    budget: u64,
+    fixed: u64,
+    opts: &EncodeOptions,
+) -> Result<(Vec<u8>, EncodeReport)> {
     // The curves give ideal code lengths; real streams add word rounding and
     // a flush, so shrink the bit budget until the file fits.
     let mut payload_budget = (budget - fixed) as f64 * 8.0;
     for _ in 0..8 {
-        let alloc = allocate(&rds, &weights, payload_budget, opts.alpha_cap);
+        let alloc = allocate(rds, weights, payload_budget, opts.alpha_cap);
         let mut offset = 0;
         let mut blocks = Vec::with_capacity(jobs.len());
-        for j in &jobs {
+        for j in jobs {
             let n = j.atoms.len();
             blocks.push(write_block(
                 j,
@@ -365,7 +400,7 @@ pub fn encode(
             )?);
             offset += n;
         }
-        let bytes = container::write(opts.gamma, &infos, &blocks);
+        let bytes = container::write(opts.gamma, infos, &blocks);
         let size = bytes.len() as u64;
         if size <= budget || payload_budget <= 0.0 {
             if size > budget {

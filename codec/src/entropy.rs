@@ -8,21 +8,21 @@
 //! decisions), which a static-table coder or zstd cannot do. So the only thing
 //! written here is the model: an adaptive bit probability (12-bit, shift-5
 //! update, as in LZMA/CABAC) implementing constriction's model traits.
+//! Decoding uses [`Reader`], a binary-only re-implementation of
+//! constriction's range decoder that reads the same bytes (no format change)
+//! several times faster.
 //!
 //! [`CostMeter`] runs the same binarisation without producing bits, summing
 //! the ideal code length; the rate allocation uses it to draw rate/distortion
 //! curves cheaply and without range-coder word granularity.
 
 use std::borrow::Borrow;
-use std::convert::Infallible;
 use std::num::NonZeroU16;
 use std::sync::OnceLock;
 
-use constriction::Queue;
-use constriction::backends::ReadWords;
-use constriction::stream::model::{DecoderModel, EncoderModel, EntropyModel};
-use constriction::stream::queue::{DefaultRangeEncoder, RangeDecoder};
-use constriction::stream::{Decode, Encode};
+use constriction::stream::Encode;
+use constriction::stream::model::{EncoderModel, EntropyModel};
+use constriction::stream::queue::DefaultRangeEncoder;
 
 const PREC: usize = 12;
 const ONE: u16 = 1 << PREC;
@@ -78,17 +78,6 @@ impl EncoderModel<PREC> for Bin {
         } else {
             (0, nz(self.0))
         })
-    }
-}
-
-impl DecoderModel<PREC> for Bin {
-    #[inline]
-    fn quantile_function(&self, quantile: u16) -> (bool, u16, NonZeroU16) {
-        if quantile < self.0 {
-            (false, 0, nz(self.0))
-        } else {
-            (true, self.0, nz(ONE - self.0))
-        }
     }
 }
 
@@ -170,30 +159,24 @@ impl BitSink for Writer {
     }
 }
 
-/// Reads little-endian words straight from the container's bytes (no copy).
-/// Past the end it reports exhaustion, which the range decoder treats as
-/// zero padding; corrupt data then shows up as an error or a checksum miss.
-pub struct LeWords<'a> {
-    bytes: &'a [u8],
-}
-
-impl ReadWords<u32, Queue> for LeWords<'_> {
-    type ReadError = Infallible;
-    #[inline]
-    fn read(&mut self) -> Result<Option<u32>, Infallible> {
-        match self.bytes.split_first_chunk::<4>() {
-            Some((w, rest)) => {
-                self.bytes = rest;
-                Ok(Some(u32::from_le_bytes(*w)))
-            }
-            None => Ok(None),
-        }
-    }
-}
-
-/// Range decoder over one stream; errors latch into [`Reader::failed`].
+/// Range decoder over one stream, bit-compatible with constriction's
+/// `RangeDecoder<u32, u64>` (which [`Writer`] feeds) for the binary models
+/// above; errors latch into [`Reader::failed`].
+///
+/// constriction's decoder is generic over arbitrary models and divides once
+/// per symbol to find the quantile; for two symbols the same decision is a
+/// comparison (`⌊d / scale⌋ < p0 ⟺ d < scale·p0`), and only `d = point − lower`
+/// matters, never `lower` itself. The arithmetic is otherwise the same, step
+/// for step — initial state, renormalisation, zero padding past the end, and
+/// the "invalid data" condition — which `tests::matches_constriction` checks
+/// on real and garbage streams. This loop is the decoder's hottest.
+#[derive(Clone)]
 pub struct Reader<'a> {
-    dec: RangeDecoder<u32, u64, LeWords<'a>>,
+    /// Words not yet read (little-endian u32 each).
+    words: &'a [u8],
+    /// `point − lower` (wrapping), always `< range` on valid data.
+    d: u64,
+    range: u64,
     failed: bool,
 }
 
@@ -203,31 +186,82 @@ impl<'a> Reader<'a> {
         if bytes.len() % 4 != 0 {
             return None;
         }
-        let dec = RangeDecoder::with_backend(LeWords { bytes }).ok()?;
-        Some(Self { dec, failed: false })
+        let mut r = Self {
+            words: bytes,
+            d: 0,
+            range: u64::MAX,
+            failed: false,
+        };
+        // The initial point is the first two words, high word first; a
+        // one-word stream is padded with a zero word.
+        let mut point = 0u64;
+        let mut read = 0;
+        while read < 2 {
+            match r.next_word() {
+                Some(w) => {
+                    point = (point << 32) | w;
+                    read += 1;
+                }
+                None => break,
+            }
+        }
+        if read == 1 {
+            point <<= 32;
+        }
+        r.d = point;
+        Some(r)
     }
-    #[inline]
+
+    #[inline(always)]
+    fn next_word(&mut self) -> Option<u64> {
+        let (w, rest) = self.words.split_first_chunk::<4>()?;
+        self.words = rest;
+        Some(u32::from_le_bytes(*w) as u64)
+    }
+
+    /// One binary decision with P(false) = `p0` / 4096 (`p0` in 1..4096);
+    /// `None` where constriction reports invalid data (state unchanged).
+    #[inline(always)]
+    fn decide(&mut self, p0: u16) -> Option<bool> {
+        let scale = self.range >> PREC;
+        if self.d >= scale << PREC {
+            return None;
+        }
+        let bound = scale * p0 as u64;
+        let bit = self.d >= bound;
+        if bit {
+            self.d -= bound;
+            self.range = scale * (ONE - p0) as u64;
+        } else {
+            self.range = bound;
+        }
+        if self.range < 1 << 32 {
+            self.range <<= 32;
+            // Past the end the stream reads as zero words.
+            self.d = (self.d << 32).wrapping_add(self.next_word().unwrap_or(0));
+        }
+        Some(bit)
+    }
+
+    #[inline(always)]
     pub fn bit(&mut self, ctx: &mut Ctx) -> bool {
-        match self.dec.decode_symbol(Bin(ctx.0)) {
-            Ok(b) => {
+        match self.decide(ctx.0) {
+            Some(b) => {
                 ctx.update(b);
                 b
             }
-            Err(_) => {
+            None => {
                 self.failed = true;
                 false
             }
         }
     }
-    #[inline]
+    #[inline(always)]
     pub fn bypass(&mut self) -> bool {
-        match self.dec.decode_symbol(Bin(HALF)) {
-            Ok(b) => b,
-            Err(_) => {
-                self.failed = true;
-                false
-            }
-        }
+        self.decide(HALF).unwrap_or_else(|| {
+            self.failed = true;
+            false
+        })
     }
     pub fn failed(&self) -> bool {
         self.failed
@@ -237,6 +271,123 @@ impl<'a> Reader<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use constriction::Queue;
+    use constriction::backends::ReadWords;
+    use constriction::stream::Decode;
+    use constriction::stream::model::DecoderModel;
+    use constriction::stream::queue::RangeDecoder;
+    use std::convert::Infallible;
+
+    impl DecoderModel<PREC> for Bin {
+        #[inline]
+        fn quantile_function(&self, quantile: u16) -> (bool, u16, NonZeroU16) {
+            if quantile < self.0 {
+                (false, 0, nz(self.0))
+            } else {
+                (true, self.0, nz(ONE - self.0))
+            }
+        }
+    }
+
+    /// The decoder this module replaced: constriction's own, over the same
+    /// little-endian words. The reference for bit-compatibility.
+    struct LeWords<'a>(&'a [u8]);
+    impl ReadWords<u32, Queue> for LeWords<'_> {
+        type ReadError = Infallible;
+        fn read(&mut self) -> Result<Option<u32>, Infallible> {
+            Ok(self.0.split_first_chunk::<4>().map(|(w, rest)| {
+                self.0 = rest;
+                u32::from_le_bytes(*w)
+            }))
+        }
+    }
+    struct Reference<'a> {
+        dec: RangeDecoder<u32, u64, LeWords<'a>>,
+        failed: bool,
+    }
+    impl<'a> Reference<'a> {
+        fn new(bytes: &'a [u8]) -> Self {
+            Self {
+                dec: RangeDecoder::with_backend(LeWords(bytes)).unwrap(),
+                failed: false,
+            }
+        }
+        fn bit(&mut self, ctx: &mut Ctx) -> bool {
+            match self.dec.decode_symbol(Bin(ctx.0)) {
+                Ok(b) => {
+                    ctx.update(b);
+                    b
+                }
+                Err(_) => {
+                    self.failed = true;
+                    false
+                }
+            }
+        }
+        fn bypass(&mut self) -> bool {
+            self.dec.decode_symbol(Bin(HALF)).unwrap_or_else(|_| {
+                self.failed = true;
+                false
+            })
+        }
+    }
+
+    /// A small deterministic generator (no dependency needed).
+    fn lcg(s: &mut u64) -> u64 {
+        *s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        *s >> 33
+    }
+
+    #[test]
+    fn matches_constriction() {
+        // Real streams of skewed and mixed bits over several contexts, and
+        // garbage (where both must fail at the same decision and agree on
+        // every bit before and after), of several lengths including 0..=2
+        // words.
+        let mut seed = 7u64;
+        let mut failures = 0;
+        for case in 0..61 {
+            let n = [0usize, 1, 3, 40, 700, 5000][case % 6];
+            let bytes = if case == 60 {
+                // The initial point lies beyond the last whole quantile.
+                vec![0xff; 12]
+            } else if case % 3 == 2 {
+                let words = [0usize, 1, 2, 3, 17, 64][case % 6];
+                (0..words * 4).map(|_| lcg(&mut seed) as u8).collect()
+            } else {
+                let mut w = Writer::default();
+                let mut ctx = [Ctx::default(); 8];
+                for i in 0..n {
+                    let k = i % 8;
+                    let b = lcg(&mut seed) % 100 < [1, 5, 20, 50, 80, 95, 99, 50][k];
+                    if i % 5 == 4 {
+                        w.bypass(b);
+                    } else {
+                        w.bit(&mut ctx[k], b);
+                    }
+                }
+                w.finish().unwrap()
+            };
+            let mut ours = Reader::new(&bytes).unwrap();
+            let mut theirs = Reference::new(&bytes);
+            let (mut c1, mut c2) = ([Ctx::default(); 8], [Ctx::default(); 8]);
+            for i in 0..n.max(300) + 64 {
+                let k = i % 8;
+                let (a, b) = if i % 5 == 4 {
+                    (ours.bypass(), theirs.bypass())
+                } else {
+                    (ours.bit(&mut c1[k]), theirs.bit(&mut c2[k]))
+                };
+                assert_eq!(a, b, "case {case}, decision {i}");
+                assert_eq!(ours.failed(), theirs.failed, "case {case}, decision {i}");
+                assert_eq!(c1[k].0, c2[k].0);
+            }
+            failures += ours.failed() as usize;
+        }
+        assert!(failures > 0, "no stream exercised the invalid-data path");
+    }
 
     #[test]
     fn bits_round_trip_and_cost_tracks_size() {

@@ -10,7 +10,10 @@
 //! * `mpeg-texture` (ffmpeg/x264 along the parameter path): only when
 //!   `ffmpeg` is on PATH; otherwise skipped with a note. `mpeg-view` needs
 //!   the traced images and is the engine's to add through
-//!   [`ffmpeg_round_trip`].
+//!   [`ffmpeg_round_trip`] and [`smallest_fitting_crf`].
+//!
+//! The `*_baselines` functions take several byte targets at once (for
+//! ratio-against-PSNR [`Curve`]s) and encode each knob setting once.
 //!
 //! PSNR on rendered frames is the engine's part (it renders both); this
 //! report measures the textures.
@@ -34,6 +37,45 @@ pub struct Baseline {
     pub psnr_db: f64,
     pub bytes: u64,
     pub note: Option<String>,
+    /// Which pixels the PSNR pools, for baselines measured on frames.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pixels: Option<String>,
+}
+
+/// One point of a ratio-against-PSNR curve.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct CurvePoint {
+    pub ratio: f64,
+    pub psnr_db: f64,
+    pub bytes: u64,
+}
+
+/// A ratio-against-PSNR curve: `metric` says which PSNR (`"texture"`: the
+/// codec's texture PSNR, [`PSNR_DEFINITION`]; `"frames_vs_traced"` and
+/// `"frames_vs_uncompressed"`: frames against the traced images or against
+/// the same frames made from uncompressed data; see the report's notes).
+#[derive(Clone, Debug, Serialize)]
+pub struct Curve {
+    pub name: String,
+    pub metric: &'static str,
+    pub points: Vec<CurvePoint>,
+}
+
+impl Curve {
+    pub fn new(name: &str, metric: &'static str) -> Self {
+        Self {
+            name: name.into(),
+            metric,
+            points: Vec::new(),
+        }
+    }
+    pub fn push(&mut self, ratio: f64, psnr_db: f64, bytes: u64) {
+        self.points.push(CurvePoint {
+            ratio,
+            psnr_db,
+            bytes,
+        });
+    }
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -55,6 +97,10 @@ pub struct CodecReport {
     /// PSNR of rendered frames against the gold standard: filled in by the
     /// engine, which renders them; `None` here.
     pub frames_psnr_db: Option<f64>,
+    /// The same frames against the uncompressed maps rendered the same
+    /// way: what compression alone costs on screen (engine; `None` here).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frames_vs_uncompressed_psnr_db: Option<f64>,
     pub bytes: u64,
     pub raw_bytes: u64,
     /// Median wall time to decode one leaf (all faces and MIPs) into an f16
@@ -66,6 +112,9 @@ pub struct CodecReport {
     pub baselines: Vec<Baseline>,
     pub notes: Vec<String>,
     pub psnr_definition: &'static str,
+    /// Ratio-against-PSNR curves (`engine codec-report --curve`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub curves: Vec<Curve>,
 }
 
 pub const PSNR_DEFINITION: &str = "10*log10(peak^2/MSE) on sign(x)*sqrt(|x|) of RGB and linear alpha; peak = max of the reference over all pooled samples";
@@ -152,6 +201,7 @@ pub fn report(c: &Container, reference: &EncodeInput, opts: &ReportOptions) -> R
         ratio_vs_8bit: raw as f64 / 4.0 / bytes as f64,
         psnr_db: total.psnr_db(),
         frames_psnr_db: None,
+        frames_vs_uncompressed_psnr_db: None,
         bytes,
         raw_bytes: raw,
         decode_ms_median: median,
@@ -160,6 +210,7 @@ pub fn report(c: &Container, reference: &EncodeInput, opts: &ReportOptions) -> R
         baselines,
         notes,
         psnr_definition: PSNR_DEFINITION,
+        curves: Vec::new(),
     })
 }
 
@@ -357,37 +408,102 @@ fn jpeg_at(reference: &EncodeInput, quality: u8) -> Result<(u64, f64)> {
 /// Per-texture JPEG at the quality whose size is closest to `target` bytes
 /// without exceeding it (or quality 1 if even that is larger).
 pub fn jpeg_baseline(reference: &EncodeInput, target: u64) -> Result<Baseline> {
-    let (mut lo, mut hi) = (1u8, 95u8);
-    let mut best = jpeg_at(reference, lo)?;
-    let mut best_q = lo;
+    Ok(jpeg_baselines(reference, &[target], &mut |_| {})?.remove(0))
+}
+
+/// [`jpeg_baseline`] at several byte targets, each quality encoded once
+/// however many targets need it; `progress` hears of every encoding.
+pub fn jpeg_baselines(
+    reference: &EncodeInput,
+    targets: &[u64],
+    progress: &mut dyn FnMut(String),
+) -> Result<Vec<Baseline>> {
+    let mut memo = std::collections::BTreeMap::new();
+    let mut at = |q: u8| -> Result<(u64, f64)> {
+        if let Some(&r) = memo.get(&q) {
+            return Ok(r);
+        }
+        let r = jpeg_at(reference, q)?;
+        progress(format!("jpeg quality {q}: {} bytes", r.0));
+        memo.insert(q, r);
+        Ok(r)
+    };
+    let raw = reference.raw_bytes();
+    let mut out = Vec::new();
+    for &target in targets {
+        let (best_q, best) = largest_fitting(1, 95, target, &mut at)?;
+        out.push(Baseline {
+            name: "jpeg-per-texture".into(),
+            ratio: raw as f64 / best.0 as f64,
+            psnr_db: best.1,
+            bytes: best.0,
+            note: Some(format!(
+                "quality {best_q}{}",
+                if best.0 > target {
+                    "; cannot reach the codec's bytes"
+                } else {
+                    ""
+                }
+            )),
+            pixels: None,
+        });
+    }
+    Ok(out)
+}
+
+/// Bisection for the largest knob value in `lo..hi` whose size fits
+/// `target` (size rising with the knob, like JPEG quality); `lo` if even
+/// that does not fit. Returns the knob and its (bytes, PSNR).
+fn largest_fitting(
+    lo: u8,
+    hi: u8,
+    target: u64,
+    eval: &mut dyn FnMut(u8) -> Result<(u64, f64)>,
+) -> Result<(u8, (u64, f64))> {
+    let (mut lo, mut hi) = (lo, hi);
+    let mut best = eval(lo)?;
+    let mut best_k = lo;
     if best.0 <= target {
         while hi > lo + 1 {
             let mid = (lo + hi) / 2;
-            let r = jpeg_at(reference, mid)?;
+            let r = eval(mid)?;
             if r.0 <= target {
                 lo = mid;
                 best = r;
-                best_q = mid;
+                best_k = mid;
             } else {
                 hi = mid;
             }
         }
     }
-    let raw = reference.raw_bytes();
-    Ok(Baseline {
-        name: "jpeg-per-texture".into(),
-        ratio: raw as f64 / best.0 as f64,
-        psnr_db: best.1,
-        bytes: best.0,
-        note: Some(format!(
-            "quality {best_q}{}",
-            if best.0 > target {
-                "; cannot reach the codec's bytes"
+    Ok((best_k, best))
+}
+
+/// Bisection for the smallest x264 CRF in `0..=51` whose stream fits
+/// `target` bytes (size falls as CRF rises); CRF 51 if none does. `eval`
+/// gives (bytes, PSNR) at a CRF; callers memoise it across targets.
+/// Returns (CRF, bytes, PSNR).
+pub fn smallest_fitting_crf(
+    target: u64,
+    eval: &mut dyn FnMut(u32) -> Result<(u64, f64)>,
+) -> Result<(u32, u64, f64)> {
+    let (mut lo, mut hi) = (0u32, 51u32);
+    let mut best = eval(hi)?;
+    let mut best_crf = hi;
+    if best.0 <= target {
+        while hi > lo + 1 {
+            let mid = (lo + hi) / 2;
+            let r = eval(mid)?;
+            if r.0 <= target {
+                hi = mid;
+                best = r;
+                best_crf = mid;
             } else {
-                ""
+                lo = mid;
             }
-        )),
-    })
+        }
+    }
+    Ok((best_crf, best.0, best.1))
 }
 
 pub fn ffmpeg_available() -> bool {
@@ -504,6 +620,16 @@ pub fn ffmpeg_round_trip(
 /// exact, which favours the baseline). The CRF is bisected to the largest
 /// total size within `target` bytes.
 fn mpeg_texture_baseline(reference: &EncodeInput, target: u64) -> Result<Baseline> {
+    Ok(mpeg_texture_baselines(reference, &[target], &mut |_| {})?.remove(0))
+}
+
+/// [`mpeg_texture_baseline`] at several byte targets, each CRF encoded once
+/// however many targets need it; `progress` hears of every encoding.
+pub fn mpeg_texture_baselines(
+    reference: &EncodeInput,
+    targets: &[u64],
+    progress: &mut dyn FnMut(String),
+) -> Result<Vec<Baseline>> {
     let raw_total = reference.raw_bytes();
     let mut streams = Vec::new();
     for t in &reference.textures {
@@ -526,7 +652,11 @@ fn mpeg_texture_baseline(reference: &EncodeInput, target: u64) -> Result<Baselin
         }
         streams.push((t, peak, order, frames, w, h));
     }
-    let run = |crf: u32| -> Result<(u64, f64)> {
+    let mut memo = std::collections::BTreeMap::new();
+    let mut run = |crf: u32| -> Result<(u64, f64)> {
+        if let Some(&r) = memo.get(&crf) {
+            return Ok(r);
+        }
         let mut bytes = 0;
         let mut acc = PsnrAccum::default();
         for (t, peak, order, frames, w, h) in &streams {
@@ -543,37 +673,29 @@ fn mpeg_texture_baseline(reference: &EncodeInput, target: u64) -> Result<Baselin
                 acc.add(t.sample(s), t.layout.channels as usize, &out, 4);
             }
         }
-        Ok((bytes, acc.psnr_db()))
+        let r = (bytes, acc.psnr_db());
+        progress(format!("mpeg-texture crf {crf}: {bytes} bytes"));
+        memo.insert(crf, r);
+        Ok(r)
     };
-    // Size falls as CRF rises: find the smallest CRF that fits.
-    let (mut lo, mut hi) = (0u32, 51u32);
-    let mut best = run(hi)?;
-    let mut best_crf = hi;
-    if best.0 <= target {
-        while hi > lo + 1 {
-            let mid = (lo + hi) / 2;
-            let r = run(mid)?;
-            if r.0 <= target {
-                hi = mid;
-                best = r;
-                best_crf = mid;
-            } else {
-                lo = mid;
-            }
-        }
+    let mut out = Vec::new();
+    for &target in targets {
+        let (best_crf, bytes, psnr_db) = smallest_fitting_crf(target, &mut run)?;
+        out.push(Baseline {
+            name: "mpeg-texture".into(),
+            ratio: raw_total as f64 / bytes as f64,
+            psnr_db,
+            bytes,
+            note: Some(format!(
+                "libx264 yuv444p10le (10-bit), crf {best_crf}, GOP 8, one stream per texture, alpha not coded{}",
+                if bytes > target {
+                    "; cannot reach the codec's bytes"
+                } else {
+                    ""
+                }
+            )),
+            pixels: None,
+        });
     }
-    Ok(Baseline {
-        name: "mpeg-texture".into(),
-        ratio: raw_total as f64 / best.0 as f64,
-        psnr_db: best.1,
-        bytes: best.0,
-        note: Some(format!(
-            "libx264 yuv444p10le (10-bit), crf {best_crf}, GOP 8, one stream per texture, alpha not coded{}",
-            if best.0 > target {
-                "; cannot reach the codec's bytes"
-            } else {
-                ""
-            }
-        )),
-    })
+    Ok(out)
 }

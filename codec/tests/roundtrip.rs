@@ -383,3 +383,26 @@ fn report_has_the_json_fields() {
     assert_eq!(b["name"], "jpeg-per-texture");
     assert!(b["ratio"].as_f64().unwrap() > 0.0 && b["psnr_db"].as_f64().unwrap() > 0.0);
 }
+
+#[test]
+fn several_targets_at_once_match_separate_encodes() {
+    let input = small_scene(9);
+    let targets = [
+        Target::Ratio(300.0),
+        Target::Bytes(40_000),
+        Target::Ratio(60.0),
+    ];
+    let all = codec::encode_targets(&input, &targets, &EncodeOptions::default()).unwrap();
+    assert_eq!(all.len(), targets.len());
+    for (t, (bytes, rep)) in targets.iter().zip(&all) {
+        let (alone, alone_rep) = encode(&input, *t, &EncodeOptions::default()).unwrap();
+        assert!(*bytes == alone, "{t:?}: containers differ");
+        assert_eq!(rep.bytes, alone_rep.bytes);
+    }
+    assert!(codec::encode_targets(&input, &[], &EncodeOptions::default()).is_err());
+    let tiny = [Target::Ratio(100.0), Target::Bytes(100)];
+    assert!(matches!(
+        codec::encode_targets(&input, &tiny, &EncodeOptions::default()),
+        Err(CodecError::BudgetTooSmall { budget: 100, .. })
+    ));
+}

@@ -212,9 +212,19 @@ pub struct CodecReportArgs {
     /// Size the targets were traced at, as WIDTHxHEIGHT.
     #[arg(long, default_value = "640x480", value_parser = parse_size)]
     pub size: (u32, u32),
-    /// Measure rendered frames at every Nth sample (0: skip).
+    /// Measure rendered frames at every Nth sample (0: skip; the MPEG-view
+    /// baseline uses the same frames and pixels, so it is skipped too).
     #[arg(long, default_value_t = 10)]
     pub frames_every: u32,
+    /// Also encode the scene at each of --curve-ratios and measure the
+    /// codec and the baselines at the same bytes: ratio-against-PSNR curves
+    /// in the JSON (`curves`). Takes one encoder analysis plus the
+    /// baselines' encodings (minutes).
+    #[arg(long)]
+    pub curve: bool,
+    /// Compression ratios of the curve points (against 32-bit floats).
+    #[arg(long, value_delimiter = ',', default_value = "100,200,400,800,1600", value_parser = parse_ratio)]
+    pub curve_ratios: Vec<f64>,
     /// Vulkan device to use (substring of its name) [default: lavapipe].
     #[arg(long, env = "ENGINE_DEVICE")]
     pub device: Option<String>,
@@ -333,9 +343,63 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
+/// A compression ratio: finite and above 1.
+pub fn parse_ratio(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(r) if r.is_finite() && r > 1.0 => Ok(r),
+        _ => Err(format!(
+            "expected a compression ratio above 1 (e.g. 384), got {s:?}"
+        )),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn curve_ratios_parse_and_reject() {
+        assert_eq!(parse_ratio("384"), Ok(384.0));
+        assert_eq!(parse_ratio(" 1600.5"), Ok(1600.5));
+        for bad in ["1", "0.5", "-3", "inf", "NaN", "x", ""] {
+            assert!(parse_ratio(bad).is_err(), "{bad}");
+        }
+        let cli =
+            Cli::try_parse_from(["engine", "codec-report", "f.ptxc", "--json", "o.json"]).unwrap();
+        let Some(Command::CodecReport(a)) = cli.command else {
+            panic!("not codec-report");
+        };
+        assert!(!a.curve);
+        assert_eq!(a.curve_ratios, vec![100.0, 200.0, 400.0, 800.0, 1600.0]);
+        let cli = Cli::try_parse_from([
+            "engine",
+            "codec-report",
+            "f.ptxc",
+            "--json",
+            "o.json",
+            "--curve",
+            "--curve-ratios",
+            "50,300",
+        ])
+        .unwrap();
+        let Some(Command::CodecReport(a)) = cli.command else {
+            panic!("not codec-report");
+        };
+        assert!(a.curve);
+        assert_eq!(a.curve_ratios, vec![50.0, 300.0]);
+        assert!(
+            Cli::try_parse_from([
+                "engine",
+                "codec-report",
+                "f.ptxc",
+                "--json",
+                "o.json",
+                "--curve-ratios",
+                "50,0.5",
+            ])
+            .is_err()
+        );
+    }
 
     #[test]
     fn sizes_parse_and_reject() {
