@@ -586,10 +586,14 @@ fn curves(
         out.push(frames);
         out.push(frames_c);
     }
+    // A baseline that cannot get as small as a target gives its smallest
+    // setting for each such target: one point, not several.
     let to_curve = |name: &str, metric, bs: Vec<codec::report::Baseline>| {
         let mut c = Curve::new(name, metric);
         for b in bs {
-            c.push(b.ratio, b.psnr_db, b.bytes);
+            if c.points.iter().all(|p| p.bytes != b.bytes) {
+                c.push(b.ratio, b.psnr_db, b.bytes);
+            }
         }
         c
     };
@@ -624,7 +628,7 @@ fn curves(
         notes.push("curve: ffmpeg not on PATH: mpeg-texture and mpeg-view curves skipped".into());
     }
     notes.push(format!(
-        "curves: metric \"texture\" is the codec's texture PSNR (psnr_definition); the frames metrics pool {FRAME_PIXELS}: pyramid-codec-frames renders the decoded distant map against the traced distant layer (frames_vs_traced, which includes the inference's own error) and against the uncompressed map rendered the same way (frames_vs_uncompressed: compression alone); mpeg-view compares decoded against traced beauty images (its uncompressed input, so compression alone)"
+        "curves: a baseline that cannot get down to some of the codec's sizes has one point at its smallest; metric \"texture\" is the codec's texture PSNR (psnr_definition); the frames metrics pool {FRAME_PIXELS}: pyramid-codec-frames renders the decoded distant map against the traced distant layer (frames_vs_traced, which includes the inference's own error) and against the uncompressed map rendered the same way (frames_vs_uncompressed: compression alone); mpeg-view compares decoded against traced beauty images (its uncompressed input, so compression alone)"
     ));
     Ok(out)
 }
