@@ -1,11 +1,10 @@
 //! CPU texgen per frame on the teapot (PEM paper: 35 ms on a 733 MHz PC):
-//! each EM geometry, serial (SIMD per vertex) against the chunked parallel
-//! version playback uses.
+//! each EM geometry, SIMD per vertex on one core (a version split over
+//! both cores with rayon measured no faster here and was dropped).
 //!
 //! `cargo bench -p engine --bench texgen`
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use engine::pem::texgen::texgen_parallel;
 use inference::em_geometry::{EmGeometry, bounding_ellipsoid, texgen};
 use inference::scene::Scene;
 use std::hint::black_box;
@@ -31,11 +30,8 @@ fn bench(c: &mut Criterion) {
     let mut out = vec![[0.0f32; 4]; positions.len()];
     let mut group = c.benchmark_group(format!("texgen_{}_vertices", positions.len()));
     for (name, g) in geometries {
-        group.bench_function(format!("{name}_serial"), |b| {
+        group.bench_function(name, |b| {
             b.iter(|| texgen(&g, origin, black_box(eye), positions, normals, &mut out))
-        });
-        group.bench_function(format!("{name}_parallel"), |b| {
-            b.iter(|| texgen_parallel(&g, origin, black_box(eye), positions, normals, &mut out))
         });
     }
     group.finish();

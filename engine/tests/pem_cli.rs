@@ -130,7 +130,10 @@ fn main_job_compiles_what_is_missing_then_plays_every_mode() {
             .expect("JSON");
     let rows = bench["rows"].as_array().expect("rows");
     assert_eq!(rows.len(), 6, "{bench}");
-    assert!(rows.iter().all(|r| r["frame_ms_median"].as_f64().is_some_and(|v| v > 0.0)));
+    assert!(
+        rows.iter()
+            .all(|r| r["frame_ms_median"].as_f64().is_some_and(|v| v > 0.0))
+    );
 
     // Every mode and knob plays cleanly (sphere PEMs are inferred on first use).
     for extra in [

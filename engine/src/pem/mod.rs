@@ -7,4 +7,3 @@ pub mod player;
 pub mod prefetch;
 pub mod samples;
 pub mod source;
-pub mod texgen;

@@ -7,7 +7,6 @@
 use super::prefetch::{MapKey, Prefetcher};
 use super::samples::SampleBlend;
 use super::source::{MapLayer, MapSource};
-use super::texgen::texgen_parallel;
 use crate::backend::upload::level_regions;
 use crate::backend::{
     Binding, Buffer, Device, Filtering, GpuError, GpuResult, Image, ImageDesc, Sampler,
@@ -22,7 +21,7 @@ use ash::vk;
 use glam::{Mat4, Vec3};
 use gpu_allocator::MemoryLocation;
 use half::f16;
-use inference::em_geometry::{EmGeometry, bounding_ellipsoid};
+use inference::em_geometry::{EmGeometry, bounding_ellipsoid, texgen};
 use inference::scene::{Material, Scene};
 use inference::texgen::TexgenVertex;
 use std::time::Instant;
@@ -327,7 +326,7 @@ impl PemPlayer {
                     streams.push((r.local, &mut r.texgen_local));
                 }
                 for (geometry, buffer) in streams {
-                    texgen_parallel(
+                    texgen(
                         &geometry,
                         r.origin,
                         eye,
