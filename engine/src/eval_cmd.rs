@@ -182,6 +182,7 @@ pub fn eval(args: &EvalArgs) -> Result<String> {
                 1
             } else {
                 source.frame(&mut renderer, &scene, eye)?; // maps resident, shaders warm
+                renderer.settle(); // no decoding ahead while timing
                 args.repeats
             };
             let mut times = Vec::new();

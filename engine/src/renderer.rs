@@ -202,6 +202,13 @@ impl Renderer {
         Ok(())
     }
 
+    /// Lets background map decoding finish before frames are timed.
+    pub fn settle(&mut self) {
+        if let Some(p) = self.pem.as_mut() {
+            p.settle();
+        }
+    }
+
     pub fn pem_settings(&self) -> Option<PemSettings> {
         self.pem.as_ref().map(|p| p.settings)
     }

@@ -535,6 +535,13 @@ impl PemPlayer {
         Ok(passes)
     }
 
+    /// Waits for decoding ahead to finish (see `Prefetcher::wait_idle`).
+    pub fn settle(&mut self) {
+        if let Some(p) = self.prefetch.as_mut() {
+            p.wait_idle();
+        }
+    }
+
     /// Vertices texgen runs over per frame.
     pub fn texgen_vertices(&self) -> usize {
         self.reflectors.iter().map(|r| r.positions.len()).sum()

@@ -104,6 +104,19 @@ impl Prefetcher {
         Some((texels, ms))
     }
 
+    /// Waits until the worker has finished every request (so it no longer
+    /// competes with rendering, e.g. before timing frames).
+    pub fn wait_idle(&mut self) {
+        while let Some(key) = self.in_flight.first().cloned() {
+            let before = self.in_flight.len();
+            self.collect(Some(&key));
+            if self.in_flight.len() == before {
+                // The worker is gone: nothing more will arrive.
+                self.in_flight.clear();
+            }
+        }
+    }
+
     /// Asks for `key` unless it is already decoded or on its way.
     pub fn request(&mut self, key: MapKey) {
         self.collect(None);
