@@ -724,6 +724,9 @@ pub fn codec_report(args: &CodecReportArgs) -> Result<String> {
         crate::play::prepare_output(parent)?;
     }
     std::fs::write(&args.json, json).with_context(|| format!("writing {}", args.json.display()))?;
+    if !report.curves.is_empty() {
+        plot_curves(&args.json.with_extension("png"), &report.curves)?;
+    }
     let mut text = format!(
         "{}: ratio {:.1}:1 ({:.1}:1 against 8-bit), texture PSNR {:.2} dB, decode {:.2} ms per leaf (median)\n",
         args.file.display(),
@@ -753,6 +756,29 @@ pub fn codec_report(args: &CodecReportArgs) -> Result<String> {
         text += "\n";
     }
     Ok(text)
+}
+
+/// The ratio-against-PSNR curves as one chart (log ratio axis): texture
+/// PSNR of the codec and the texture baselines, and PSNR of rendered frames
+/// against their uncompressed version (compression alone).
+pub fn plot_curves(path: &Path, curves: &[codec::report::Curve]) -> Result<()> {
+    use crate::eval::plot::{ChartSpec, LegendPosition, Series, xy_chart};
+    let mut spec = ChartSpec::new(
+        "Teapot PEM: compression ratio against PSNR",
+        "compression ratio against f32 (log)",
+        "PSNR (dB): textures, or frames against uncompressed",
+    );
+    spec.log_x = true;
+    spec.legend = LegendPosition::UpperRight;
+    for c in curves.iter().filter(|c| c.metric != "frames_vs_traced") {
+        spec.series.push(Series {
+            name: format!("{} ({})", c.name, c.metric.replace('_', " ")),
+            points: c.points.iter().map(|p| (p.ratio, p.psnr_db)).collect(),
+            labels: Vec::new(),
+            connect: true,
+        });
+    }
+    xy_chart(path, &spec)
 }
 
 #[cfg(test)]
