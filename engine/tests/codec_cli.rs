@@ -132,6 +132,95 @@ fn encode_and_report_an_inferred_pem() {
     assert!(report["bytes"].as_u64().is_some_and(|b| b > 0));
     assert!(report["decode_ms_median"].as_f64().is_some_and(|t| t > 0.0));
     assert!(report["baselines"].is_array());
+    assert!(
+        report["frames_vs_uncompressed_psnr_db"]
+            .as_f64()
+            .is_some_and(|p| p.is_finite() && p > 10.0),
+        "{report}"
+    );
+    let ffmpeg = std::process::Command::new("ffmpeg")
+        .arg("-version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    let names: Vec<&str> = report["baselines"]
+        .as_array()
+        .expect("baselines")
+        .iter()
+        .filter_map(|b| b["name"].as_str())
+        .collect();
+    if ffmpeg {
+        // The traced images of the 3 samples through x264, measured on
+        // the rendered frames' pixels.
+        let view = report["baselines"]
+            .as_array()
+            .and_then(|b| b.iter().find(|b| b["name"] == "mpeg-view"))
+            .expect("mpeg-view baseline");
+        assert!(view["psnr_db"].as_f64().is_some_and(|p| p > 10.0), "{view}");
+        assert!(
+            view["pixels"]
+                .as_str()
+                .is_some_and(|p| p.contains("coverage"))
+        );
+        assert!(names.contains(&"mpeg-view-same-ratio"), "{names:?}");
+    } else {
+        assert!(!names.contains(&"mpeg-view"), "{names:?}");
+        assert!(notes.contains("ffmpeg not on PATH"), "{notes}");
+    }
+
+    // Curves: the codec at two ratios, the baselines at its sizes.
+    let json = dir.path().join("curve.json");
+    ok(&engine(&[
+        "codec-report",
+        container_s,
+        "--json",
+        json.to_str().expect("utf-8"),
+        "--scene",
+        &scene,
+        "--infer-dir",
+        infer_s,
+        "--trace-dir",
+        traces_s,
+        "--size",
+        "64x48",
+        "--frames-every",
+        "2",
+        "--curve",
+        "--curve-ratios",
+        "8,16",
+    ]));
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&json).expect("json")).expect("JSON");
+    let curves = report["curves"].as_array().expect("curves");
+    let curve = |name: &str, metric: &str| {
+        curves
+            .iter()
+            .find(|c| c["name"] == name && c["metric"] == metric)
+            .and_then(|c| c["points"].as_array())
+            .unwrap_or_else(|| panic!("no {name} {metric} curve: {report}"))
+    };
+    let codec = curve("pyramid-codec", "texture");
+    assert_eq!(codec.len(), 2);
+    let r = |p: &serde_json::Value, k: &str| p[k].as_f64().expect("number");
+    assert!(r(&codec[0], "ratio") < r(&codec[1], "ratio"), "{codec:?}");
+    assert!(
+        r(&codec[0], "psnr_db") > r(&codec[1], "psnr_db"),
+        "{codec:?}"
+    );
+    assert!(
+        codec
+            .iter()
+            .all(|p| p["bytes"].as_u64().is_some_and(|b| b > 0))
+    );
+    assert_eq!(curve("pyramid-codec-frames", "frames_vs_traced").len(), 2);
+    assert_eq!(
+        curve("pyramid-codec-frames", "frames_vs_uncompressed").len(),
+        2
+    );
+    assert!(!curve("jpeg-per-texture", "texture").is_empty());
+    if ffmpeg {
+        assert!(!curve("mpeg-texture", "texture").is_empty());
+        assert!(!curve("mpeg-view", "frames_vs_uncompressed").is_empty());
+    }
 }
 
 #[test]
