@@ -324,22 +324,16 @@ impl FrameBench {
                 .map(|c| [c[0], c[1], c[2], 1.0])
                 .collect();
             let render = self.probe.render(&it.geometry, &it.layout, &decoded)?;
-            let t = Target {
-                name: &it.name,
-                pixels: &it.target,
-                channels: 3,
+            let psnr_against = |pixels| {
+                let t = Target {
+                    name: &it.name,
+                    pixels,
+                    channels: 3,
+                };
+                inference::infer::layer::psnr_over_rows(&render, &t, &it.pixels)
             };
-            db.push(inference::infer::layer::psnr_over_rows(
-                &render, &t, &it.pixels,
-            ));
-            let t = Target {
-                name: &it.name,
-                pixels: &it.raw_render,
-                channels: 3,
-            };
-            vs_raw.push(inference::infer::layer::psnr_over_rows(
-                &render, &t, &it.pixels,
-            ));
+            db.push(psnr_against(&it.target));
+            vs_raw.push(psnr_against(&it.raw_render));
         }
         Ok((crate::perf::median(&db), crate::perf::median(&vs_raw)))
     }

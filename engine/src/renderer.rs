@@ -209,10 +209,6 @@ impl Renderer {
         }
     }
 
-    pub fn pem_settings(&self) -> Option<PemSettings> {
-        self.pem.as_ref().map(|p| p.settings)
-    }
-
     /// The samples a PEM frame from `eye` draws (None without PEM set-up).
     pub fn pem_blend(&self, eye: Vec3) -> Option<SampleBlend> {
         let s = self.pem.as_ref()?.settings;

@@ -541,11 +541,6 @@ impl PemPlayer {
             p.wait_idle();
         }
     }
-
-    /// Vertices texgen runs over per frame.
-    pub fn texgen_vertices(&self) -> usize {
-        self.reflectors.iter().map(|r| r.positions.len()).sum()
-    }
 }
 
 /// The images of one sample slot and its descriptor sets.
@@ -563,12 +558,8 @@ fn make_slot(
     let size = r.resolution >> settings.drop_levels;
     let mut images = Vec::new();
     for layer in layers {
-        let desc = match layer {
-            MapLayer::Ptm => ImageDesc::new_2d(vk::Format::R16G16B16A16_SFLOAT, size, size),
-            _ => ImageDesc::new_cube(vk::Format::R16G16B16A16_SFLOAT, size),
-        }
-        .all_mip_levels()
-        .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST);
+        let desc = map_desc(*layer, size)
+            .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST);
         images.push(Image::new(
             device,
             &format!("{} {} slot", r.name, layer.file_part()),
@@ -612,6 +603,16 @@ fn make_slot(
     })
 }
 
+/// The image a `size` map of `layer` plays from: RGBA16F, full MIP chain.
+fn map_desc(layer: MapLayer, size: u32) -> ImageDesc {
+    let format = vk::Format::R16G16B16A16_SFLOAT;
+    match layer {
+        MapLayer::Ptm => ImageDesc::new_2d(format, size, size),
+        _ => ImageDesc::new_cube(format, size),
+    }
+    .all_mip_levels()
+}
+
 /// f16 components of a whole leaf map (RGBA, full MIP chain).
 fn leaf_halves(layer: MapLayer, resolution: u32) -> usize {
     inference::solve::layout::TextureLayout::full_chain(layer.shape(resolution)).len() * 4
@@ -622,12 +623,7 @@ fn dropped_bytes(layer: MapLayer, resolution: u32, drop: u32) -> GpuResult<u64> 
     if drop == 0 {
         return Ok(0);
     }
-    let desc = match layer {
-        MapLayer::Ptm => ImageDesc::new_2d(vk::Format::R16G16B16A16_SFLOAT, resolution, resolution),
-        _ => ImageDesc::new_cube(vk::Format::R16G16B16A16_SFLOAT, resolution),
-    }
-    .all_mip_levels();
-    let (regions, _) = level_regions(&desc)?;
+    let (regions, _) = level_regions(&map_desc(layer, resolution))?;
     Ok(regions.get(drop as usize).map_or(0, |r| r.buffer_offset))
 }
 
