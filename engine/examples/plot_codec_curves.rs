@@ -38,5 +38,5 @@ fn main() -> Result<()> {
         }
         curves.push(curve);
     }
-    engine::codec_cmd::plot_curves(std::path::Path::new(png), &curves)
+    engine::codec_report::plot_curves(std::path::Path::new(png), &curves)
 }

@@ -10,12 +10,12 @@
 //! Differences of medians give the per-pass split that lavapipe's
 //! timestamps cannot (it attributes most work to a frame's first pass).
 
-use crate::cli::PlayArgs;
+use crate::options::{PemOptions, RunPlace};
 use crate::pem::player::{PemKind, PemSettings};
 use crate::perf::{PerfLog, PerfReport};
-use crate::play::{Session, open_session};
+use crate::play::{Session, compile_context};
 use crate::renderer::{FrameMode, Renderer};
-use anyhow::{Context, Result};
+use anyhow::Result;
 use serde::Serialize;
 use std::time::Instant;
 
@@ -75,16 +75,29 @@ impl BenchReport {
     }
 }
 
-pub fn bench(args: &PlayArgs) -> Result<BenchReport> {
+/// How long to measure, and where the maps come from.
+#[derive(Clone, Debug)]
+pub struct BenchOptions {
+    /// Timed frames per view and variant.
+    pub frames_per_view: u32,
+    /// Untimed frames first at each view.
+    pub warmup: u32,
+    pub pem: PemOptions,
+}
+
+pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
     let Session {
         scene,
         out,
         device,
         renderer,
-    } = open_session(args)?;
-    let (width, height) = args.size;
+        ..
+    } = Session::open(place)?;
+    let ctx = compile_context(place, &scene, &out);
+    let (width, height) = place.size;
     let views = 8u32;
-    let per_view = args.frames.unwrap_or(25).max(1);
+    let per_view = opts.frames_per_view.max(1);
+    let warmup = opts.warmup;
     // One renderer per PEM variant: switching settings re-creates slots.
     let mut renderers = vec![renderer];
     for (_, pem) in VARIANTS.iter().skip(2) {
@@ -94,7 +107,7 @@ pub fn bench(args: &PlayArgs) -> Result<BenchReport> {
         settings.local_layer = local;
         settings.blend = blend;
         let layers = settings.layers();
-        let source = crate::compile::map_source(args, &scene, &out, &layers)?;
+        let source = crate::compile::map_source(&ctx, &opts.pem, &layers)?;
         r.set_pem(&scene, settings, source)?;
         renderers.push(r);
     }
@@ -112,8 +125,8 @@ pub fn bench(args: &PlayArgs) -> Result<BenchReport> {
     for v in 0..views {
         let k = ((v as f32 + 0.5) / views as f32 * o.samples.saturating_sub(1) as f32) as u32;
         let eye = o.eye(o.angle_deg(k) + 0.5 * o.step_deg, 0.0);
-        for i in 0..args.warmup + per_view {
-            if i == args.warmup {
+        for i in 0..warmup + per_view {
+            if i == warmup {
                 // Decoding ahead, started by the new view, must not run
                 // behind the timed frames.
                 renderers.iter_mut().for_each(Renderer::settle);
@@ -126,11 +139,11 @@ pub fn bench(args: &PlayArgs) -> Result<BenchReport> {
                 };
                 let start = Instant::now();
                 let stats = renderer.frame(mode, eye, o.view(eye))?;
-                if i >= args.warmup {
+                if i >= warmup {
                     record(log, start, stats);
                 }
             }
-            if i >= args.warmup {
+            if i >= warmup {
                 progress.inc(1);
             }
         }
@@ -138,11 +151,11 @@ pub fn bench(args: &PlayArgs) -> Result<BenchReport> {
     // Then the moving variant alone: one sample further every frame, its
     // maps decoded ahead while the previous frame draws.
     let last = o.samples.saturating_sub(1).max(1);
-    for i in 0..args.warmup + views * per_view {
+    for i in 0..warmup + views * per_view {
         let eye = o.eye(o.angle_deg(i % last) + 0.5 * o.step_deg, 0.0);
         let start = Instant::now();
         let stats = renderers[MOVING - 1].frame(FrameMode::Pem, eye, o.view(eye))?;
-        if i >= args.warmup {
+        if i >= warmup {
             record(&mut logs[MOVING], start, stats);
             progress.inc(1);
         }
@@ -194,8 +207,6 @@ pub fn bench(args: &PlayArgs) -> Result<BenchReport> {
         rows,
         split_ms,
     };
-    let path = out.join("bench.json");
-    std::fs::write(&path, serde_json::to_string_pretty(&report)?)
-        .with_context(|| format!("writing {}", path.display()))?;
+    crate::util::files::write_json(&out.join("bench.json"), &report)?;
     Ok(report)
 }

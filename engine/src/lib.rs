@@ -1,19 +1,26 @@
-//! The Vulkan engine: a thin ash backend, an explicit pass list with its
-//! executor, one module per pass, headless capture and per-pass counters.
+//! The Vulkan engine library, read from the top down (each layer uses only
+//! the layers below it; the `engine` binary's commands sit above all):
+//!
+//! ```text
+//!  play · bench · eval · compile · codec_report   drivers, typed options (options)
+//!  renderer · pem · probe                          what a frame and a probe render are
+//!  passes                                          one file per pass
+//!  graph                                           pass trait, executor, image states
+//!  backend · util · maps                           ash wrappers; files, stats; map kinds and paths
+//! ```
 
 pub mod backend;
 pub mod bench;
 pub mod capture;
-pub mod cli;
-pub mod codec_cmd;
+pub mod codec_report;
 pub mod compare;
 pub mod compile;
 pub mod cube;
 pub mod eval;
-pub mod eval_cmd;
 pub mod gpu_scene;
 pub mod graph;
-pub mod infer_cmd;
+pub mod maps;
+pub mod options;
 pub mod passes;
 pub mod pem;
 pub mod perf;
@@ -21,4 +28,4 @@ pub mod play;
 pub mod probe;
 pub mod renderer;
 pub mod shader_interface;
-pub mod trace_cmd;
+pub mod util;

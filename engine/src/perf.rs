@@ -4,6 +4,7 @@
 
 use crate::graph::PassTiming;
 use crate::renderer::CpuTimes;
+use crate::util::stats::median;
 use serde::Serialize;
 
 #[derive(Default)]
@@ -50,20 +51,6 @@ pub struct PerfReport {
     pub cpu: CpuReport,
     /// Passes run once before the first frame (static EM capture, MIPs).
     pub setup_passes: Vec<PassReport>,
-}
-
-pub fn median(values: &[f64]) -> f64 {
-    if values.is_empty() {
-        return f64::NAN;
-    }
-    let mut sorted = values.to_vec();
-    sorted.sort_by(f64::total_cmp);
-    let mid = sorted.len() / 2;
-    if sorted.len() % 2 == 1 {
-        sorted[mid]
-    } else {
-        0.5 * (sorted[mid - 1] + sorted[mid])
-    }
 }
 
 impl PerfLog {
@@ -199,17 +186,5 @@ impl PerfReport {
             );
         }
         out
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn median_of_odd_even_and_empty() {
-        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
-        assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
-        assert!(median(&[]).is_nan());
     }
 }

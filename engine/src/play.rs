@@ -1,13 +1,15 @@
-//! The main job: render frames along the scene's orbit, capture them, and
-//! report per-pass counters.
+//! The main job: compile what is missing, render frames along the default
+//! path, capture them, and report per-pass counters.
 
-use crate::backend::{DeviceOptions, create_device};
+use crate::backend::create_device;
 use crate::capture;
-use crate::cli::{Mode, PlayArgs};
+use crate::compile::CompileContext;
+use crate::options::{Mode, PemOptions, PlayOptions, RunPlace};
 use crate::pem::path::{default_frames, path_view};
 use crate::pem::player::{PemKind, PemSettings};
 use crate::perf::{PerfLog, PerfReport};
 use crate::renderer::{FrameMode, FrameStats, Renderer};
+use crate::util::files::claim_dir;
 use anyhow::{Context, Result, bail};
 use inference::scene::Scene;
 use inference::trace::{TraceSettings, Tracer};
@@ -15,128 +17,179 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::Instant;
 
-/// Output folder: `--out`, else `out/<scene>` under the current directory.
-pub fn output_dir(args: &PlayArgs, scene: &Scene) -> PathBuf {
-    args.out
-        .clone()
-        .unwrap_or_else(|| Path::new("out").join(&scene.name))
-}
-
-/// Creates `dir` and proves it writable before any rendering starts.
-pub fn prepare_output(dir: &Path) -> Result<()> {
-    std::fs::create_dir_all(dir)
-        .with_context(|| format!("cannot create output folder {}", dir.display()))?;
-    let probe = dir.join(".write-test");
-    std::fs::write(&probe, b"")
-        .with_context(|| format!("output folder {} is not writable", dir.display()))?;
-    let _ = std::fs::remove_file(probe);
-    Ok(())
-}
-
-/// What playing and benchmarking share: the scene, a writable output
-/// folder, the device and a renderer set up at the requested size.
+/// What playing, benchmarking and evaluating share: the scene, the output
+/// folder (claimed), the device and a renderer at the run's size.
 pub struct Session {
+    pub place: RunPlace,
     pub scene: Scene,
     pub out: PathBuf,
     pub device: crate::backend::Device,
     pub renderer: Renderer,
 }
 
-pub fn open_session(args: &PlayArgs) -> Result<Session> {
-    let scene = Scene::load(&args.scene)?;
-    let out = output_dir(args, &scene);
-    prepare_output(&out)?;
-    let device = create_device(&DeviceOptions {
-        device_name: args.device.clone(),
-        validate: args.validate,
-    })?;
-    let (width, height) = args.size;
-    let renderer = Renderer::new(&device, &scene, width, height)
-        .with_context(|| format!("setting up scene {}", scene.source.display()))?;
-    Ok(Session {
+impl Session {
+    /// Loads the scene, claims the output folder (`out/<scene>` unless
+    /// given), opens the device and sets the renderer up.
+    pub fn open(place: &RunPlace) -> Result<Session> {
+        let scene = Scene::load(&place.scene)?;
+        let out = place
+            .out
+            .clone()
+            .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
+        claim_dir(&out)?;
+        let device = create_device(&place.device)?;
+        let (width, height) = place.size;
+        let renderer = Renderer::new(&device, &scene, width, height)
+            .with_context(|| format!("setting up scene {}", scene.source.display()))?;
+        Ok(Session {
+            place: place.clone(),
+            scene,
+            out,
+            device,
+            renderer,
+        })
+    }
+}
+
+/// Compiling under `out` for `place`.
+pub fn compile_context<'a>(
+    place: &'a RunPlace,
+    scene: &'a Scene,
+    out: &'a Path,
+) -> CompileContext<'a> {
+    CompileContext {
         scene,
+        scene_arg: &place.scene,
         out,
-        device,
-        renderer,
+        size: place.size,
+        device: &place.device,
+    }
+}
+
+/// Sets `renderer` up for `mode`, compiling missing maps first.
+pub fn setup_mode<'s>(
+    ctx: &CompileContext<'s>,
+    renderer: &mut Renderer,
+    mode: Mode,
+    pem: &PemOptions,
+    trace_spp: u32,
+) -> Result<FrameSource<'s>> {
+    Ok(match mode {
+        Mode::StaticEm => FrameSource::Raster(FrameMode::StaticEm),
+        Mode::Bare => FrameSource::Raster(FrameMode::Bare),
+        Mode::Trace => {
+            let (width, height) = ctx.size;
+            let settings = TraceSettings {
+                width,
+                height,
+                spp: trace_spp,
+                ..TraceSettings::default()
+            };
+            FrameSource::Trace(Box::new(Tracer::new(ctx.scene)?), settings)
+        }
+        Mode::LayeredPem | Mode::SpherePem | Mode::Ptm => {
+            let settings = pem_settings(mode, pem, ctx.scene)?;
+            let source = crate::compile::map_source(ctx, pem, &settings.layers())?;
+            renderer.set_pem(ctx.scene, settings, source)?;
+            FrameSource::Raster(FrameMode::Pem)
+        }
     })
 }
 
-pub fn play(args: &PlayArgs) -> Result<PerfReport> {
+/// Plays `opts` at `place`: frames along the default path, perf.json.
+pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<PerfReport> {
+    if opts.frames == Some(0) {
+        bail!("--frames 0: expected at least one frame");
+    }
     let Session {
         scene,
         out,
         device,
         mut renderer,
-    } = open_session(args)?;
-    let (width, height) = args.size;
-    let mut frames_from = setup_mode(args, &scene, &out, &mut renderer)?;
-    let frames = args.frames.unwrap_or(default_frames(&scene.orbit));
+        ..
+    } = Session::open(place)?;
+    let ctx = compile_context(place, &scene, &out);
+    let mut source = setup_mode(&ctx, &mut renderer, opts.mode, &opts.pem, opts.trace_spp)?;
+    let renderer = &mut renderer;
+    let scene = &scene;
+    let (width, height) = place.size;
+    let frames = opts.frames.unwrap_or(default_frames(&scene.orbit));
     let eye_of = |i: u32| {
         let (azimuth, elevation) = path_view(&scene.orbit, i, frames);
         scene.orbit.eye(azimuth, elevation)
     };
-
-    if !matches!(frames_from, FrameSource::Trace(..)) {
-        for _ in 0..args.warmup {
-            frames_from.frame(&mut renderer, &scene, eye_of(0))?;
+    if !matches!(source, FrameSource::Trace(..)) {
+        for _ in 0..opts.warmup {
+            source.frame(renderer, scene, eye_of(0))?;
         }
     }
-
-    // Encoding PNGs takes longer than a frame: a writer thread does it.
-    let (send, receive) = mpsc::channel::<(u32, Vec<[f32; 4]>)>();
-    let writer_dir = out.clone();
-    let write_exr = args.exr;
-    let writer = std::thread::spawn(move || -> Result<(), capture::CaptureError> {
-        for (i, pixels) in receive {
-            let stem = writer_dir.join(format!("frame_{i:04}"));
-            capture::write_png(&stem.with_extension("png"), width, height, &pixels)?;
-            if write_exr {
-                capture::write_exr(&stem.with_extension("exr"), width, height, &pixels)?;
-            }
-        }
-        Ok(())
-    });
-
+    let writer = FrameWriter::start(out.clone(), (width, height), opts.exr);
     let progress = indicatif::ProgressBar::new(u64::from(frames)).with_style(
         indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames {elapsed}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    progress.set_message(format!("{} {:?}", scene.name, args.mode));
+    progress.set_message(format!("{} {}", scene.name, opts.mode.name()));
     let mut log = PerfLog::default();
     for i in 0..frames {
         let start = Instant::now();
-        let (stats, pixels) = frames_from.frame(&mut renderer, &scene, eye_of(i))?;
+        let (stats, pixels) = source.frame(renderer, scene, eye_of(i))?;
         log.record(
             start.elapsed().as_secs_f64() * 1e3,
             &stats.passes,
             stats.cpu,
         );
-        if !args.no_capture && send.send((i, pixels)).is_err() {
+        if opts.capture && !writer.send(i, pixels) {
             break; // the writer stopped: its error is reported below
         }
         progress.inc(1);
     }
     progress.finish_and_clear();
-    drop(send);
-    match writer.join() {
-        Ok(result) => result?,
-        Err(_) => bail!("the frame writer thread panicked"),
-    }
-
+    writer.finish()?;
     let report = log.report(
         &device.name,
         &scene.name,
-        &format!("{:?}", args.mode),
+        &format!("{:?}", opts.mode),
         [width, height],
         &renderer.setup_timings,
     );
-    let json = serde_json::to_string_pretty(&report)?;
-    let perf_path = out.join("perf.json");
-    let tmp = out.join(".perf.json.tmp");
-    std::fs::write(&tmp, json).with_context(|| format!("writing {}", tmp.display()))?;
-    std::fs::rename(&tmp, &perf_path)
-        .with_context(|| format!("writing {}", perf_path.display()))?;
+    crate::util::files::write_json(&out.join("perf.json"), &report)?;
     Ok(report)
+}
+
+/// Encoding PNGs takes longer than a frame: a writer thread does it.
+struct FrameWriter {
+    send: mpsc::Sender<(u32, Vec<[f32; 4]>)>,
+    thread: std::thread::JoinHandle<Result<(), capture::CaptureError>>,
+}
+
+impl FrameWriter {
+    fn start(dir: PathBuf, (width, height): (u32, u32), exr: bool) -> Self {
+        let (send, receive) = mpsc::channel::<(u32, Vec<[f32; 4]>)>();
+        let thread = std::thread::spawn(move || {
+            for (i, pixels) in receive {
+                let stem = dir.join(format!("frame_{i:04}"));
+                capture::write_png(&stem.with_extension("png"), width, height, &pixels)?;
+                if exr {
+                    capture::write_exr(&stem.with_extension("exr"), width, height, &pixels)?;
+                }
+            }
+            Ok(())
+        });
+        Self { send, thread }
+    }
+
+    /// Queues frame `i`; false when the writer has stopped (on an error).
+    fn send(&self, i: u32, pixels: Vec<[f32; 4]>) -> bool {
+        self.send.send((i, pixels)).is_ok()
+    }
+
+    fn finish(self) -> Result<()> {
+        drop(self.send);
+        match self.thread.join() {
+            Ok(result) => Ok(result?),
+            Err(_) => bail!("the frame writer thread panicked"),
+        }
+    }
 }
 
 /// Where a run's frames come from: the rasteriser in some mode, or the
@@ -169,37 +222,30 @@ impl FrameSource<'_> {
                     .chunks_exact(3)
                     .map(|p| [p[0], p[1], p[2], 1.0])
                     .collect();
-                Ok((
-                    FrameStats {
-                        passes: Vec::new(),
-                        cpu: Default::default(),
-                    },
-                    pixels,
-                ))
+                let stats = FrameStats {
+                    passes: Vec::new(),
+                    cpu: Default::default(),
+                };
+                Ok((stats, pixels))
             }
         }
     }
 }
 
-/// The PEM settings `args` ask for (None for modes without PEMs).
-pub fn pem_settings(args: &PlayArgs, scene: &Scene) -> Result<Option<PemSettings>> {
-    let kind = match args.mode {
+/// The PEM settings of a PEM `mode` with `pem`'s knobs.
+pub fn pem_settings(mode: Mode, pem: &PemOptions, scene: &Scene) -> Result<PemSettings> {
+    let kind = match mode {
         Mode::LayeredPem => PemKind::Layered,
         Mode::SpherePem => PemKind::Sphere,
         Mode::Ptm => PemKind::Ptm,
-        _ => return Ok(None),
+        _ => bail!("internal: {mode:?} plays no PEMs"),
     };
-    let p = &args.pem;
     let mut settings = PemSettings::new(kind);
-    settings.blend = !p.no_blend;
-    settings.local_layer = !p.distant_only;
-    settings.spacing = p.spacing;
-    settings.filtering = match p.filtering {
-        crate::cli::Filter::Trilinear => crate::backend::Filtering::Trilinear,
-        crate::cli::Filter::Bilinear => crate::backend::Filtering::Bilinear,
-        crate::cli::Filter::Nearest => crate::backend::Filtering::Nearest,
-    };
-    if let Some(size) = p.em_size {
+    settings.blend = pem.blend;
+    settings.local_layer = pem.local_layer;
+    settings.spacing = pem.spacing;
+    settings.filtering = pem.filtering;
+    if let Some(size) = pem.em_size {
         let inferred = scene
             .objects
             .iter()
@@ -211,36 +257,5 @@ pub fn pem_settings(args: &PlayArgs, scene: &Scene) -> Result<Option<PemSettings
         }
         settings.drop_levels = inferred.trailing_zeros() - size.trailing_zeros();
     }
-    Ok(Some(settings))
-}
-
-/// Sets the renderer up for `args.mode`, compiling missing maps first.
-pub fn setup_mode<'s>(
-    args: &PlayArgs,
-    scene: &'s Scene,
-    out: &Path,
-    renderer: &mut Renderer,
-) -> Result<FrameSource<'s>> {
-    Ok(match args.mode {
-        Mode::StaticEm => FrameSource::Raster(FrameMode::StaticEm),
-        Mode::Bare => FrameSource::Raster(FrameMode::Bare),
-        Mode::Trace => {
-            let (w, h) = args.size;
-            let settings = TraceSettings {
-                width: w,
-                height: h,
-                spp: args.trace_spp,
-                ..TraceSettings::default()
-            };
-            FrameSource::Trace(Box::new(Tracer::new(scene)?), settings)
-        }
-        Mode::LayeredPem | Mode::SpherePem | Mode::Ptm => {
-            let Some(settings) = pem_settings(args, scene)? else {
-                bail!("internal: {:?} has no PEM settings", args.mode);
-            };
-            let source = crate::compile::map_source(args, scene, out, &settings.layers())?;
-            renderer.set_pem(scene, settings, source)?;
-            FrameSource::Raster(FrameMode::Pem)
-        }
-    })
+    Ok(settings)
 }

@@ -124,8 +124,7 @@ fn malformed_scene_file_names_file_and_line() {
 }
 
 fn scene_with_obj(dir: &Path, obj: &str) -> std::path::PathBuf {
-    let teapot = inference::scene::assets_dir().join("scenes/teapot.toml");
-    let text = std::fs::read_to_string(teapot).expect("teapot.toml");
+    let text = inference::scene::shipped("teapot").expect("built-in teapot");
     std::fs::write(dir.join("mesh.obj"), obj).expect("write obj");
     // Swap the generated teapot for the OBJ next to the scene file.
     let obj_line = format!("mesh = {{ obj = \"{}\" }}", dir.join("mesh.obj").display());
@@ -187,20 +186,41 @@ fn unwritable_output_folder() {
 
 #[test]
 fn no_vulkan_driver() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let icd = dir.path().join("no-such-icd.json");
+    let icd = icd.to_str().expect("utf-8");
+    let out = dir.path().join("out");
     let o = engine(
-        &["--frames", "1", "--size", "8x8", "--no-capture"],
         &[
-            ("VK_DRIVER_FILES", "/nonexistent/icd.json"),
-            ("VK_ICD_FILENAMES", "/nonexistent/icd.json"),
+            "--frames",
+            "1",
+            "--size",
+            "8x8",
+            "--no-capture",
+            "--mode",
+            "static-em",
+            "--out",
+            out.to_str().expect("utf-8"),
         ],
+        &[("VK_DRIVER_FILES", icd), ("VK_ICD_FILENAMES", icd)],
     );
     assert_clean_failure(&o, &["Vulkan"]);
 }
 
 #[test]
 fn unknown_device_name_lists_available() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out");
     let o = engine(
-        &["--device", "no-such-gpu", "--frames", "1", "--no-capture"],
+        &[
+            "--device",
+            "no-such-gpu",
+            "--frames",
+            "1",
+            "--no-capture",
+            "--out",
+            out.to_str().expect("utf-8"),
+        ],
         &[],
     );
     assert_clean_failure(&o, &["no-such-gpu", "llvmpipe"]);

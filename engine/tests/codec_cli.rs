@@ -12,8 +12,7 @@ fn engine(args: &[&str]) -> Output {
 }
 
 fn small_scene(dir: &Path) -> String {
-    let text = std::fs::read_to_string(inference::scene::assets_dir().join("scenes/teapot.toml"))
-        .expect("teapot.toml");
+    let text = inference::scene::shipped("teapot").expect("built-in teapot");
     let text = text
         .lines()
         .map(|l| match l.trim() {
@@ -73,7 +72,7 @@ fn encode_and_report_an_inferred_pem() {
     // A second run finds every map up to date and still summarizes.
     let text = ok(&engine(&infer_all));
     assert!(
-        text.contains("9 layers already inferred") && text.contains("3 samples: LS"),
+        text.contains("9 maps already inferred") && text.contains("3 samples: LS"),
         "{text}"
     );
     let container = dir.path().join("teapot.ptxc");

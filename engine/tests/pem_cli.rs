@@ -96,18 +96,24 @@ fn main_job_compiles_what_is_missing_then_plays_every_mode() {
         text(&again)
     );
 
-    // A re-inferred map (newer than the container) is re-encoded first.
-    std::thread::sleep(std::time::Duration::from_millis(20));
-    let map = out.join("infer/sample_0001/teapot.specular_distant.exr");
-    let bytes = std::fs::read(&map).expect("map");
-    std::fs::write(&map, bytes).expect("rewrite map");
-    let stale = play(&scene, &out, &["--no-capture"]);
-    assert!(stale.status.success(), "{}", text(&stale));
-    assert!(
-        text(&stale).contains("ratio"),
-        "not re-encoded: {}",
-        text(&stale)
+    // An edited scene (the light's colour) is never played from old maps:
+    // the run says what changed, traces, infers and encodes again.
+    let text_of_scene = std::fs::read_to_string(&scene).expect("scene");
+    let edited = text_of_scene.replacen(
+        "radiance = [12.0, 11.5, 10.5]",
+        "radiance = [12.0, 11.5, 4.0]",
+        1,
     );
+    assert_ne!(edited, text_of_scene, "the tiny scene has the light");
+    std::fs::write(&scene, edited).expect("edit scene");
+    let stale = play(&scene, &out, &["--no-capture"]);
+    let log = text(&stale);
+    assert!(stale.status.success(), "{log}");
+    assert!(
+        log.contains("lights, materials changed"),
+        "not said what changed: {log}"
+    );
+    assert!(log.contains("ratio"), "not re-encoded: {log}");
 
     // The bench measures every variant at the same views (maps compiled above).
     let o = engine(&[
@@ -171,19 +177,20 @@ fn bad_pem_knobs_fail_cleanly() {
     }
     let o = play(&scene, &out, &["--spacing", "0"]);
     assert!(!o.status.success());
-    // A container that is not one: a clear error naming it.
-    let bogus = out.join("bogus.ptxc");
-    std::fs::write(&bogus, b"not a container").expect("write");
+    // Maps the user named that are not there: a clear error, nothing made
+    // there.
+    let no_maps = dir.path().join("no-maps");
     let o = play(
         &scene,
         &out,
-        &[
-            "--container",
-            bogus.to_str().expect("utf-8"),
-            "--infer-dir",
-            "/nonexistent-maps",
-        ],
+        &["--infer-dir", no_maps.to_str().expect("utf-8")],
     );
     assert!(!o.status.success());
     assert!(!text(&o).contains("panicked"), "{}", text(&o));
+    assert!(
+        text(&o).contains("no-maps") && text(&o).contains("maps missing"),
+        "{}",
+        text(&o)
+    );
+    assert!(!no_maps.exists(), "an input folder is never written");
 }

@@ -31,6 +31,7 @@ fn files(dir: &Path) -> Vec<String> {
         .flatten()
         .flatten()
         .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n != ".pem-engine")
         .collect();
     names.sort();
     names
@@ -38,8 +39,7 @@ fn files(dir: &Path) -> Vec<String> {
 
 /// The teapot scene with one line replaced, written into `dir`.
 fn patched_teapot(dir: &Path, from: &str, to: &str) -> PathBuf {
-    let teapot = inference::scene::assets_dir().join("scenes/teapot.toml");
-    let text = std::fs::read_to_string(teapot).expect("teapot.toml");
+    let text = inference::scene::shipped("teapot").expect("built-in teapot");
     assert!(text.contains(from), "teapot.toml has {from:?}");
     let path = dir.join("scene.toml");
     std::fs::write(&path, text.replacen(from, to, 1)).expect("write scene");
@@ -84,7 +84,7 @@ fn tiny_trace_writes_layers_png_and_throughput() {
 
     assert_eq!(
         files(&out),
-        ["sample_0003.exr", "sample_0003.key", "sample_0003.png"]
+        ["sample_0003.exr", "sample_0003.exr.key", "sample_0003.png"]
     );
     let layers = inference::trace::output::read_exr(&out.join("sample_0003.exr")).expect("EXR");
     let names: Vec<&str> = layers.iter().map(|(n, _)| n.as_str()).collect();
@@ -253,7 +253,7 @@ fn free_view_keeps_its_angles_in_the_file_name() {
         files(&out),
         [
             "view_az-12.500_el+20.000.exr",
-            "view_az-12.500_el+20.000.key",
+            "view_az-12.500_el+20.000.exr.key",
             "view_az-12.500_el+20.000.png"
         ]
     );

@@ -5,9 +5,11 @@
 //! Pure CPU, no Vulkan.
 
 pub mod em_geometry;
+pub mod files;
 pub mod fresnel;
 pub mod hull;
 pub mod infer;
+pub mod key;
 pub mod probe;
 pub mod scene;
 pub mod solve;

@@ -242,6 +242,22 @@ pub enum Filtering {
     Nearest,
 }
 
+impl Filtering {
+    pub const ALL: [Filtering; 3] = [
+        Filtering::Trilinear,
+        Filtering::Bilinear,
+        Filtering::Nearest,
+    ];
+    /// The flag value, e.g. `trilinear`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Filtering::Trilinear => "trilinear",
+            Filtering::Bilinear => "bilinear",
+            Filtering::Nearest => "nearest",
+        }
+    }
+}
+
 impl Sampler {
     pub fn trilinear(device: &Device, address: vk::SamplerAddressMode) -> GpuResult<Self> {
         Self::new(device, address, Filtering::Trilinear)

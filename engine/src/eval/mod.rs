@@ -1,8 +1,15 @@
-//! Parts of `engine eval` (issue #5): the traced reference of any view,
-//! metrics over a reflector's pixels, the speed/accuracy table and its chart.
+//! `engine eval` (the speed/accuracy table): the traced reference of any
+//! view, metrics over a reflector's pixels, the rows and views measured,
+//! the table, its chart and pictures, and the driver.
 
-pub mod files;
+pub mod chart;
 pub mod metrics;
+pub mod pictures;
 pub mod plot;
 pub mod reference;
+pub mod rows;
+pub mod run;
 pub mod table;
+pub mod views;
+
+pub use run::{EvalOptions, eval};

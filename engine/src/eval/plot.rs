@@ -6,7 +6,7 @@
 //! plotters draws into an RGB buffer; `image` encodes it and the file is
 //! written atomically.
 
-use super::files::write_atomically;
+use crate::util::files::write as write_atomically;
 use anyhow::{Context, Result, anyhow, bail};
 use image::ImageEncoder;
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};

@@ -8,12 +8,13 @@
 //!
 //! Cache: `<dir>/view_az±A_el±E_WxH_Nspp.{exr,png,key}`, the tracer's usual
 //! files (all layers as float EXR, a tone-mapped PNG for people), written
-//! atomically; the `.key` records [`inference::trace::cache::key`] of scene,
-//! eye and settings, so a second request with the same inputs reads the EXR
-//! instead of tracing, and a changed scene, seed or transport re-traces.
+//! atomically; the `.exr.key` record holds [`inference::trace::cache::image_key`]
+//! of scene, eye and settings, so a second request with the same inputs reads
+//! the EXR instead of tracing, and a changed scene, seed or transport (or a
+//! damaged file) re-traces.
 
-use crate::infer_cmd::targets::{composite_pixels, target_pixels};
-use crate::play::prepare_output;
+use crate::compile::infer::targets::{composite_pixels, target_pixels};
+use crate::compile::trace::cached_or_traced;
 use anyhow::{Context, Result, bail};
 use glam::Vec3;
 use inference::scene::{Material, Scene};
@@ -79,7 +80,7 @@ pub struct ReferenceImage {
     /// is > 0 (elsewhere the layers are 0). Glass: no transmission term.
     pub composite: Vec<[f32; 4]>,
     /// Cache key of the traced image.
-    pub key: u64,
+    pub key: inference::key::Key,
     /// The EXR all this was read from.
     pub exr: PathBuf,
     /// True when this call traced the view, false when it came from the cache.
@@ -102,6 +103,7 @@ impl ReferenceImage {
 /// The tracer (and its BVH) is built on the first view that needs tracing.
 pub struct References<'a> {
     scene: &'a Scene,
+    scene_key: inference::key::Key,
     dir: PathBuf,
     settings: TraceSettings,
     tracer: OnceCell<Tracer<'a>>,
@@ -115,6 +117,7 @@ impl<'a> References<'a> {
             .context("trace settings of the eval references")?;
         Ok(References {
             scene,
+            scene_key: cache::scene_key(scene),
             dir: dir.to_owned(),
             settings,
             tracer: OnceCell::new(),
@@ -145,17 +148,11 @@ impl<'a> References<'a> {
         self.check_reflector(object)?;
         let eye = view.eye(self.scene);
         let stem = self.stem(view);
-        let key = cache::key(self.scene, eye, &self.settings);
-        let traced = !cache::is_fresh(&stem, key);
-        if traced {
-            prepare_output(&self.dir)?;
-            let image = self.tracer()?.render(eye, &self.settings)?;
-            output::write_image(&stem, &image)
-                .with_context(|| format!("writing {}", stem.display()))?;
-            cache::record(&stem, key)?;
-        }
+        let key = cache::image_key(&self.scene_key, eye, &self.settings);
+        let (layers, traced) = cached_or_traced(&stem, &key, || {
+            Ok(self.tracer()?.render(eye, &self.settings)?)
+        })?;
         let exr = output::with_suffix(&stem, ".exr");
-        let layers = output::read_exr(&exr)?;
         let (width, height) = (self.settings.width, self.settings.height);
         let n = width as usize * height as usize;
         let read = || -> Result<_> {
@@ -257,8 +254,8 @@ mod tests {
         }
     }
 
-    fn teapot(cache: &Path) -> Result<Scene> {
-        Ok(Scene::load_with_cache("teapot", cache)?)
+    fn teapot(_: &Path) -> Result<Scene> {
+        Ok(Scene::load("teapot")?)
     }
 
     fn modified(path: &Path) -> Result<std::time::SystemTime> {

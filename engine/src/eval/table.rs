@@ -7,8 +7,8 @@
 //! the orbit in elevation. Each score is the row's aggregate over the views
 //! of that kind (the driver says which aggregate in its docs).
 
-use super::files::write_atomically;
 use super::metrics::PSNR_CAP_DB;
+use crate::util::files::write as write_atomically;
 use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;

@@ -3,49 +3,14 @@
 //! files themselves. Both write the same layout: RGBA f16, MIP-major, then
 //! face, then rows — what `level_regions` uploads.
 
-use crate::codec_cmd::map_specs;
+pub use crate::maps::MapLayer;
+use crate::maps::{map_path, map_specs};
 use anyhow::{Context, Result, bail};
 use half::f16;
 use inference::infer::maps::read_map;
 use inference::scene::Scene;
-use inference::solve::layout::{TextureLayout, TextureShape};
+use inference::solve::layout::TextureLayout;
 use std::path::{Path, PathBuf};
-
-/// One kind of inferred map of a reflector.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum MapLayer {
-    Distant,
-    Local,
-    Sphere,
-    Ptm,
-}
-
-impl MapLayer {
-    /// The map's file name part, as `engine infer` writes it.
-    pub fn file_part(self) -> &'static str {
-        match self {
-            MapLayer::Distant => "specular_distant",
-            MapLayer::Local => "specular_local",
-            MapLayer::Sphere => "specular_sphere",
-            MapLayer::Ptm => "ptm",
-        }
-    }
-    pub fn channels(self) -> usize {
-        match self {
-            MapLayer::Local => 4,
-            _ => 3,
-        }
-    }
-    pub fn shape(self, resolution: u32) -> TextureShape {
-        match self {
-            MapLayer::Ptm => TextureShape::Tex2D {
-                width: resolution,
-                height: resolution,
-            },
-            _ => TextureShape::Cube { size: resolution },
-        }
-    }
-}
 
 /// Which source playback reads maps from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize)]
@@ -97,7 +62,7 @@ impl MapSource {
         }
         let mut index = Vec::new();
         for (i, (spec, tex)) in specs.iter().zip(textures).enumerate() {
-            let layout = TextureLayout::full_chain(spec.shape);
+            let layout = spec.layout();
             let (w, h) = layout.level_size(0);
             let got = (
                 tex.layout.width,
@@ -105,13 +70,12 @@ impl MapSource {
                 tex.layout.faces,
                 tex.layout.channels,
             );
-            let want = (w, h, layout.faces(), spec.channels);
+            let want = (w, h, layout.faces(), spec.layer.channels() as u32);
             if got != want || tex.grid.n0 < scene.orbit.samples {
                 bail!(
-                    "{}: texture {i} ({}.{}) is {}x{}x{} faces, {} channels, {} samples; expected {}x{}x{}, {} channels, {} samples (re-run `engine encode`)",
+                    "{}: texture {i} ({}) is {}x{}x{} faces, {} channels, {} samples; expected {}x{}x{}, {} channels, {} samples (re-run `engine encode`)",
                     path.display(),
-                    spec.object,
-                    spec.layer,
+                    spec.name(),
                     got.0,
                     got.1,
                     got.2,
@@ -124,7 +88,7 @@ impl MapSource {
                     scene.orbit.samples
                 );
             }
-            index.push((spec.object.clone(), spec.layer, i as u32));
+            index.push((spec.object.clone(), spec.layer.file_part(), i as u32));
         }
         Ok(Self {
             kind: Kind::Container {
@@ -174,7 +138,7 @@ impl MapSource {
             Kind::Container { index, .. } => index
                 .iter()
                 .any(|(o, l, _)| o == object && *l == layer.file_part()),
-            Kind::Exr { dir } => sample_path(dir, 0, object, layer).is_file(),
+            Kind::Exr { dir } => map_path(dir, 0, object, layer).is_file(),
         }
     }
 
@@ -227,12 +191,19 @@ impl MapSource {
                 cache.end_frame();
             }
             Kind::Exr { dir } => {
-                let path = sample_path(dir, sample, object, layer);
+                let path = map_path(dir, sample, object, layer);
                 let map = read_map(&path, &layout, layer.channels())
                     .with_context(|| format!("reading inferred map {}", path.display()))?;
                 for (i, texel) in out.chunks_exact_mut(4).enumerate() {
                     for (c, v) in texel.iter_mut().enumerate() {
-                        *v = f16::from_f32(map.get(c).map_or(1.0, |m| m[i]));
+                        let x = map.get(c).map_or(1.0, |m| m[i]);
+                        *v = f16::from_f32(x);
+                        if v.is_infinite() {
+                            bail!(
+                                "{}: holds {x:e}, beyond what playback's f16 textures hold (±65504)",
+                                path.display()
+                            );
+                        }
                     }
                 }
             }
@@ -240,9 +211,4 @@ impl MapSource {
         self.last_read_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(())
     }
-}
-
-pub fn sample_path(dir: &Path, sample: u32, object: &str, layer: MapLayer) -> PathBuf {
-    dir.join(format!("sample_{sample:04}"))
-        .join(format!("{object}.{}.exr", layer.file_part()))
 }

@@ -66,21 +66,21 @@ pub fn write_map(path: &Path, layout: &TextureLayout, map: &[Vec<f32>]) -> Resul
         (w0 * faces) as usize,
         h0 as usize,
     )));
-    let tmp = path.with_extension("exr.tmp");
-    let written = Image::from_layers(attributes, layers)
-        .write()
-        .to_file(&tmp)
-        .map_err(|cause| MapError::Exr {
-            path: path.to_owned(),
-            cause,
-        });
-    if let Err(e) = written {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(e);
-    }
-    std::fs::rename(&tmp, path).map_err(|cause| MapError::Io {
-        path: path.to_owned(),
-        cause,
+    crate::files::write_with(path, |tmp| {
+        Image::from_layers(attributes, layers)
+            .write()
+            .to_file(tmp)
+            .map_err(|cause| MapError::Exr {
+                path: path.to_owned(),
+                cause,
+            })
+    })
+    .map_err(|e| match e {
+        crate::files::AtomicError::Write(e) => e,
+        crate::files::AtomicError::Rename { path, source } => MapError::Io {
+            path,
+            cause: source,
+        },
     })
 }
 
@@ -91,13 +91,28 @@ pub fn read_map(
     layout: &TextureLayout,
     channels: usize,
 ) -> Result<Vec<Vec<f32>>, MapError> {
+    let bytes = std::fs::read(path).map_err(|cause| MapError::Io {
+        path: path.to_owned(),
+        cause,
+    })?;
+    parse_map(&bytes, path, layout, channels)
+}
+
+/// [`read_map`] on the file's bytes, already read (and checked); `path`
+/// names the file in errors.
+pub fn parse_map(
+    bytes: &[u8],
+    path: &Path,
+    layout: &TextureLayout,
+    channels: usize,
+) -> Result<Vec<Vec<f32>>, MapError> {
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
         .all_channels()
         .all_layers()
         .all_attributes()
-        .from_file(path)
+        .from_buffered(std::io::Cursor::new(bytes))
         .map_err(|cause| MapError::Exr {
             path: path.to_owned(),
             cause,

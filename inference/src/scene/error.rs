@@ -13,7 +13,7 @@ pub enum SceneError {
         cause: std::io::Error,
     },
     /// The scene file does not exist; `available` lists the scenes beside where it was sought.
-    #[error("{}: no such scene file (available there: {available})", path.display())]
+    #[error("{}: no such scene file (available: {available})", path.display())]
     NoScene { path: PathBuf, available: String },
     /// TOML syntax or type error; `toml`'s message carries line and column.
     #[error("{}: {cause}", path.display())]

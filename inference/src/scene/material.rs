@@ -45,3 +45,6 @@ impl Default for EmSettings {
         }
     }
 }
+
+/// EM sizes playback and inference support (cube face edge, powers of two).
+pub const EM_RESOLUTIONS: std::ops::RangeInclusive<u32> = 4..=2048;

@@ -9,8 +9,8 @@ mod load;
 pub mod material;
 pub mod mesh;
 pub mod obj;
-pub mod paths;
 pub mod room;
+pub mod shipped;
 pub mod texture;
 
 #[cfg(test)]
@@ -24,9 +24,9 @@ pub use crate::fresnel::schlick_fresnel;
 pub use camera::{Camera, Orbit};
 pub use error::SceneError;
 pub use light::AreaLight;
-pub use material::{EmLayer, EmSettings, Material};
+pub use material::{EM_RESOLUTIONS, EmLayer, EmSettings, Material};
 pub use mesh::Mesh;
-pub use paths::{assets_dir, cache_dir, workspace_dir};
+pub use shipped::{SHIPPED, shipped};
 pub use texture::{Pattern, Texture};
 
 /// A loaded, validated scene. Room surfaces ("floor", "walls", "ceiling") and lights are
@@ -59,32 +59,42 @@ pub struct Object {
 }
 
 impl Scene {
-    /// `name_or_path`: a scene name (file `assets/scenes/<name>.toml`) or a path to a
-    /// `.toml` file. Generated meshes are cached in [`cache_dir`].
+    /// `name_or_path`: the name of a shipped scene (built into the binary,
+    /// [`SHIPPED`]) or a path to a `.toml` file. Relative mesh paths are
+    /// relative to the scene file.
     pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
-        Scene::load_with_cache(name_or_path, &cache_dir())
-    }
-
-    /// As [`Scene::load`], with generated meshes cached in `cache_dir`.
-    pub fn load_with_cache(name_or_path: &str, cache_dir: &Path) -> Result<Scene, SceneError> {
-        let path = scene_path(name_or_path);
-        let text = std::fs::read_to_string(&path).map_err(|e| match e.kind() {
+        let p = Path::new(name_or_path);
+        let is_path = p.extension().is_some_and(|e| e == "toml") || p.components().count() > 1;
+        if !is_path {
+            let Some(text) = shipped(name_or_path) else {
+                return Err(SceneError::NoScene {
+                    path: p.to_owned(),
+                    available: format!(
+                        "built-in scenes: {}; or give a path to a .toml file",
+                        shipped::shipped_names()
+                    ),
+                });
+            };
+            let source = Path::new("assets/scenes").join(format!("{name_or_path}.toml"));
+            return Scene::from_toml(text, &source);
+        }
+        let text = std::fs::read_to_string(p).map_err(|e| match e.kind() {
             std::io::ErrorKind::NotFound => SceneError::NoScene {
-                available: available_scenes(&path),
-                path: path.clone(),
+                available: available_scenes(p),
+                path: p.to_owned(),
             },
-            _ => SceneError::io(&path, e),
+            _ => SceneError::io(p, e),
         })?;
-        Scene::from_toml(&text, &path, cache_dir)
+        Scene::from_toml(&text, p)
     }
 
     /// Parses scene text; `path` is used for error messages and relative mesh paths.
-    pub fn from_toml(text: &str, path: &Path, cache_dir: &Path) -> Result<Scene, SceneError> {
+    pub fn from_toml(text: &str, path: &Path) -> Result<Scene, SceneError> {
         let file: file::SceneFile = toml::from_str(text).map_err(|e| SceneError::Toml {
             path: path.to_owned(),
             cause: Box::new(e),
         })?;
-        load::Loader { path, cache_dir }.build(file)
+        load::Loader { path }.build(file)
     }
 
     /// Bounds of all objects, room included: `(min, max)`.
@@ -108,7 +118,8 @@ impl Scene {
     }
 }
 
-/// Stems of the `.toml` files beside `path`, for "did you mean" messages.
+/// Stems of the `.toml` files beside `path` and the built-in scenes, for
+/// "did you mean" messages.
 fn available_scenes(path: &Path) -> String {
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut names: Vec<String> = std::fs::read_dir(dir)
@@ -120,21 +131,10 @@ fn available_scenes(path: &Path) -> String {
         .filter_map(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
         .collect();
     names.sort();
-    if names.is_empty() {
+    let beside = if names.is_empty() {
         "none".to_owned()
     } else {
         names.join(", ")
-    }
-}
-
-/// A bare name (no separator, no `.toml`) means `assets/scenes/<name>.toml`.
-fn scene_path(name_or_path: &str) -> PathBuf {
-    let p = Path::new(name_or_path);
-    if p.extension().is_some_and(|e| e == "toml") || p.components().count() > 1 {
-        p.to_owned()
-    } else {
-        assets_dir()
-            .join("scenes")
-            .join(format!("{name_or_path}.toml"))
-    }
+    };
+    format!("{beside}; built-in scenes: {}", shipped::shipped_names())
 }

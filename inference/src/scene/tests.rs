@@ -51,7 +51,7 @@ fn load(text: &str) -> Result<Scene, SceneError> {
     std::fs::write(dir.path().join("tetra.obj"), TETRA).expect("write obj");
     let path = dir.path().join("x.toml");
     std::fs::write(&path, text).expect("write scene");
-    Scene::load_with_cache(&path.to_string_lossy(), dir.path())
+    Scene::load(&path.to_string_lossy())
 }
 
 /// The error text for `BASE` with `from` replaced by `to` (or `to` appended if `from` is "").
@@ -76,9 +76,7 @@ material = "chrome"
 
 #[test]
 fn committed_teapot_scene_loads() {
-    let cache = tempfile::tempdir().expect("temp dir");
-    let path = assets_dir().join("scenes/teapot.toml");
-    let s = Scene::load_with_cache(&path.to_string_lossy(), cache.path()).expect("loads");
+    let s = Scene::load("teapot").expect("the built-in teapot loads");
     assert_eq!(s.name, "teapot");
     let names: Vec<&str> = s.objects.iter().map(|o| o.name.as_str()).collect();
     assert_eq!(names, ["floor", "walls", "ceiling", "light", "teapot"]);
@@ -363,14 +361,18 @@ fn broken_mesh_file_is_reported_through_the_scene() {
 
 #[test]
 fn missing_scene_file_is_named() {
-    let e = Scene::load("/nonexistent/dir/nothing.toml").expect_err("missing");
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("other.toml"), "").expect("write");
+    let missing = dir.path().join("nothing.toml");
+    let e = Scene::load(&missing.to_string_lossy()).expect_err("missing");
     let e = e.to_string();
-    assert!(e.contains("/nonexistent/dir/nothing.toml"), "{e}");
-    let e = Scene::load("no_such_scene_name").expect_err("missing");
-    let e = e.to_string();
-    assert!(e.contains("scenes/no_such_scene_name.toml"), "{e}");
+    assert!(e.contains(&*missing.to_string_lossy()), "{e}");
     assert!(
-        e.contains("no such scene file (available there: teapot"),
+        e.contains("available: other; built-in scenes: teapot"),
         "{e}"
     );
+    let e = Scene::load("no_such_scene_name").expect_err("missing");
+    let e = e.to_string();
+    assert!(e.contains("no_such_scene_name: no such scene"), "{e}");
+    assert!(e.contains("built-in scenes: teapot"), "{e}");
 }

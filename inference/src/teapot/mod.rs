@@ -1,6 +1,5 @@
-//! The Utah teapot from Newell's 32 bicubic Bézier patches: data, tessellation, OBJ cache.
+//! The Utah teapot from Newell's 32 bicubic Bézier patches: data and tessellation.
 
-mod cache;
 mod data;
 mod patch;
 mod tessellate;
@@ -9,7 +8,6 @@ mod weld;
 #[cfg(test)]
 mod tests;
 
-pub use cache::{cached_obj, obj_file_name};
 pub use patch::{Patch, Sample};
 pub use tessellate::{MAX_SEGMENTS, Tessellation, tessellate};
 

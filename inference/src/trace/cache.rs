@@ -1,80 +1,81 @@
-//! The cache key of a traced image: a hash of everything that determines its pixels
-//! (scene content, eye, settings, tracer version), not of file names or times.
+//! The cache key of a traced image: named hashes of everything that
+//! determines its pixels (scene content, eye, settings, tracer version), not
+//! of file names or times. The scene's parts are hashed once per run
+//! ([`scene_key`]), each image adds its eye and settings ([`image_key`]).
 
 use std::hash::Hasher;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 use super::TraceSettings;
 use super::error::TraceError;
+use crate::key::{Fnv, Freshness, Key};
 use crate::scene::{Material, Scene};
 
 /// Bump when a change to the tracer changes its images.
 pub const TRACER_VERSION: u32 = 1;
 
-/// FNV-1a, 64-bit: stable across runs, platforms and Rust versions (unlike `DefaultHasher`).
-struct Fnv(u64);
-
-impl Hasher for Fnv {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
-        }
-    }
+fn hash(f: impl FnOnce(&mut Fnv)) -> u64 {
+    let mut h = Fnv::default();
+    f(&mut h);
+    h.finish()
 }
 
-impl Fnv {
-    fn f(&mut self, x: f32) {
-        self.write_u32(x.to_bits());
-    }
-    fn v3(&mut self, v: Vec3) {
-        v.to_array().into_iter().for_each(|x| self.f(x));
-    }
-    fn v2(&mut self, v: Vec2) {
-        v.to_array().into_iter().for_each(|x| self.f(x));
-    }
-    fn s(&mut self, s: &str) {
-        self.write_u64(s.len() as u64);
-        self.write(s.as_bytes());
-    }
-}
-
-/// Key of the image `settings` produce of `scene` from `eye` (threads and progress excluded:
-/// they do not change pixels).
-pub fn key(scene: &Scene, eye: Vec3, settings: &TraceSettings) -> u64 {
-    let mut h = Fnv(0xcbf2_9ce4_8422_2325);
-    h.write_u32(TRACER_VERSION);
-    h.v3(eye);
-    h.write_u32(settings.width);
-    h.write_u32(settings.height);
-    h.write_u32(settings.spp);
-    h.write_u64(settings.seed);
-    let t = &settings.transport;
-    h.v3(t.background);
-    h.write_u32(t.max_diffuse_bounces);
-    h.write_u32(t.max_specular_bounces);
-
+/// The scene's content by part: camera, orbit, lights, materials, geometry
+/// and textures (names included; the scene's file name is not).
+pub fn scene_key(scene: &Scene) -> Key {
     let c = &scene.camera;
-    [c.fov_y_deg, c.near, c.far]
-        .into_iter()
-        .for_each(|x| h.f(x));
     let o = &scene.orbit;
-    h.v3(o.center);
-    [o.radius, o.height, o.start_deg, o.step_deg]
-        .into_iter()
-        .for_each(|x| h.f(x));
-    for l in &scene.lights {
-        h.s(&l.name);
-        [l.center, l.edge_u, l.edge_v, l.radiance]
-            .into_iter()
-            .for_each(|v| h.v3(v));
-    }
+    Key::new()
+        .with(
+            "camera",
+            hash(|h| {
+                [c.fov_y_deg, c.near, c.far]
+                    .into_iter()
+                    .for_each(|x| h.f32(x))
+            }),
+        )
+        .with(
+            "orbit",
+            hash(|h| {
+                h.v3(o.center);
+                [o.radius, o.height, o.start_deg, o.step_deg]
+                    .into_iter()
+                    .for_each(|x| h.f32(x));
+            }),
+        )
+        .with(
+            "lights",
+            hash(|h| {
+                for l in &scene.lights {
+                    h.str(&l.name);
+                    [l.center, l.edge_u, l.edge_v, l.radiance]
+                        .into_iter()
+                        .for_each(|v| h.v3(v));
+                }
+            }),
+        )
+        .with("materials", hash(|h| materials(h, scene)))
+        .with("geometry", hash(|h| geometry(h, scene)))
+        .with(
+            "textures",
+            hash(|h| {
+                for tex in &scene.textures {
+                    h.write_u32(tex.width);
+                    h.write_u32(tex.height);
+                    tex.texels
+                        .iter()
+                        .flatten()
+                        .for_each(|&x| h.write_u32(x.to_bits()));
+                }
+            }),
+        )
+}
+
+fn materials(h: &mut Fnv, scene: &Scene) {
     for (m, name) in scene.materials.iter().zip(&scene.material_names) {
-        h.s(name);
+        h.str(name);
         match *m {
             Material::Diffuse { albedo, texture } => {
                 h.write_u8(0);
@@ -88,11 +89,11 @@ pub fn key(scene: &Scene, eye: Vec3, settings: &TraceSettings) -> u64 {
             Material::Glossy { f0, roughness } => {
                 h.write_u8(2);
                 h.v3(f0);
-                h.f(roughness);
+                h.f32(roughness);
             }
             Material::Glass { ior, absorption } => {
                 h.write_u8(3);
-                h.f(ior);
+                h.f32(ior);
                 h.v3(absorption);
             }
             Material::Emissive { radiance } => {
@@ -101,8 +102,11 @@ pub fn key(scene: &Scene, eye: Vec3, settings: &TraceSettings) -> u64 {
             }
         }
     }
+}
+
+fn geometry(h: &mut Fnv, scene: &Scene) {
     for obj in &scene.objects {
-        h.s(&obj.name);
+        h.str(&obj.name);
         h.write_u64(obj.material as u64);
         let m = &obj.mesh;
         h.write_u64(m.positions.len() as u64);
@@ -111,37 +115,46 @@ pub fn key(scene: &Scene, eye: Vec3, settings: &TraceSettings) -> u64 {
         m.uvs.iter().for_each(|&uv| h.v2(uv));
         m.indices.iter().for_each(|&i| h.write_u32(i));
     }
-    for tex in &scene.textures {
-        h.write_u32(tex.width);
-        h.write_u32(tex.height);
-        tex.texels
-            .iter()
-            .flatten()
-            .for_each(|&x| h.write_u32(x.to_bits()));
+}
+
+/// Key of the image `settings` produce of the scene (its [`scene_key`])
+/// from `eye` (threads and progress excluded: they do not change pixels).
+pub fn image_key(scene: &Key, eye: Vec3, settings: &TraceSettings) -> Key {
+    let t = &settings.transport;
+    Key::new()
+        .with("tracer version", u64::from(TRACER_VERSION))
+        .merged(scene)
+        .with("eye", hash(|h| h.v3(eye)))
+        .with(
+            "trace settings",
+            hash(|h| {
+                h.write_u32(settings.width);
+                h.write_u32(settings.height);
+                h.write_u32(settings.spp);
+                h.write_u64(settings.seed);
+                h.v3(t.background);
+                h.write_u32(t.max_diffuse_bounces);
+                h.write_u32(t.max_specular_bounces);
+            }),
+        )
+}
+
+/// Key of one image, hashing the scene too (for single images; loops over
+/// many views should hash the scene once with [`scene_key`]).
+pub fn key(scene: &Scene, eye: Vec3, settings: &TraceSettings) -> Key {
+    image_key(&scene_key(scene), eye, settings)
+}
+
+/// Whether `<stem>.exr` and `<stem>.png` exist, whole, traced with `key`.
+pub fn freshness(stem: &Path, key: &Key) -> Freshness {
+    if !super::output::with_suffix(stem, ".png").is_file() {
+        return Freshness::Missing;
     }
-    h.finish()
+    crate::key::freshness(&super::output::with_suffix(stem, ".exr"), key)
 }
 
-/// The file beside `<stem>.exr` that records the key it was traced with.
-pub fn key_path(stem: &Path) -> PathBuf {
-    super::output::with_suffix(stem, ".key")
-}
-
-/// True when `<stem>.exr` and `<stem>.png` exist and were traced with `key`.
-pub fn is_fresh(stem: &Path, key: u64) -> bool {
-    let recorded = std::fs::read_to_string(key_path(stem)).ok();
-    recorded.is_some_and(|r| r.trim() == format!("{key:016x}"))
-        && super::output::with_suffix(stem, ".exr").is_file()
-        && super::output::with_suffix(stem, ".png").is_file()
-}
-
-/// Records `key` for `<stem>` (atomically, after the images are in place).
-pub fn record(stem: &Path, key: u64) -> Result<(), TraceError> {
-    let path = key_path(stem);
-    let tmp = super::output::temp_name(&path);
-    std::fs::write(&tmp, format!("{key:016x}\n")).map_err(|e| TraceError::io(&tmp, e))?;
-    std::fs::rename(&tmp, &path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        TraceError::io(&path, e)
-    })
+/// Records `key` for `<stem>.exr` (after the images are in place).
+pub fn record(stem: &Path, key: &Key) -> Result<(), TraceError> {
+    let exr = super::output::with_suffix(stem, ".exr");
+    crate::key::write_record(&exr, key).map_err(|e| TraceError::io(&exr, e.source))
 }

@@ -42,7 +42,7 @@ pub enum TraceError {
 }
 
 impl TraceError {
-    pub(crate) fn io(path: impl Into<PathBuf>, cause: std::io::Error) -> Self {
+    pub fn io(path: impl Into<PathBuf>, cause: std::io::Error) -> Self {
         TraceError::Io {
             path: path.into(),
             cause,

@@ -16,8 +16,8 @@ use super::error::TraceError;
 pub fn write_image(stem: &Path, image: &TraceImage) -> Result<(PathBuf, PathBuf), TraceError> {
     let exr_path = with_suffix(stem, ".exr");
     let png_path = with_suffix(stem, ".png");
-    let exr_tmp = temp_name(&exr_path);
-    let png_tmp = temp_name(&png_path);
+    let exr_tmp = crate::files::temp_path(&exr_path);
+    let png_tmp = crate::files::temp_path(&png_path);
     let result = write_exr(&exr_tmp, image)
         .and_then(|()| write_png(&png_tmp, image))
         .and_then(|()| rename(&exr_tmp, &exr_path))
@@ -36,14 +36,6 @@ pub fn with_suffix(stem: &Path, suffix: &str) -> PathBuf {
     let mut s = stem.as_os_str().to_owned();
     s.push(suffix);
     PathBuf::from(s)
-}
-
-/// `dir/.name.tmp`: same folder (rename stays atomic), hidden, distinct per target.
-pub fn temp_name(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
-    path.with_file_name(format!(".{name}.tmp"))
 }
 
 fn rename(from: &Path, to: &Path) -> Result<(), TraceError> {
@@ -90,13 +82,20 @@ pub type ExrLayer = (String, Vec<(String, Vec<f32>)>);
 
 /// Layer names and channel names of an EXR written by [`write_exr`], with the samples.
 pub fn read_exr(path: &Path) -> Result<Vec<ExrLayer>, TraceError> {
+    let bytes = std::fs::read(path).map_err(|e| TraceError::io(path, e))?;
+    parse_exr(&bytes, path)
+}
+
+/// [`read_exr`] on the file's bytes, already read (and checked); `path`
+/// names the file in errors.
+pub fn parse_exr(bytes: &[u8], path: &Path) -> Result<Vec<ExrLayer>, TraceError> {
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
         .all_channels()
         .all_layers()
         .all_attributes()
-        .from_file(path)
+        .from_buffered(std::io::Cursor::new(bytes))
         .map_err(|cause| TraceError::Exr {
             path: path.to_owned(),
             cause,

@@ -494,7 +494,11 @@ fn cache_key_follows_what_determines_the_image() {
     );
     let mut t = s.clone();
     t.lights[0].radiance *= 2.0;
-    assert_ne!(k, cache::key(&t, eye, &base));
+    assert_eq!(
+        cache::key(&t, eye, &base).changes(&k),
+        ["lights"],
+        "a stale image names what changed"
+    );
 }
 
 #[test]

@@ -15,11 +15,13 @@ use super::light::AreaLight;
 use super::material::Material;
 use super::{Object, Scene, room};
 
-/// Validation context: the scene file (for messages and relative paths) and the mesh cache.
+/// Validation context: the scene file (for messages and relative mesh paths).
 pub struct Loader<'a> {
     pub path: &'a Path,
-    pub cache_dir: &'a Path,
 }
+
+/// Most viewpoint samples a scene may ask for (a 64 × 64 grid).
+pub const MAX_SAMPLES: u32 = 4096;
 
 impl Loader<'_> {
     /// Objects come out as: floor, walls, ceiling, one per light, then the file's objects.
@@ -29,6 +31,7 @@ impl Loader<'_> {
             let stem = self.path.file_stem().unwrap_or_default();
             stem.to_string_lossy().into_owned()
         });
+        self.check_name(&name)?;
         let camera = self.camera(&file)?;
         let orbit = self.orbit(&file)?;
         let declared = self.materials(&file.materials)?;
@@ -143,8 +146,11 @@ impl Loader<'_> {
 
     fn orbit(&self, file: &SceneFile) -> Result<Orbit, SceneError> {
         let o = &file.orbit;
-        if o.samples == 0 {
-            return Err(self.err("orbit.samples", "0 (expected at least 1)"));
+        if !(1..=MAX_SAMPLES).contains(&o.samples) {
+            return Err(self.err(
+                "orbit.samples",
+                format!("{} (expected 1 to {MAX_SAMPLES})", o.samples),
+            ));
         }
         Ok(Orbit {
             center: self.vec3("orbit.center", o.center)?,
@@ -154,6 +160,23 @@ impl Loader<'_> {
             step_deg: self.finite("orbit.step_deg", o.step_deg)?,
             samples: o.samples,
         })
+    }
+
+    /// The scene's name names its output folder and files: a plain name,
+    /// never a path.
+    fn check_name(&self, name: &str) -> Result<(), SceneError> {
+        let plain = name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'));
+        if name.is_empty() || name.len() > 64 || !plain || name.starts_with('.') {
+            return Err(self.err(
+                "name",
+                format!(
+                    "{name:?} (expected 1 to 64 letters, digits, '_', '-' or '.', not starting with '.': it names the output folder)"
+                ),
+            ));
+        }
+        Ok(())
     }
 
     fn room_box(&self, r: &RoomFile) -> Result<(Vec3, Vec3), SceneError> {

@@ -13,7 +13,7 @@ use crate::scene::mesh::Mesh;
 use crate::scene::obj::load_obj;
 use crate::teapot::{self, DEFAULT_SEGMENTS, MAX_SEGMENTS, TeapotPart};
 
-const MAX_EM_RESOLUTION: u32 = 8192;
+use crate::scene::material::EM_RESOLUTIONS;
 
 impl Loader<'_> {
     pub(super) fn object(
@@ -73,7 +73,7 @@ impl Loader<'_> {
                     ));
                 }
                 let part = m.part.unwrap_or(TeapotPart::Whole);
-                teapot::cached_obj(segments, part, self.cache_dir).map_err(nested)?
+                return Ok(teapot::tessellate(segments, part).map_err(nested)?.mesh);
             }
             (None, Some(obj)) => {
                 if m.segments.is_some() || m.part.is_some() {
@@ -94,12 +94,14 @@ impl Loader<'_> {
         load_obj(&obj_path).map_err(nested)
     }
     fn em(&self, field: &str, em: &EmFile) -> Result<EmSettings, SceneError> {
-        if !(em.resolution.is_power_of_two() && em.resolution <= MAX_EM_RESOLUTION) {
+        if !(em.resolution.is_power_of_two() && EM_RESOLUTIONS.contains(&em.resolution)) {
             return Err(self.err(
                 format!("{field}.resolution"),
                 format!(
-                    "{} is not a power of two in 1..={MAX_EM_RESOLUTION}",
-                    em.resolution
+                    "{} (expected a power of two from {} to {})",
+                    em.resolution,
+                    EM_RESOLUTIONS.start(),
+                    EM_RESOLUTIONS.end()
                 ),
             ));
         }

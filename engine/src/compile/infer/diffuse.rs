@@ -1,12 +1,13 @@
 //! `engine infer --diffuse`: one view-independent texture from several
 //! views, stacked into one solve.
 
+use super::InferRequest;
 use super::report::finite_or_max;
-use super::targets::{target_pixels, traced_layers};
-use super::{open_device, output_dir, trace_dir, trace_settings};
-use crate::cli::InferArgs;
-use crate::play::prepare_output;
+use super::targets::target_pixels;
+use crate::compile::trace::traced_layers;
+use crate::maps::traced_stem;
 use crate::probe::VulkanProbe;
+use crate::util::files::claim_dir;
 use anyhow::{Context, Result, bail};
 use inference::infer::Target;
 use inference::infer::maps::write_map;
@@ -14,7 +15,7 @@ use inference::probe::{Lookup, ProbeGeometry};
 use inference::scene::{Material, Scene};
 use inference::solve::SolveOptions;
 use inference::solve::layout::TextureShape;
-use inference::trace::{Tracer, camera};
+use inference::trace::{Tracer, cache, camera};
 use serde::Serialize;
 
 #[derive(Serialize)]
@@ -53,9 +54,22 @@ pub(super) fn unique_uvs(mesh: &inference::scene::Mesh) -> Vec<glam::Vec2> {
         .collect()
 }
 
-/// `--diffuse OBJECT`: one texture for all `--views`, stacked.
-pub(super) fn infer_diffuse(args: &InferArgs, object_name: &str) -> Result<String> {
-    let scene = Scene::load(&args.scene)?;
+/// One view-independent texture of a diffuse object from several views.
+#[derive(Clone, Debug)]
+pub struct DiffuseRequest {
+    pub object: String,
+    /// Orbit samples stacked into the solve.
+    pub views: Vec<u32>,
+    /// Texture size (square, power of two).
+    pub texture_size: u32,
+    /// Where to trace and write (its `samples` are ignored).
+    pub common: InferRequest,
+}
+
+/// One texture for all `req.views`, stacked into one solve.
+pub fn infer_diffuse(scene: &Scene, req: &DiffuseRequest) -> Result<String> {
+    let object_name = req.object.as_str();
+    let args = &req.common;
     let object = scene.object(object_name).with_context(|| {
         format!(
             "--diffuse {object_name}: no such object in {}",
@@ -70,30 +84,32 @@ pub(super) fn infer_diffuse(args: &InferArgs, object_name: &str) -> Result<Strin
             "--diffuse {object_name}: the object's material is not diffuse (expected a Lambertian object)"
         );
     }
-    let size = args.texture_size;
+    let size = req.texture_size;
     if size == 0 || !size.is_power_of_two() || size > 4096 {
         bail!("--texture-size {size}: expected a power of two up to 4096");
     }
-    if let Some(&k) = args.views.iter().find(|&&k| k >= scene.orbit.samples) {
+    if let Some(&k) = req.views.iter().find(|&&k| k >= scene.orbit.samples) {
         bail!(
             "--views: sample {k} out of range 0..{} (the scene's orbit.samples)",
             scene.orbit.samples
         );
     }
-    let tracer = Tracer::new(&scene)?;
+    let tracer = Tracer::new(scene)?;
     let (width, height) = args.size;
-    let settings = trace_settings(args)?;
-    let out = output_dir(args, &scene);
-    prepare_output(&out)?;
-    let trace_dir = trace_dir(args, &scene);
-    let device = open_device(args)?;
+    let settings = args.trace_settings()?;
+    let out = &args.infer_dir;
+    claim_dir(out)?;
+    let scene_key = cache::scene_key(scene);
+    let device = crate::backend::create_device(&args.device)?;
     let mut probe = VulkanProbe::new(&device)?;
-    let projection = camera::projection(&scene, width, height);
+    let projection = camera::projection(scene, width, height);
     let layer = format!("{object_name}.diffuse");
     let uvs = unique_uvs(&object.mesh);
     let mut targets = Vec::new();
-    for &k in &args.views {
-        let (layers, _) = traced_layers(&trace_dir, &scene, &tracer, k, &settings)?;
+    for &k in &req.views {
+        let stem = traced_stem(&args.trace_dir, k);
+        let eye = tracer.sample_eye(k)?;
+        let (layers, _) = traced_layers(&tracer, &scene_key, eye, &settings, &stem)?;
         targets.push(target_pixels(
             &layers,
             &layer,
@@ -101,7 +117,7 @@ pub(super) fn infer_diffuse(args: &InferArgs, object_name: &str) -> Result<Strin
             width as usize * height as usize,
         )?);
     }
-    let views: Vec<(ProbeGeometry, Target)> = args
+    let views: Vec<(ProbeGeometry, Target)> = req
         .views
         .iter()
         .zip(&targets)
@@ -142,7 +158,7 @@ pub(super) fn infer_diffuse(args: &InferArgs, object_name: &str) -> Result<Strin
     )?;
     let report = DiffuseReport {
         object: object_name.into(),
-        views: args.views.clone(),
+        views: req.views.clone(),
         rows: result.rows,
         probe_renders: result.probe_renders,
         psnr_per_view_db: result
@@ -153,13 +169,10 @@ pub(super) fn infer_diffuse(args: &InferArgs, object_name: &str) -> Result<Strin
         cg_iterations: result.iterations.clone(),
         solve_s: result.solve_time.as_secs_f64(),
     };
-    std::fs::write(
-        out.join("diffuse_report.json"),
-        serde_json::to_string_pretty(&report)?,
-    )?;
+    crate::util::files::write_json(&out.join("diffuse_report.json"), &report)?;
     Ok(format!(
         "{layer}: {} views stacked, {} rows, {} probe renders, PSNR per view {:?} dB, solve {:.2} s ({:?} CG it.)\n",
-        args.views.len(),
+        req.views.len(),
         report.rows,
         report.probe_renders,
         report

@@ -1,6 +1,9 @@
-//! Command-line interface of the `engine` binary.
+//! The `engine` binary's command line: clap structures, and how each
+//! becomes the library's typed options.
 
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::{Args, Parser, Subcommand};
+use engine::backend::{DeviceOptions, Filtering};
+use engine::options::{Maps, Mode, PemOptions, PlayOptions, RunPlace};
 use std::path::PathBuf;
 
 #[derive(Parser, Debug)]
@@ -44,7 +47,7 @@ pub enum Command {
 #[derive(Args, Debug, Clone)]
 #[command(group(clap::ArgGroup::new("what").required(true).args(["sample", "all", "view_angle"])))]
 pub struct TraceArgs {
-    /// Scene name (a file in assets/scenes/) or path to a scene file.
+    /// A built-in scene's name (teapot) or the path of a .toml scene file.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
     /// Orbit sample to trace (0-based).
@@ -84,7 +87,7 @@ pub struct TraceArgs {
 #[derive(Args, Debug, Clone)]
 #[command(group(clap::ArgGroup::new("which").required(true).args(["sample", "all", "diffuse"])))]
 pub struct InferArgs {
-    /// Scene name (a file in assets/scenes/) or path to a scene file.
+    /// A built-in scene's name (teapot) or the path of a .toml scene file.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
     /// Orbit sample to infer (0-based).
@@ -138,7 +141,7 @@ pub struct InferArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct EvalArgs {
-    /// Scene name (a file in assets/scenes/) or path to a scene file.
+    /// A built-in scene's name (teapot) or the path of a .toml scene file.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
     /// Output folder for eval.json, tradeoff.png and pictures [default: out/<scene>/eval].
@@ -176,7 +179,7 @@ pub struct EvalArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct EncodeArgs {
-    /// Scene name (a file in assets/scenes/) or path to a scene file.
+    /// A built-in scene's name (teapot) or the path of a .toml scene file.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
     /// Target compression ratio against 32-bit floats [default: 384].
@@ -200,7 +203,7 @@ pub struct CodecReportArgs {
     /// Where to write the JSON report.
     #[arg(long)]
     pub json: PathBuf,
-    /// Scene name (a file in assets/scenes/) or path to a scene file.
+    /// A built-in scene's name (teapot) or the path of a .toml scene file.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
     /// Where `engine infer --all` wrote the maps [default: out/<scene>/infer].
@@ -225,6 +228,9 @@ pub struct CodecReportArgs {
     /// Compression ratios of the curve points (against 32-bit floats).
     #[arg(long, value_delimiter = ',', default_value = "100,200,400,800,1600", value_parser = parse_ratio)]
     pub curve_ratios: Vec<f64>,
+    /// Turn the Khronos validation layer on for the rendered frames.
+    #[arg(long)]
+    pub validate: bool,
     /// Vulkan device to use (substring of its name) [default: lavapipe].
     #[arg(long, env = "ENGINE_DEVICE")]
     pub device: Option<String>,
@@ -232,17 +238,19 @@ pub struct CodecReportArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct PlayArgs {
-    /// Scene name (a file in assets/scenes/) or path to a scene file.
+    /// A built-in scene's name (teapot) or the path of a .toml scene file.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
     /// Frames along the default path: through every orbit sample, then
     /// rising above the orbit plane [default: 1.5 per viewpoint sample].
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub frames: Option<u32>,
     /// Frame size as WIDTHxHEIGHT.
     #[arg(long, default_value = "640x480", value_parser = parse_size)]
     pub size: (u32, u32),
-    /// Output folder for frames and perf.json [default: out/<scene>].
+    /// Output folder for frames, perf.json and the compiled maps
+    /// [default: out/<scene>]; the engine writes only into folders it made
+    /// or that were empty.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// What each frame draws.
@@ -278,10 +286,12 @@ pub struct PemArgs {
     /// missing) or the inferred EXR files.
     #[arg(long, value_enum, default_value_t = Maps::Container)]
     pub maps: Maps,
-    /// The container [default: out/<scene>/<scene>.ptxc].
+    /// Play this container (an input: checked against the scene, never
+    /// rebuilt) [default: compiled as <out>/<scene>.ptxc].
     #[arg(long)]
     pub container: Option<PathBuf>,
-    /// Where `engine infer --all` wrote the maps [default: out/<scene>/infer].
+    /// Play the maps `engine infer --all --out DIR` wrote into DIR (an
+    /// input: checked, never re-inferred) [default: compiled under <out>/infer].
     #[arg(long)]
     pub infer_dir: Option<PathBuf>,
     /// Draw the nearest viewpoint sample only (no blend pass).
@@ -298,37 +308,8 @@ pub struct PemArgs {
     #[arg(long)]
     pub em_size: Option<u32>,
     /// Texture filtering of the maps.
-    #[arg(long, value_enum, default_value_t = Filter::Trilinear)]
-    pub filtering: Filter,
-}
-
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Maps {
-    Container,
-    Exr,
-}
-
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Filter {
-    Trilinear,
-    Bilinear,
-    Nearest,
-}
-
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Mode {
-    /// Mirror reflectors from one static cube map (the baseline).
-    StaticEm,
-    /// One inferred sphere-at-infinity EM per viewpoint sample.
-    SpherePem,
-    /// Inferred distant (box) and local (ellipsoid) EMs per sample (the PEM paper).
-    LayeredPem,
-    /// Inferred parameterized texture maps pasted on the surface.
-    Ptm,
-    /// The ray-traced gold standard (CPU, seconds per frame).
-    Trace,
-    /// Every mesh with one texture and nothing else (reference cost).
-    Bare,
+    #[arg(long, value_enum, default_value_t = Filtering::Trilinear)]
+    pub filtering: Filtering,
 }
 
 /// Parses `WIDTHxHEIGHT`, each 1..=8192.
@@ -350,6 +331,54 @@ pub fn parse_ratio(s: &str) -> Result<f64, String> {
         _ => Err(format!(
             "expected a compression ratio above 1 (e.g. 384), got {s:?}"
         )),
+    }
+}
+
+impl PlayArgs {
+    /// Where the run happens.
+    pub fn place(&self) -> RunPlace {
+        RunPlace {
+            scene: self.scene.clone(),
+            out: self.out.clone(),
+            device: device(&self.device, self.validate),
+            size: self.size,
+        }
+    }
+
+    /// What the main job draws and keeps.
+    pub fn options(&self) -> PlayOptions {
+        PlayOptions {
+            mode: self.mode,
+            pem: self.pem.options(),
+            frames: self.frames,
+            warmup: self.warmup,
+            capture: !self.no_capture,
+            exr: self.exr,
+            trace_spp: self.trace_spp,
+        }
+    }
+}
+
+impl PemArgs {
+    pub fn options(&self) -> PemOptions {
+        PemOptions {
+            maps: self.maps,
+            container: self.container.clone(),
+            infer_dir: self.infer_dir.clone(),
+            blend: !self.no_blend,
+            local_layer: !self.distant_only,
+            spacing: self.spacing,
+            em_size: self.em_size,
+            filtering: self.filtering,
+        }
+    }
+}
+
+/// The device options of `--device` and `--validate`.
+pub fn device(name: &Option<String>, validate: bool) -> DeviceOptions {
+    DeviceOptions {
+        device_name: name.clone(),
+        validate,
     }
 }
 

@@ -1,36 +1,8 @@
-//! Targets from the tracer: layers of a sample (traced on demand), as
-//! RGBA pixels, and a reflector's composite appearance.
+//! Targets from the tracer: a traced layer as RGBA pixels, and a
+//! reflector's composite appearance.
 
-use crate::play::prepare_output;
 use anyhow::{Context, Result, bail};
-use inference::scene::Scene;
-use inference::trace::{TraceSettings, Tracer, cache, output};
-use std::path::Path;
-
-/// The traced layers of sample `k`, tracing them first when missing or
-/// traced with other inputs.
-pub(super) fn traced_layers(
-    trace_dir: &Path,
-    scene: &Scene,
-    tracer: &Tracer,
-    k: u32,
-    settings: &TraceSettings,
-) -> Result<(Vec<output::ExrLayer>, u64)> {
-    let stem = trace_dir.join(format!("sample_{k:04}"));
-    let eye = tracer.sample_eye(k)?;
-    let key = cache::key(scene, eye, settings);
-    if !cache::is_fresh(&stem, key) {
-        if let Some(dir) = stem.parent() {
-            prepare_output(dir)?;
-        }
-        let image = tracer.render(eye, settings)?;
-        output::write_image(&stem, &image)
-            .with_context(|| format!("writing {}", stem.display()))?;
-        cache::record(&stem, key)?;
-    }
-    let path = output::with_suffix(&stem, ".exr");
-    Ok((output::read_exr(&path)?, key))
-}
+use inference::trace::output;
 
 /// `name`'s pixels as RGBA (premultiplied by A when `premultiply`).
 pub(crate) fn target_pixels(
@@ -71,7 +43,7 @@ pub(crate) fn target_pixels(
 /// shades the distant layer, `fresnel × map`, and at the sample view that
 /// reproduces `fresnel × (local over distant)`, the layered PEM's specular
 /// term.
-pub(super) fn specular_pixels(
+pub(crate) fn specular_pixels(
     layers: &[output::ExrLayer],
     object: &str,
     pixel_count: usize,

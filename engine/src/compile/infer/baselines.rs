@@ -6,7 +6,7 @@ use anyhow::Result;
 use glam::Vec3;
 use inference::infer::Target;
 use inference::probe::{Lookup, ProbeGeometry};
-use inference::scene::{Material, Scene};
+use inference::scene::Scene;
 use inference::solve::layout::{TextureLayout, TextureShape};
 
 /// Each reflector's static EM from the engine (size, origin, texels).
@@ -19,12 +19,10 @@ pub(super) fn static_ems(
     height: u32,
 ) -> Result<std::collections::HashMap<String, StaticEm>> {
     let mut renderer = crate::renderer::Renderer::new(device, scene, width, height)?;
-    let reflectors = scene.objects.iter().filter(|o| {
-        matches!(
-            scene.materials.get(o.material),
-            Some(Material::Mirror { .. } | Material::Glossy { .. })
-        )
-    });
+    let reflectors = scene
+        .objects
+        .iter()
+        .filter(|o| crate::maps::reflective(scene, o));
     let mut out = std::collections::HashMap::new();
     for (index, object) in reflectors.enumerate() {
         out.insert(object.name.clone(), renderer.static_em(index)?);

@@ -1,6 +1,5 @@
 //! What `engine infer` writes to report.json and prints.
 
-use anyhow::{Context, Result, bail};
 use inference::infer::LayerResult;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -44,30 +43,36 @@ pub struct SampleReport {
 }
 
 impl SampleReport {
-    /// The report already in `path` for sample `sample`: `None` when there
-    /// is none, an error naming the file when it cannot be read or is not
-    /// that sample's report (checked before inferring anything, so a bad
-    /// file costs no work).
-    pub(super) fn read(path: &Path, sample: u32) -> Result<Option<SampleReport>> {
-        let bytes = match std::fs::read(path) {
-            Ok(bytes) => bytes,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-            Err(e) => return Err(e).with_context(|| format!("reading {}", path.display())),
+    /// The report already in `path` for sample `sample`, or a new empty
+    /// one when there is none or it cannot be used (a damaged or foreign
+    /// file is replaced, with a warning, not left blocking the run).
+    pub(super) fn read_or_new(path: &Path, sample: u32) -> SampleReport {
+        let empty = SampleReport {
+            sample,
+            probe_renders: 0,
+            a_vs_render_psnr_db: f64::MAX,
+            solve_s: 0.0,
+            warm_started: false,
+            layers: Vec::new(),
         };
-        let old: SampleReport = serde_json::from_slice(&bytes).with_context(|| {
-            format!(
-                "{}: not a sample report (move it away to start the report afresh)",
-                path.display()
-            )
-        })?;
-        if old.sample != sample {
-            bail!(
-                "{}: reports sample {}, expected {sample}",
-                path.display(),
-                old.sample
-            );
+        let Ok(bytes) = std::fs::read(path) else {
+            return empty;
+        };
+        match serde_json::from_slice::<SampleReport>(&bytes) {
+            Ok(old) if old.sample == sample => old,
+            Ok(old) => {
+                eprintln!(
+                    "{}: reports sample {}, expected {sample}: starting it afresh",
+                    path.display(),
+                    old.sample
+                );
+                empty
+            }
+            Err(e) => {
+                eprintln!("{}: unreadable ({e}): starting it afresh", path.display());
+                empty
+            }
         }
-        Ok(Some(old))
     }
 
     /// Sample `sample`'s report after this run inferred `fresh` layers:

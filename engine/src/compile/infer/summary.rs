@@ -1,7 +1,7 @@
 //! Medians over every sample inferred so far (all `sample_*/report.json` in
 //! the output folder, skipped samples included), per layer.
 
-use crate::perf::median;
+use crate::util::stats::median;
 use anyhow::Result;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -81,10 +81,7 @@ pub(super) fn summarize(dir: &Path) -> Result<String> {
         );
         summary.insert(name.clone(), s);
     }
-    std::fs::write(
-        dir.join("summary.json"),
-        serde_json::to_string_pretty(&summary)?,
-    )?;
+    crate::util::files::write_json(&dir.join("summary.json"), &summary)?;
     let samples = summary.values().map(|s| s.samples).max().unwrap_or(0);
     Ok(if samples > 1 { text } else { String::new() })
 }

@@ -1,0 +1,56 @@
+//! `engine encode`: every sample's inferred maps into one container.
+
+use super::default_dir;
+use crate::cli::EncodeArgs;
+use anyhow::{Context, Result, bail};
+use codec::Target;
+use engine::compile::container_key;
+use engine::compile::encode::{DEFAULT_RATIO, encode_to, load_input};
+use engine::maps::{map_path, map_specs};
+use inference::scene::Scene;
+
+pub fn run(args: &EncodeArgs) -> Result<String> {
+    let scene = Scene::load(&args.scene)?;
+    let target = match (args.ratio, args.bytes) {
+        (Some(r), None) if r.is_finite() && r > 1.0 => Target::Ratio(r),
+        (None, Some(b)) if b > 0 => Target::Bytes(b),
+        (None, None) => Target::Ratio(DEFAULT_RATIO),
+        _ => bail!("--ratio must be > 1 or --bytes > 0, not both"),
+    };
+    let dir = default_dir(&args.infer_dir, &scene, "infer");
+    // The container's key is made of the keys its maps were inferred with.
+    let mut keys = Vec::new();
+    for k in 0..scene.orbit.samples {
+        for spec in map_specs(&scene) {
+            let path = map_path(&dir, k, &spec.object, spec.layer);
+            let record = inference::key::read_record(&path).with_context(|| {
+                format!(
+                    "{}: missing or without its key record (run `engine infer --scene {} --all --out {}` first)",
+                    path.display(),
+                    args.scene,
+                    dir.display()
+                )
+            })?;
+            keys.push(record.key);
+        }
+    }
+    let input = load_input(&scene, &dir)?;
+    let e = encode_to(
+        &input,
+        target,
+        &args.out,
+        &container_key(keys.iter(), target),
+    )?;
+    Ok(format!(
+        "{}: {} textures x {} samples, {} bytes from {} raw (ratio {:.1}:1, worst texture {:.1} dB) in {:.1} s{}\n",
+        args.out.display(),
+        input.textures.len(),
+        scene.orbit.samples,
+        e.bytes,
+        e.raw_bytes,
+        e.ratio,
+        e.worst_psnr_db,
+        e.seconds,
+        e.note.map_or(String::new(), |n| format!(" ({n})"))
+    ))
+}

@@ -1,0 +1,173 @@
+//! Rendered-frame PSNR of a container: every reflector's distant layer
+//! decoded and rendered on the reflector by this device, against the
+//! traced layer and against the uncompressed map rendered the same way.
+
+use super::CodecReportRequest;
+use crate::maps::{MapLayer, map_path, map_specs, traced_stem};
+use crate::util::stats::median;
+use anyhow::{Context, Result};
+use inference::infer::maps::read_map;
+use inference::scene::Scene;
+use inference::solve::layout::TextureLayout;
+use inference::trace::output;
+
+/// One measured frame: a reflector's distant layer at one orbit sample.
+pub(super) struct FrameItem {
+    /// Texture index in the container (= object index of [`map_specs`]).
+    pub(super) index: u32,
+    pub(super) k: u32,
+    name: String,
+    layout: TextureLayout,
+    geometry: inference::probe::ProbeGeometry,
+    /// The traced layer.
+    target: Vec<[f32; 4]>,
+    /// The reflector's pixels: rendered coverage above one half.
+    pub(super) pixels: Vec<u32>,
+    /// The uncompressed map rendered, against the traced layer.
+    raw_db: f64,
+    /// That render (the reference for compression alone).
+    raw_render: Vec<[f32; 4]>,
+}
+
+/// Rendered-frame PSNR, set up once: every reflector's distant layer at
+/// every `every`-th sample with a traced target, rendered on the reflector
+/// by this device (box texgen, as inferred) from a map, against the traced
+/// layer over the object's pixels (coverage > 0.5), RGB, peak = the traced
+/// layer's maximum there; medians over frames.
+pub(super) struct FrameBench {
+    probe: crate::probe::VulkanProbe,
+    pub(super) items: Vec<FrameItem>,
+}
+
+/// How [`FrameBench`] pools pixels, for the JSON.
+pub(super) const FRAME_PIXELS: &str = "the reflector's pixels (rendered coverage > 0.5) at every --frames-every-th orbit sample; linear RGB; PSNR per frame with peak = the traced image's maximum over those pixels; median over frames";
+
+impl FrameBench {
+    pub(super) fn new(req: &CodecReportRequest, scene: &Scene) -> Result<Option<Self>> {
+        use inference::em_geometry::{EmGeometry, texgen};
+        use inference::infer::Target;
+        use inference::probe::{Lookup, ProbeGeometry, ProbeRenderer};
+        if req.frames_every == 0 {
+            return Ok(None);
+        }
+        let (width, height) = req.size;
+        let device = crate::backend::create_device(&req.device)?;
+        let mut probe = crate::probe::VulkanProbe::new(&device)?;
+        let projection = inference::trace::camera::projection(scene, width, height);
+        let (room_min, room_max) = scene.bounds();
+        let mut items = Vec::new();
+        for (index, spec) in map_specs(scene).iter().enumerate() {
+            if spec.layer != MapLayer::Distant {
+                continue;
+            }
+            let Some(object) = scene.object(&spec.object) else {
+                continue;
+            };
+            let layout = spec.layout();
+            let origin = object.mesh.area_weighted_centroid();
+            for k in (0..scene.orbit.samples).step_by(req.frames_every as usize) {
+                let traced = output::with_suffix(&traced_stem(&req.trace_dir, k), ".exr");
+                if !traced.is_file() {
+                    continue;
+                }
+                let layers = output::read_exr(&traced)?;
+                let name = spec.name();
+                let target = crate::compile::infer::targets::target_pixels(
+                    &layers,
+                    &name,
+                    false,
+                    (width * height) as usize,
+                )
+                .with_context(|| format!("{}", traced.display()))?;
+                let eye = scene.orbit.sample_eye(k)?;
+                let mut lookups = vec![[0.0f32; 4]; object.mesh.positions.len()];
+                let geometry_em = EmGeometry::Box {
+                    min: room_min,
+                    max: room_max,
+                };
+                texgen(
+                    &geometry_em,
+                    origin,
+                    eye,
+                    &object.mesh.positions,
+                    &object.mesh.normals,
+                    &mut lookups,
+                );
+                let geometry = ProbeGeometry {
+                    key: 0xC0DEC ^ u64::from(k),
+                    positions: object.mesh.positions.clone(),
+                    indices: object.mesh.indices.clone(),
+                    lookup: Lookup::Cube(
+                        lookups
+                            .iter()
+                            .map(|l| glam::Vec3::new(l[0], l[1], l[2]))
+                            .collect(),
+                    ),
+                    view_proj: projection * scene.orbit.view(eye),
+                    width,
+                    height,
+                };
+                let path = map_path(&req.infer_dir, k, &spec.object, spec.layer);
+                // Alpha 1 everywhere, like the decoded maps: the rendered
+                // alpha is the object's coverage either way.
+                let raw =
+                    inference::infer::layer::texels(&read_map(&path, &layout, 3)?, layout.len());
+                let render_raw = probe.render(&geometry, &layout, &raw)?;
+                let pixels: Vec<u32> = (0..width * height)
+                    .filter(|&p| render_raw[p as usize][3] > 0.5)
+                    .collect();
+                let t = Target {
+                    name: &name,
+                    pixels: &target,
+                    channels: 3,
+                };
+                let raw_db = inference::infer::layer::psnr_over_rows(&render_raw, &t, &pixels);
+                items.push(FrameItem {
+                    index: index as u32,
+                    k,
+                    name,
+                    layout: layout.clone(),
+                    geometry,
+                    target,
+                    pixels,
+                    raw_db,
+                    raw_render: render_raw,
+                });
+            }
+        }
+        Ok((!items.is_empty()).then_some(Self { probe, items }))
+    }
+
+    /// Median PSNRs of the container's decoded maps rendered, over the
+    /// frames: against the traced layer, and against the uncompressed maps
+    /// rendered (compression alone).
+    pub(super) fn decoded_db(&mut self, container: &codec::Container) -> Result<(f64, f64)> {
+        use inference::infer::Target;
+        use inference::probe::ProbeRenderer;
+        let (mut db, mut vs_raw) = (Vec::new(), Vec::new());
+        for it in &self.items {
+            let mut decoded = vec![0.0f32; it.layout.len() * 4];
+            codec::decode_leaf_all(container, it.index, 0, [it.k, 0], &mut decoded)?;
+            let decoded: Vec<[f32; 4]> = decoded
+                .chunks_exact(4)
+                .map(|c| [c[0], c[1], c[2], 1.0])
+                .collect();
+            let render = self.probe.render(&it.geometry, &it.layout, &decoded)?;
+            let psnr_against = |pixels| {
+                let t = Target {
+                    name: &it.name,
+                    pixels,
+                    channels: 3,
+                };
+                inference::infer::layer::psnr_over_rows(&render, &t, &it.pixels)
+            };
+            db.push(psnr_against(&it.target));
+            vs_raw.push(psnr_against(&it.raw_render));
+        }
+        Ok((median(&db), median(&vs_raw)))
+    }
+
+    pub(super) fn raw_db(&self) -> f64 {
+        median(&self.items.iter().map(|i| i.raw_db).collect::<Vec<_>>())
+    }
+}

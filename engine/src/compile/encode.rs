@@ -1,0 +1,199 @@
+//! Encoding: every sample's inferred maps into one container per scene,
+//! at a size that holds the quality. A container that would decode far
+//! below [`MIN_TEXTURE_PSNR_DB`] (maps too small for the ratio asked) is
+//! encoded again with more bytes, never played black.
+
+use crate::maps::{MapSpec, map_path, map_specs, sample_dir};
+use crate::util::files::check_overwrite_keyed;
+use anyhow::{Context, Result, bail};
+use codec::quality::PsnrAccum;
+use codec::{EncodeInput, EncodeOptions, LeafLayout, ParamGrid, ParamTexture, Target, TextureId};
+use inference::infer::maps::parse_map;
+use inference::key::Key;
+use inference::scene::Scene;
+use std::path::Path;
+
+/// The lowest texture PSNR (the codec's definition, `codec::quality`) a
+/// container may decode to; the teapot's maps reach ~50 dB at 384:1.
+pub const MIN_TEXTURE_PSNR_DB: f64 = 35.0;
+/// The ratio asked for when none is given (the thesis's 384:1).
+pub const DEFAULT_RATIO: f64 = 384.0;
+/// f16's largest finite value: what playback's textures can hold.
+const F16_MAX: f32 = 65504.0;
+
+/// A map that could not be used for encoding: which one, and why.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {why}", path.display())]
+pub struct BadMap {
+    pub sample: u32,
+    pub spec: usize,
+    pub path: std::path::PathBuf,
+    pub why: String,
+}
+
+/// Reads every sample's maps into the codec's input (sample-major; each
+/// sample MIP-major, then face, rows, texels, channels interleaved). A map
+/// that is missing, damaged (its key record's checksum) or holds values
+/// playback cannot (beyond f16) is a [`BadMap`] naming it.
+pub fn load_input(scene: &Scene, infer_dir: &Path) -> Result<EncodeInput> {
+    let specs = map_specs(scene);
+    if specs.is_empty() {
+        bail!(
+            "{}: no reflective object has [objects.em] settings: nothing to encode",
+            scene.source.display()
+        );
+    }
+    let samples = scene.orbit.samples;
+    let mut textures = Vec::new();
+    for (index, spec) in specs.iter().enumerate() {
+        let layout = spec.layout();
+        let (w, h) = layout.level_size(0);
+        let channels = spec.layer.channels();
+        let leaf = LeafLayout {
+            width: w,
+            height: h,
+            faces: layout.faces(),
+            mips: layout.levels(),
+            channels: channels as u32,
+        };
+        let id = TextureId {
+            object: index as u32,
+            layer: 0,
+        };
+        let mut texture = ParamTexture::zeroed(id, ParamGrid::one_d(samples), leaf, 1.0);
+        let mut rows = 0u64;
+        for k in 0..samples {
+            let map = read_checked(infer_dir, k, index, spec)?;
+            for (i, texel) in texture
+                .sample_mut(k as usize)
+                .chunks_exact_mut(channels)
+                .enumerate()
+            {
+                for (ch, v) in texel.iter_mut().enumerate() {
+                    *v = map[ch][i];
+                }
+            }
+            rows += sample_rows(&sample_dir(infer_dir, k), &spec.name());
+        }
+        // Rate allocation weighs errors by screen area (thesis ch. 4).
+        texture.screen_area = (rows as f32 / samples as f32).max(1.0);
+        textures.push(texture);
+    }
+    Ok(EncodeInput { textures })
+}
+
+/// One map's channels, verified against its key record.
+fn read_checked(dir: &Path, k: u32, spec_index: usize, spec: &MapSpec) -> Result<Vec<Vec<f32>>> {
+    let path = map_path(dir, k, &spec.object, spec.layer);
+    let bad = |why: String| BadMap {
+        sample: k,
+        spec: spec_index,
+        path: path.clone(),
+        why,
+    };
+    let bytes = inference::key::read_verified(&path).map_err(bad)?;
+    let map = parse_map(&bytes, &path, &spec.layout(), spec.layer.channels())
+        .map_err(|e| bad(e.to_string()))?;
+    if let Some(v) = map.iter().flatten().find(|v| v.abs() > F16_MAX) {
+        return Err(bad(format!(
+            "holds {v:e}, beyond what playback's f16 textures hold (±{F16_MAX})"
+        ))
+        .into());
+    }
+    Ok(map)
+}
+
+/// Pixels the layer covered in a sample (from its report.json), 0 if unknown.
+fn sample_rows(sample_dir: &Path, layer: &str) -> u64 {
+    std::fs::read(sample_dir.join("report.json"))
+        .ok()
+        .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
+        .and_then(|r| {
+            r["layers"]
+                .as_array()?
+                .iter()
+                .find(|l| l["name"] == layer)?["rows"]
+                .as_u64()
+        })
+        .unwrap_or(0)
+}
+
+/// What an encode made.
+pub struct Encoded {
+    pub bytes: u64,
+    pub raw_bytes: u64,
+    pub ratio: f64,
+    /// The worst texture's PSNR after decoding (the codec's definition).
+    pub worst_psnr_db: f64,
+    pub seconds: f64,
+    /// Why the size differs from the target asked for, if it does.
+    pub note: Option<String>,
+}
+
+/// Encodes `input` at `target` into `out` (atomically, with a key record
+/// `key`), growing the budget until every texture decodes to at least
+/// [`MIN_TEXTURE_PSNR_DB`]. Refuses to replace a file that is not the
+/// engine's.
+pub fn encode_to(input: &EncodeInput, target: Target, out: &Path, key: &Key) -> Result<Encoded> {
+    check_overwrite_keyed(out)?;
+    let start = std::time::Instant::now();
+    let raw = input.raw_bytes();
+    let mut target = target;
+    let mut note = None;
+    loop {
+        let (bytes, report) = match codec::encode(input, target, &EncodeOptions::default()) {
+            Err(codec::CodecError::BudgetTooSmall { minimum, .. }) => {
+                note = Some(format!(
+                    "maps too small for the ratio asked: {minimum} bytes, the least the codec writes"
+                ));
+                target = Target::Bytes(minimum);
+                continue;
+            }
+            r => r.with_context(|| format!("encoding {}", out.display()))?,
+        };
+        let container = codec::Container::from_bytes(bytes.clone())?;
+        let worst = worst_psnr(&container, input)?;
+        if worst >= MIN_TEXTURE_PSNR_DB {
+            crate::util::files::write(out, &bytes)?;
+            inference::key::write_record(out, key)?;
+            return Ok(Encoded {
+                bytes: report.bytes,
+                raw_bytes: report.raw_bytes,
+                ratio: report.ratio,
+                worst_psnr_db: worst,
+                seconds: start.elapsed().as_secs_f64(),
+                note,
+            });
+        }
+        let next = report.bytes.saturating_mul(2);
+        if next > raw / 2 {
+            bail!(
+                "{}: the maps decode to {worst:.1} dB at {} bytes (need ≥ {MIN_TEXTURE_PSNR_DB} dB) and no size under half the raw maps holds that",
+                out.display(),
+                report.bytes
+            );
+        }
+        note = Some(format!(
+            "at {} bytes a texture decoded to {worst:.1} dB (< {MIN_TEXTURE_PSNR_DB} dB): encoded again with more bytes",
+            report.bytes
+        ));
+        target = Target::Bytes(next);
+    }
+}
+
+/// The lowest PSNR over the container's textures against `input`.
+fn worst_psnr(container: &codec::Container, input: &EncodeInput) -> Result<f64> {
+    let mut cache = codec::DecodeCache::default();
+    let mut worst = f64::INFINITY;
+    for t in &input.textures {
+        let mut acc = PsnrAccum::default();
+        let mut out = vec![0.0f32; t.layout.texels() * 4];
+        for s in 0..t.grid.n0 {
+            cache.decode_leaf_all(container, t.id.object, t.id.layer, [s, 0], &mut out)?;
+            cache.end_frame();
+            acc.add(t.sample(s as usize), t.layout.channels as usize, &out, 4);
+        }
+        worst = worst.min(acc.psnr_db());
+    }
+    Ok(worst)
+}

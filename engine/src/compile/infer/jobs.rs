@@ -1,0 +1,109 @@
+//! Which maps a scene asks for — per reflector with EM settings, each EM
+//! layer on its geometry, on request one sphere-at-infinity EM for its
+//! whole specular appearance, and its PTM — and the key of each.
+
+use crate::maps::{MapLayer, reflective};
+use anyhow::{Result, bail};
+use glam::Vec3;
+use inference::em_geometry::{EmGeometry, bounding_ellipsoid};
+use inference::key::{Fnv, Key};
+use inference::scene::{EM_RESOLUTIONS, EmLayer, Object, Scene};
+use inference::solve::SolveOptions;
+use inference::solve::layout::TextureShape;
+use std::hash::Hasher;
+
+/// Bump when a change to inference changes the maps it makes.
+pub const INFERENCE_VERSION: u32 = 2;
+
+/// One map of one reflector to infer.
+pub struct Job<'a> {
+    pub object: &'a Object,
+    pub layer: MapLayer,
+    /// Where texgen intersects reflected rays (None for the PTM).
+    pub geometry: Option<EmGeometry>,
+    pub origin: Vec3,
+    pub resolution: u32,
+}
+
+impl Job<'_> {
+    /// `<object>.<layer>`.
+    pub fn name(&self) -> String {
+        format!("{}.{}", self.object.name, self.layer.file_part())
+    }
+    pub fn channels(&self) -> usize {
+        self.layer.channels()
+    }
+    pub fn shape(&self) -> TextureShape {
+        self.layer.shape(self.resolution)
+    }
+}
+
+/// The maps the scene asks for: per reflective object with EM settings,
+/// its EM layers, with `sphere` its whole specular appearance on one
+/// sphere-at-infinity EM (same resolution), then its PTM. `em_size`
+/// overrides the scene's EM resolution.
+pub fn jobs_for(scene: &Scene, em_size: Option<u32>, sphere: bool) -> Result<Vec<Job<'_>>> {
+    let (room_min, room_max) = scene.bounds();
+    let mut jobs = Vec::new();
+    for object in scene.objects.iter().filter(|o| reflective(scene, o)) {
+        let Some(em) = object.em.as_ref() else {
+            continue;
+        };
+        let resolution = em_size.unwrap_or(em.resolution);
+        if !resolution.is_power_of_two() || !EM_RESOLUTIONS.contains(&resolution) {
+            bail!(
+                "--em-size {resolution}: expected a power of two from {} to {}",
+                EM_RESOLUTIONS.start(),
+                EM_RESOLUTIONS.end()
+            );
+        }
+        let origin = object.mesh.area_weighted_centroid();
+        let job = |layer, geometry| Job {
+            object,
+            layer,
+            geometry,
+            origin,
+            resolution,
+        };
+        for &layer in &em.layers {
+            let geometry = match layer {
+                EmLayer::Distant => EmGeometry::Box {
+                    min: room_min,
+                    max: room_max,
+                },
+                EmLayer::Local => EmGeometry::Ellipsoid {
+                    center: origin,
+                    radii: bounding_ellipsoid(origin, &object.mesh.positions),
+                },
+            };
+            jobs.push(job(MapLayer::from_em(layer), Some(geometry)));
+        }
+        if sphere {
+            jobs.push(job(MapLayer::Sphere, Some(EmGeometry::SphereAtInfinity)));
+        }
+        jobs.push(job(MapLayer::Ptm, None));
+    }
+    Ok(jobs)
+}
+
+/// The key of a map: the traced target's (scene parts, eye, trace
+/// settings) plus the map's own inputs — the job (name, geometry, origin,
+/// resolution), the solve options, the image size, the reflector's mesh and
+/// the inference code's version. New kinds of job leave the keys of the
+/// others as they are.
+pub fn map_key(trace: &Key, job: &Job, options: &SolveOptions, size: (u32, u32)) -> Key {
+    let mut h = Fnv::default();
+    h.str(&job.name());
+    h.str(&format!("{:?} {:?}", job.geometry, job.origin));
+    h.write_u32(job.resolution);
+    h.write_u32(size.0);
+    h.write_u32(size.1);
+    h.str(&format!("{:?} {:?}", options.eps_f, options.eps_b));
+    for p in &job.object.mesh.positions {
+        h.v3(*p);
+    }
+    trace
+        .clone()
+        .with("inference version", u64::from(INFERENCE_VERSION))
+        .with("map settings", h.finish())
+}

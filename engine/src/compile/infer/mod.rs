@@ -1,0 +1,245 @@
+//! Inference of every reflector's maps for orbit samples. Per sample: the
+//! traced layers (traced first when missing, stale or damaged), then for
+//! each map the scene asks for ([`jobs_for`]) — distant on the room's box,
+//! local on the reflector's minimum-volume ellipsoid (premultiplied RGBA),
+//! on request one sphere-at-infinity EM for the whole specular appearance,
+//! and the PTM — probe renders on this device, the regularized solve
+//! warm-started from the previous sample, the forward-mapping baseline, and
+//! the map written as EXR with its key record, and the sample's report
+//! merged after every map (an interrupted run loses no finished map).
+
+mod baselines;
+mod diffuse;
+mod jobs;
+mod pictures;
+mod report;
+mod sample;
+mod summary;
+pub(crate) mod targets;
+
+pub use diffuse::{DiffuseRequest, infer_diffuse};
+pub use jobs::{INFERENCE_VERSION, Job, jobs_for, map_key};
+
+use crate::backend::{DeviceOptions, create_device};
+use crate::maps::map_path;
+use crate::util::files::claim_dir;
+use anyhow::{Result, bail};
+use inference::key::{Freshness, Key};
+use inference::scene::Scene;
+use inference::solve::SolveOptions;
+use inference::trace::{TraceSettings, Tracer, cache};
+use std::path::PathBuf;
+
+/// What to infer and where.
+#[derive(Clone, Debug)]
+pub struct InferRequest {
+    /// Orbit samples to infer.
+    pub samples: Vec<u32>,
+    /// Keep maps already inferred from the same inputs (`--all`).
+    pub skip_fresh: bool,
+    /// Also the sphere-at-infinity EM of every reflector.
+    pub sphere: bool,
+    /// Cube-map size for every EM [default: the scene's].
+    pub em_size: Option<u32>,
+    /// Size of the targets and probe renders.
+    pub size: (u32, u32),
+    /// Samples per pixel when a target must be traced.
+    pub spp: u32,
+    /// Pyramidal regularization weight ε_f.
+    pub eps_f: f32,
+    /// Where traced targets are read from (and traced into when missing).
+    pub trace_dir: PathBuf,
+    /// Where the maps go.
+    pub infer_dir: PathBuf,
+    pub device: DeviceOptions,
+}
+
+impl InferRequest {
+    /// Every sample of `scene`, skipping fresh maps, with the defaults.
+    pub fn all(scene: &Scene, trace_dir: PathBuf, infer_dir: PathBuf) -> Self {
+        Self {
+            samples: (0..scene.orbit.samples).collect(),
+            skip_fresh: true,
+            sphere: false,
+            em_size: None,
+            size: (640, 480),
+            spp: inference::trace::DEFAULT_SPP,
+            eps_f: 0.1,
+            trace_dir,
+            infer_dir,
+            device: DeviceOptions::default(),
+        }
+    }
+
+    pub fn trace_settings(&self) -> Result<TraceSettings> {
+        let settings = TraceSettings {
+            width: self.size.0,
+            height: self.size.1,
+            spp: self.spp,
+            progress: true,
+            ..TraceSettings::default()
+        };
+        settings.validate()?;
+        Ok(settings)
+    }
+
+    pub fn solve_options(&self) -> SolveOptions {
+        SolveOptions {
+            eps_f: self.eps_f,
+            ..SolveOptions::default()
+        }
+    }
+}
+
+/// What is known before any work: the scene's maps and the key each map
+/// of each sample must carry.
+pub struct Plan<'a> {
+    pub scene: &'a Scene,
+    pub jobs: Vec<Job<'a>>,
+    pub scene_key: Key,
+    pub settings: TraceSettings,
+    pub options: SolveOptions,
+}
+
+impl<'a> Plan<'a> {
+    pub fn new(scene: &'a Scene, req: &InferRequest) -> Result<Self> {
+        if let Some(&k) = req.samples.iter().find(|&&k| k >= scene.orbit.samples) {
+            bail!(
+                "--sample {k}: out of range 0..{} (the scene's orbit.samples)",
+                scene.orbit.samples
+            );
+        }
+        let jobs = jobs_for(scene, req.em_size, req.sphere)?;
+        if jobs.is_empty() {
+            bail!(
+                "{}: no reflective object has [objects.em] settings: nothing to infer",
+                scene.source.display()
+            );
+        }
+        Ok(Self {
+            scene,
+            jobs,
+            scene_key: cache::scene_key(scene),
+            settings: req.trace_settings()?,
+            options: req.solve_options(),
+        })
+    }
+
+    /// The traced target's key of sample `k`.
+    pub fn trace_key(&self, k: u32) -> Result<Key> {
+        let eye = self.scene.orbit.sample_eye(k)?;
+        Ok(cache::image_key(&self.scene_key, eye, &self.settings))
+    }
+
+    /// The key sample `k`'s map of `job` must carry.
+    pub fn key(&self, trace_key: &Key, job: &Job) -> Key {
+        let size = (self.settings.width, self.settings.height);
+        map_key(trace_key, job, &self.options, size)
+    }
+
+    /// Every (sample, job index) of `samples` whose map is not fresh, with
+    /// what is wrong with it.
+    pub fn stale(
+        &self,
+        samples: &[u32],
+        infer_dir: &std::path::Path,
+    ) -> Result<Vec<(u32, usize, Freshness)>> {
+        let mut stale = Vec::new();
+        for &k in samples {
+            let trace_key = self.trace_key(k)?;
+            for (i, job) in self.jobs.iter().enumerate() {
+                let path = map_path(infer_dir, k, &job.object.name, job.layer);
+                let f = inference::key::freshness(&path, &self.key(&trace_key, job));
+                if f != Freshness::Fresh {
+                    stale.push((k, i, f));
+                }
+            }
+        }
+        Ok(stale)
+    }
+}
+
+/// Infers what `req` asks for; returns the printed lines (per map, and
+/// with `skip_fresh` the medians over every sample inferred so far).
+pub fn infer(scene: &Scene, req: &InferRequest) -> Result<String> {
+    let plan = Plan::new(scene, req)?;
+    claim_dir(&req.infer_dir)?;
+    let todo: Vec<(u32, Vec<usize>)> = if req.skip_fresh {
+        // Before any work: what will be skipped, so a changed key shows at
+        // once rather than after hours of re-inference.
+        let stale = plan.stale(&req.samples, &req.infer_dir)?;
+        eprintln!("{}", stale_line(&plan, &stale, req.samples.len()));
+        group_by_sample(&stale)
+    } else {
+        let all: Vec<usize> = (0..plan.jobs.len()).collect();
+        req.samples.iter().map(|&k| (k, all.clone())).collect()
+    };
+    let skipped =
+        req.samples.len() * plan.jobs.len() - todo.iter().map(|t| t.1.len()).sum::<usize>();
+    let device = create_device(&req.device)?;
+    let mut run = sample::SampleRun::new(&plan, req, &device, Tracer::new(scene)?)?;
+    let bar = indicatif::ProgressBar::new(todo.iter().map(|t| t.1.len() as u64).sum());
+    let mut text = String::new();
+    let mut reports = Vec::new();
+    for (k, jobs) in &todo {
+        let (report, lines) = run.infer_sample(*k, jobs, &bar)?;
+        text += &lines;
+        reports.push(report);
+    }
+    bar.finish_and_clear();
+    if skipped > 0 {
+        text += &format!("{skipped} maps already inferred from the same inputs: skipped\n");
+    }
+    if req.skip_fresh {
+        text += &summary::summarize(&req.infer_dir)?;
+    }
+    // A single sample's report is also DIR/report.json, as tools expect.
+    let top = req.infer_dir.join("report.json");
+    match reports.as_slice() {
+        [] => {}
+        [only] => crate::util::files::write_json(&top, only)?,
+        all => crate::util::files::write_json(&top, &all)?,
+    }
+    Ok(text)
+}
+
+/// `fresh / to infer` per map kind, and the first reasons.
+fn stale_line(plan: &Plan, stale: &[(u32, usize, Freshness)], samples: usize) -> String {
+    let mut line = String::from("up to date / to infer:");
+    for (i, job) in plan.jobs.iter().enumerate() {
+        let n = stale.iter().filter(|s| s.1 == i).count();
+        line += &format!(" {} {}/{n}", job.name(), samples - n);
+    }
+    let reasons: Vec<String> = stale
+        .iter()
+        .filter_map(|(k, i, f)| match f {
+            Freshness::Stale(what) => Some(format!(
+                "sample {k} {}: {} changed",
+                plan.jobs[*i].name(),
+                what.join(", ")
+            )),
+            Freshness::Broken(why) => Some(format!("{why}: inferring it again")),
+            _ => None,
+        })
+        .take(3)
+        .collect();
+    if !reasons.is_empty() {
+        line += &format!(
+            " ({}{})",
+            reasons.join("; "),
+            if stale.len() > 3 { "; …" } else { "" }
+        );
+    }
+    line
+}
+
+fn group_by_sample(stale: &[(u32, usize, Freshness)]) -> Vec<(u32, Vec<usize>)> {
+    let mut out: Vec<(u32, Vec<usize>)> = Vec::new();
+    for &(k, i, _) in stale {
+        match out.last_mut() {
+            Some((last, jobs)) if *last == k => jobs.push(i),
+            _ => out.push((k, vec![i])),
+        }
+    }
+    out
+}

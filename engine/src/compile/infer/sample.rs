@@ -1,0 +1,219 @@
+//! One sample's inference: its traced layers, then each map asked for,
+//! written with its key record, the sample's report merged after each.
+
+use super::baselines::{StaticEm, static_em_psnr, static_ems};
+use super::pictures::{write_comparison, write_map_picture};
+use super::report::{LayerReport, SampleReport, finite_or_max};
+use super::targets::{composite_pixels, specular_pixels, target_pixels};
+use super::{InferRequest, Job, Plan};
+use crate::compile::trace::traced_layers;
+use crate::maps::{MapLayer, map_path, sample_dir, traced_stem};
+use crate::probe::VulkanProbe;
+use crate::util::files::claim_dir;
+use anyhow::{Context, Result};
+use glam::{Mat4, Vec3};
+use inference::em_geometry::{EmGeometry, texgen};
+use inference::infer::maps::{read_map, write_map};
+use inference::infer::{Target, infer_layer};
+use inference::key::Key;
+use inference::probe::{Lookup, ProbeGeometry};
+use inference::scene::Mesh;
+use inference::trace::{Tracer, camera, output};
+use std::collections::HashMap;
+
+/// What every sample of a run shares: the plan, the device's probe
+/// renderer, the static EMs (a baseline), the tracer for missing targets.
+pub(super) struct SampleRun<'a> {
+    plan: &'a Plan<'a>,
+    req: &'a InferRequest,
+    probe: VulkanProbe,
+    static_ems: HashMap<String, StaticEm>,
+    tracer: Tracer<'a>,
+    projection: Mat4,
+}
+
+impl<'a> SampleRun<'a> {
+    pub(super) fn new(
+        plan: &'a Plan<'a>,
+        req: &'a InferRequest,
+        device: &crate::backend::Device,
+        tracer: Tracer<'a>,
+    ) -> Result<Self> {
+        let (width, height) = req.size;
+        Ok(Self {
+            plan,
+            req,
+            probe: VulkanProbe::new(device)?,
+            static_ems: static_ems(device, plan.scene, width, height)?,
+            tracer,
+            projection: camera::projection(plan.scene, width, height),
+        })
+    }
+
+    /// Infers the maps `jobs` (indices into the plan's jobs) of sample `k`;
+    /// returns the sample's merged report and one printed line per map.
+    pub(super) fn infer_sample(
+        &mut self,
+        k: u32,
+        jobs: &[usize],
+        bar: &indicatif::ProgressBar,
+    ) -> Result<(SampleReport, String)> {
+        let scene = self.plan.scene;
+        let eye = scene.orbit.sample_eye(k)?;
+        let stem = traced_stem(&self.req.trace_dir, k);
+        let (layers, trace_key) = traced_layers(
+            &self.tracer,
+            &self.plan.scene_key,
+            eye,
+            &self.plan.settings,
+            &stem,
+        )?;
+        let dir = sample_dir(&self.req.infer_dir, k);
+        claim_dir(&dir)?;
+        let report_path = dir.join("report.json");
+        let order: Vec<String> = self.plan.jobs.iter().map(Job::name).collect();
+        let mut report = SampleReport::read_or_new(&report_path, k);
+        let mut lines = String::new();
+        for &i in jobs {
+            let job = &self.plan.jobs[i];
+            bar.set_message(format!("sample {k} {}", job.name()));
+            let (layer, warm) = self.infer_job(k, eye, job, &layers, &trace_key)?;
+            lines += &layer_line(k, &layer);
+            report = SampleReport::merged(Some(report), k, vec![layer], warm, &order);
+            crate::util::files::write_json(&report_path, &report)?;
+            bar.inc(1);
+        }
+        Ok((report, lines))
+    }
+
+    /// One map: probe renders, solve, baselines; the map, its pictures and
+    /// its key record written. Returns its report and whether it was
+    /// warm-started.
+    fn infer_job(
+        &mut self,
+        k: u32,
+        eye: Vec3,
+        job: &Job,
+        layers: &[output::ExrLayer],
+        trace_key: &Key,
+    ) -> Result<(LayerReport, bool)> {
+        let (width, height) = self.req.size;
+        let pixel_count = width as usize * height as usize;
+        let name = job.name();
+        let mesh = &job.object.mesh;
+        let pixels = match job.layer {
+            MapLayer::Distant | MapLayer::Local => {
+                target_pixels(layers, &name, job.layer == MapLayer::Local, pixel_count)?
+            }
+            MapLayer::Sphere => specular_pixels(layers, &job.object.name, pixel_count)?,
+            MapLayer::Ptm => composite_pixels(layers, &job.object.name, pixel_count)?,
+        };
+        let lookup = match job.geometry {
+            Some(g) => cube_lookup(&g, job.origin, eye, mesh),
+            None => Lookup::Uv(mesh.uvs.clone()),
+        };
+        let key = self.plan.key(trace_key, job);
+        let geometry = ProbeGeometry {
+            key: key.hash() ^ u64::from(k),
+            positions: mesh.positions.clone(),
+            indices: mesh.indices.clone(),
+            lookup,
+            view_proj: self.projection * self.plan.scene.orbit.view(eye),
+            width,
+            height,
+        };
+        let layout = job.layer.layout(job.resolution);
+        // Warm start from the previous sample's map, when it reads.
+        let previous = k
+            .checked_sub(1)
+            .map(|p| map_path(&self.req.infer_dir, p, &job.object.name, job.layer))
+            .and_then(|p| read_map(&p, &layout, job.channels()).ok());
+        let target = Target {
+            name: &name,
+            pixels: &pixels,
+            channels: job.channels(),
+        };
+        let result = infer_layer(
+            &mut self.probe,
+            &geometry,
+            job.shape(),
+            &target,
+            previous.as_deref(),
+            &self.plan.options,
+            &mut |_, _| {},
+        )
+        .with_context(|| {
+            let file = output::with_suffix(&traced_stem(&self.req.trace_dir, k), ".exr");
+            format!("{}: sample {k}, {name}", file.display())
+        })?;
+        let dir = sample_dir(&self.req.infer_dir, k);
+        let map = map_path(&self.req.infer_dir, k, &job.object.name, job.layer);
+        write_map(&map, &layout, &result.map)?;
+        inference::key::write_record(&map, &key)?;
+        write_comparison(&dir.join(format!("{name}.png")), width, &pixels, &result)?;
+        write_map_picture(&dir.join(format!("{name}.map.png")), &layout, &result.map)?;
+        let mut report = LayerReport::from(&result);
+        // The static EM against the targets it stands for: the distant
+        // layer and the whole specular appearance.
+        if let (MapLayer::Distant | MapLayer::Sphere, Some(em)) =
+            (job.layer, self.static_ems.get(&job.object.name))
+        {
+            let target = Target {
+                channels: 3,
+                ..target
+            };
+            let psnr = static_em_psnr(
+                &mut self.probe,
+                &geometry,
+                mesh,
+                em,
+                eye,
+                &target,
+                &result.pixels,
+            )?;
+            report.psnr_db.static_em = Some(finite_or_max(psnr));
+        }
+        Ok((report, previous.is_some()))
+    }
+}
+
+/// One printed line per map inferred.
+fn layer_line(sample: u32, l: &LayerReport) -> String {
+    format!(
+        "sample {:>3} {:<26} LS {:>6.2} dB  forward {:>6.2} dB{}  A·x vs render {:>6.1} dB  {} rows  {} renders  probe {:.1} s  assembly {:.1} s  solve {:.2} s ({:?} CG it.)\n",
+        sample,
+        l.name,
+        l.psnr_db.least_squares,
+        l.psnr_db.forward_mapping,
+        l.psnr_db
+            .static_em
+            .map_or(String::new(), |v| format!("  static EM {v:>6.2} dB")),
+        l.a_vs_render_psnr_db,
+        l.rows,
+        l.probe_renders,
+        l.probe_s,
+        l.assembly_s,
+        l.solve_s,
+        l.cg_iterations
+    )
+}
+
+/// Per-vertex cube lookups of `mesh` seen from `eye` for an EM on
+/// `geometry` centred at `origin` (CPU texgen).
+fn cube_lookup(geometry: &EmGeometry, origin: Vec3, eye: Vec3, mesh: &Mesh) -> Lookup {
+    let mut lookups = vec![[0.0f32; 4]; mesh.positions.len()];
+    texgen(
+        geometry,
+        origin,
+        eye,
+        &mesh.positions,
+        &mesh.normals,
+        &mut lookups,
+    );
+    Lookup::Cube(
+        lookups
+            .iter()
+            .map(|l| Vec3::new(l[0], l[1], l[2]))
+            .collect(),
+    )
+}

@@ -1,0 +1,236 @@
+//! What the main job compiles before it can play PEMs: the traced gold
+//! standard, the inferred maps of every sample and the compressed
+//! container — each only when missing, stale or damaged, each with its own
+//! progress bars and key records, so a second run starts playing at once
+//! and an edited scene is never played from old maps.
+
+pub mod encode;
+pub mod infer;
+pub mod trace;
+
+use crate::backend::DeviceOptions;
+use crate::maps::{DataDirs, MapLayer, map_path};
+use crate::options::{Maps, PemOptions};
+use crate::pem::source::MapSource;
+use anyhow::{Result, bail};
+use infer::{InferRequest, Plan};
+use inference::key::{Fnv, Freshness, Key};
+use inference::scene::Scene;
+use std::hash::Hasher;
+use std::path::Path;
+
+/// Where and how a run compiles: the scene (and how the user named it, for
+/// hints), the output folder, the image size and the device.
+pub struct CompileContext<'a> {
+    pub scene: &'a Scene,
+    pub scene_arg: &'a str,
+    pub out: &'a Path,
+    pub size: (u32, u32),
+    pub device: &'a DeviceOptions,
+}
+
+impl CompileContext<'_> {
+    fn request(&self, dirs: &DataDirs, sphere: bool) -> InferRequest {
+        InferRequest {
+            sphere,
+            size: self.size,
+            device: self.device.clone(),
+            ..InferRequest::all(self.scene, dirs.trace.clone(), dirs.infer.clone())
+        }
+    }
+}
+
+/// The key of a container: the keys of the maps it holds, the codec's
+/// format and the target it was encoded at.
+pub fn container_key<'k>(map_keys: impl Iterator<Item = &'k Key>, target: codec::Target) -> Key {
+    let mut h = Fnv::default();
+    for k in map_keys {
+        h.write_u64(k.hash());
+    }
+    let target = match target {
+        codec::Target::Ratio(r) => r.to_bits(),
+        codec::Target::Bytes(b) => b ^ (1 << 63),
+    };
+    Key::new()
+        .with("maps", h.finish())
+        .with("codec format", u64::from(codec::FORMAT_VERSION))
+        .with("target", target)
+}
+
+/// The map source for `layers` under `pem`'s options, compiling whatever is
+/// missing, stale or damaged under the output folder first. Maps or a
+/// container the user named (`--infer-dir`, `--container`) are inputs:
+/// read, checked, never rebuilt.
+pub fn map_source(
+    ctx: &CompileContext,
+    pem: &PemOptions,
+    layers: &[MapLayer],
+) -> Result<MapSource> {
+    let scene = ctx.scene;
+    let mut dirs = DataDirs::under(ctx.out, scene);
+    if let Some(d) = &pem.infer_dir {
+        dirs.infer = d.clone();
+    }
+    let sphere = layers.contains(&MapLayer::Sphere);
+    let req = ctx.request(&dirs, sphere);
+    let plan = Plan::new(scene, &req)?;
+    let wanted: Vec<MapLayer> = if pem.maps == Maps::Exr || sphere {
+        layers.to_vec()
+    } else {
+        crate::maps::map_specs(scene)
+            .iter()
+            .map(|s| s.layer)
+            .collect()
+    };
+    let stale = stale_maps(&plan, &req, &wanted)?;
+    if !stale.is_empty() {
+        if pem.infer_dir.is_some() {
+            bail!(
+                "{}: {} (infer them with `engine infer --scene {} --all --out {}`, or drop --infer-dir to compile under --out)",
+                dirs.infer.display(),
+                describe(&plan, &stale),
+                ctx.scene_arg,
+                dirs.infer.display()
+            );
+        }
+        eprintln!(
+            "{}: compiling the maps ({}): tracing and inferring what is missing (cached; a re-run resumes)",
+            scene.name,
+            describe(&plan, &stale)
+        );
+        eprint!("{}", infer::infer(scene, &req)?);
+        let left = stale_maps(&plan, &req, &wanted)?;
+        if !left.is_empty() {
+            bail!(
+                "{}: inference finished but {}",
+                dirs.infer.display(),
+                describe(&plan, &left)
+            );
+        }
+    }
+    if pem.maps == Maps::Exr || sphere {
+        return Ok(MapSource::exr(&dirs.infer));
+    }
+    container_source(ctx, pem, &plan, &req, &dirs)
+}
+
+/// (sample, job, what is wrong) for every map of a `wanted` layer that is
+/// not fresh.
+fn stale_maps(
+    plan: &Plan,
+    req: &InferRequest,
+    wanted: &[MapLayer],
+) -> Result<Vec<(u32, usize, Freshness)>> {
+    Ok(plan
+        .stale(&req.samples, &req.infer_dir)?
+        .into_iter()
+        .filter(|(_, i, _)| wanted.contains(&plan.jobs[*i].layer))
+        .collect())
+}
+
+/// "N maps missing; sample 3 teapot.ptm: lights changed".
+fn describe(plan: &Plan, stale: &[(u32, usize, Freshness)]) -> String {
+    let missing = stale.iter().filter(|s| s.2 == Freshness::Missing).count();
+    let mut parts = Vec::new();
+    if missing > 0 {
+        parts.push(format!("{missing} maps missing"));
+    }
+    for (k, i, f) in stale.iter().filter(|s| s.2 != Freshness::Missing).take(2) {
+        let name = plan.jobs[*i].name();
+        parts.push(match f {
+            Freshness::Stale(what) => format!("sample {k} {name}: {} changed", what.join(", ")),
+            Freshness::Broken(why) => format!("sample {k} {name}: {why}"),
+            _ => continue,
+        });
+    }
+    let others = stale.iter().filter(|s| s.2 != Freshness::Missing).count();
+    if others > 2 {
+        parts.push(format!("{} more stale", others - 2));
+    }
+    parts.join("; ")
+}
+
+/// The container: the one named by the user (checked, read only) or the
+/// one under the output folder, encoded again when stale or damaged.
+fn container_source(
+    ctx: &CompileContext,
+    pem: &PemOptions,
+    plan: &Plan,
+    req: &InferRequest,
+    dirs: &DataDirs,
+) -> Result<MapSource> {
+    let target = codec::Target::Ratio(encode::DEFAULT_RATIO);
+    let mut map_keys = Vec::new();
+    for &k in &req.samples {
+        let trace_key = plan.trace_key(k)?;
+        for spec in crate::maps::map_specs(ctx.scene) {
+            if let Some(job) = plan
+                .jobs
+                .iter()
+                .find(|j| j.object.name == spec.object && j.layer == spec.layer)
+            {
+                map_keys.push(plan.key(&trace_key, job));
+            }
+        }
+    }
+    let key = container_key(map_keys.iter(), target);
+    let path = pem
+        .container
+        .clone()
+        .unwrap_or_else(|| dirs.container.clone());
+    match inference::key::freshness(&path, &key) {
+        Freshness::Fresh => return MapSource::container(ctx.scene, &path),
+        why if pem.container.is_some() => bail!(
+            "{}: {} (encode it with `engine encode --scene {} --out {}`, or drop --container to compile under --out)",
+            path.display(),
+            match why {
+                Freshness::Missing if path.exists() =>
+                    "no key record: not a container this engine compiled for these maps".to_string(),
+                Freshness::Missing => "no such file".to_string(),
+                Freshness::Stale(what) =>
+                    format!("compiled from other inputs ({} changed)", what.join(", ")),
+                Freshness::Broken(why) => why,
+                Freshness::Fresh => unreachable!("handled above"),
+            },
+            ctx.scene_arg,
+            path.display()
+        ),
+        _ => {}
+    }
+    let input = load_or_reinfer(ctx, req, dirs)?;
+    let e = encode::encode_to(&input, target, &path, &key)?;
+    eprintln!(
+        "{}: {} bytes from {} raw (ratio {:.1}:1, worst texture {:.1} dB) in {:.1} s{}",
+        path.display(),
+        e.bytes,
+        e.raw_bytes,
+        e.ratio,
+        e.worst_psnr_db,
+        e.seconds,
+        e.note.map_or(String::new(), |n| format!(" ({n})"))
+    );
+    MapSource::container(ctx.scene, &path)
+}
+
+/// The encoder's input; a map that fails to read (damaged since it was
+/// checked) is forgotten and inferred again, once.
+fn load_or_reinfer(
+    ctx: &CompileContext,
+    req: &InferRequest,
+    dirs: &DataDirs,
+) -> Result<codec::EncodeInput> {
+    match encode::load_input(ctx.scene, &dirs.infer) {
+        Ok(input) => Ok(input),
+        Err(e) => {
+            let Some(bad) = e.downcast_ref::<encode::BadMap>() else {
+                return Err(e);
+            };
+            eprintln!("{bad}: inferring it again");
+            let specs = crate::maps::map_specs(ctx.scene);
+            let spec = &specs[bad.spec];
+            inference::key::forget(&map_path(&dirs.infer, bad.sample, &spec.object, spec.layer));
+            eprint!("{}", infer::infer(ctx.scene, req)?);
+            encode::load_input(ctx.scene, &dirs.infer)
+        }
+    }
+}

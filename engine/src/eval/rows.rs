@@ -1,0 +1,128 @@
+//! The rows of `engine eval`: every mode and every knob that trades speed
+//! for accuracy, as typed play options — each also written as the main
+//! command's flags, so `engine <flags>` replays what a row measured.
+
+use crate::backend::Filtering;
+use crate::options::{Maps, Mode, PemOptions};
+use std::collections::BTreeMap;
+
+/// One row: a label, the mode and its knobs.
+#[derive(Clone, Debug)]
+pub struct Row {
+    pub label: String,
+    pub mode: Mode,
+    pub pem: PemOptions,
+    /// Samples per pixel of a traced row.
+    pub trace_spp: u32,
+}
+
+impl Row {
+    fn new(label: &str, mode: Mode) -> Self {
+        Self {
+            label: label.into(),
+            mode,
+            pem: PemOptions::default(),
+            trace_spp: 16,
+        }
+    }
+    fn with(mut self, f: impl FnOnce(&mut PemOptions)) -> Self {
+        f(&mut self.pem);
+        self
+    }
+
+    /// The main command's flags this row stands for.
+    pub fn flags(&self) -> String {
+        let mut words = vec![format!("--mode {}", self.mode.name())];
+        for (name, value) in self.pem.flags() {
+            words.push(match value {
+                Some(v) => format!("--{name} {v}"),
+                None => format!("--{name}"),
+            });
+        }
+        if self.mode == Mode::Trace {
+            words.push(format!("--trace-spp {}", self.trace_spp));
+        }
+        words.join(" ")
+    }
+
+    /// The row's settings for `eval.json`: its label and its knobs that
+    /// differ from the defaults, by flag name (`no_blend: true`, `spacing: 4`).
+    pub fn settings(&self) -> BTreeMap<String, serde_json::Value> {
+        let mut settings = BTreeMap::new();
+        settings.insert("label".into(), serde_json::Value::from(self.label.as_str()));
+        for (name, value) in self.pem.flags() {
+            let v = match value {
+                None => serde_json::Value::Bool(true),
+                Some(v) => v.parse::<u64>().map_or_else(
+                    |_| serde_json::Value::from(v.as_str()),
+                    serde_json::Value::from,
+                ),
+            };
+            settings.insert(name.replace('-', "_"), v);
+        }
+        if self.mode == Mode::Trace {
+            settings.insert("trace_spp".into(), self.trace_spp.into());
+        }
+        settings
+    }
+}
+
+/// Every row, in table order.
+pub fn all_rows() -> Vec<Row> {
+    let layered = || Row::new("layered-pem", Mode::LayeredPem);
+    let labelled = |label: &str| Row {
+        label: label.into(),
+        ..layered()
+    };
+    vec![
+        Row::new("static-em", Mode::StaticEm),
+        Row::new("sphere-pem", Mode::SpherePem),
+        Row::new("sphere-pem nearest-sample", Mode::SpherePem).with(|p| p.blend = false),
+        layered(),
+        labelled("layered-pem nearest-sample").with(|p| p.blend = false),
+        labelled("layered-pem distant-only").with(|p| p.local_layer = false),
+        labelled("layered-pem em128").with(|p| p.em_size = Some(128)),
+        labelled("layered-pem em64").with(|p| p.em_size = Some(64)),
+        labelled("layered-pem bilinear").with(|p| p.filtering = Filtering::Bilinear),
+        labelled("layered-pem nearest-texel").with(|p| p.filtering = Filtering::Nearest),
+        labelled("layered-pem spacing2").with(|p| p.spacing = 2),
+        labelled("layered-pem spacing4").with(|p| p.spacing = 4),
+        labelled("layered-pem spacing8").with(|p| p.spacing = 8),
+        labelled("layered-pem uncompressed").with(|p| p.maps = Maps::Exr),
+        Row::new("ptm", Mode::Ptm),
+        Row::new("ptm nearest-sample", Mode::Ptm).with(|p| p.blend = false),
+        Row {
+            trace_spp: 4,
+            ..Row::new("trace 4spp", Mode::Trace)
+        },
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_have_unique_labels_and_replayable_flags() {
+        let rows = all_rows();
+        for (i, r) in rows.iter().enumerate() {
+            assert!(rows[..i].iter().all(|o| o.label != r.label), "{}", r.label);
+        }
+        let spacing = rows
+            .iter()
+            .find(|r| r.label == "layered-pem spacing4")
+            .expect("row");
+        assert_eq!(spacing.flags(), "--mode layered-pem --spacing 4");
+        let s = spacing.settings();
+        assert_eq!(s["spacing"], serde_json::json!(4));
+        assert_eq!(s["label"], serde_json::json!("layered-pem spacing4"));
+        let nearest = rows
+            .iter()
+            .find(|r| r.label == "ptm nearest-sample")
+            .expect("row");
+        assert_eq!(nearest.flags(), "--mode ptm --no-blend");
+        assert_eq!(nearest.settings()["no_blend"], serde_json::json!(true));
+        let trace = rows.iter().find(|r| r.mode == Mode::Trace).expect("row");
+        assert_eq!(trace.flags(), "--mode trace --trace-spp 4");
+    }
+}

@@ -1,0 +1,255 @@
+//! `engine eval`: every row of [`all_rows`] measured against the traced
+//! gold standard on three kinds of views — on the orbit, between samples,
+//! above the orbit plane — beside its frame time.
+
+use super::chart::tradeoff_chart;
+use super::metrics;
+use super::pictures::side_by_side;
+use super::reference::{ReferenceImage, References, View as RefView};
+use super::rows::{Row, all_rows};
+use super::table::{EvalRow, EvalTable, ViewCounts};
+use super::views::{Category, View, views};
+use crate::options::RunPlace;
+use crate::play::{FrameSource, Session, compile_context, setup_mode};
+use crate::util::stats::{mean, median, percentile};
+use anyhow::{Context, Result, bail};
+use inference::trace::TraceSettings;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// What to measure.
+#[derive(Clone, Debug)]
+pub struct EvalOptions {
+    /// Where the eval's files go [default: `<data>/eval`].
+    pub out: Option<PathBuf>,
+    /// Views per category, spread evenly along the orbit.
+    pub views: u32,
+    /// Elevation of the "above" views over the orbit plane, degrees.
+    pub elevation: f32,
+    /// Samples per pixel of the traced references.
+    pub spp: u32,
+    /// Timed frames per view and row (after one untimed frame).
+    pub repeats: u32,
+    /// Only these rows (labels) [default: all].
+    pub rows: Vec<String>,
+}
+
+/// What one row measured on one view.
+struct ViewResult {
+    category: Category,
+    psnr_db: f64,
+    flip: f64,
+    frame_ms: f64,
+}
+
+/// Runs the rows of `opts` in `place` (whose output folder holds the
+/// compiled maps); returns the printed table.
+pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
+    let rows = selected_rows(&opts.rows)?;
+    let Session {
+        scene,
+        out: data,
+        device,
+        mut renderer,
+        ..
+    } = Session::open(place)?;
+    let out = opts.out.clone().unwrap_or_else(|| data.join("eval"));
+    crate::util::files::claim_dir(&out)?;
+    let reflector = scene
+        .objects
+        .iter()
+        .find(|o| o.em.is_some())
+        .with_context(|| format!("{}: no reflector with [objects.em]", scene.source.display()))?
+        .name
+        .clone();
+    let views = views(&scene, opts.views, opts.elevation);
+    let (width, height) = place.size;
+    // The gold standard of every view (traced once, cached).
+    let settings = TraceSettings {
+        width,
+        height,
+        spp: opts.spp,
+        progress: true,
+        ..TraceSettings::default()
+    };
+    let tracing = References::new(&scene, &out.join("reference"), settings)?;
+    let references = views
+        .iter()
+        .map(|v| tracing.get(RefView::new(v.azimuth_deg, v.elevation_deg), &reflector))
+        .collect::<Result<Vec<_>>>()?;
+    let ctx = compile_context(place, &scene, &data);
+    let mut table_rows = Vec::new();
+    let mut pictures: Vec<(String, Vec<[f32; 4]>)> = Vec::new();
+    let progress = indicatif::ProgressBar::new((rows.len() * views.len()) as u64).with_style(
+        indicatif::ProgressStyle::with_template("eval {msg} [{bar:30}] {pos}/{len} {elapsed}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let mut skipped = Vec::new();
+    let above = views.iter().position(|v| v.category == Category::Above);
+    for row in &rows {
+        progress.set_message(row.label.clone());
+        let mut source = match setup_mode(&ctx, &mut renderer, row.mode, &row.pem, row.trace_spp) {
+            Ok(s) => s,
+            Err(e) => {
+                // A row whose maps cannot be made (e.g. sphere PEMs not
+                // inferred) is reported, not fatal.
+                skipped.push(format!("{}: {e:#}", row.label));
+                progress.inc(views.len() as u64);
+                continue;
+            }
+        };
+        let mut results = Vec::new();
+        for (i, (view, reference)) in views.iter().zip(&references).enumerate() {
+            let (result, pixels) = measure(
+                &mut source,
+                &mut renderer,
+                &scene,
+                view,
+                reference,
+                opts.repeats,
+                &reflector,
+            )?;
+            results.push(result);
+            if Some(i) == above && !row.label.contains(' ') {
+                pictures.push((row.label.clone(), pixels));
+            }
+            progress.inc(1);
+        }
+        table_rows.push(table_row(row, &results, opts.views));
+    }
+    progress.finish_and_clear();
+    let table = EvalTable { rows: table_rows };
+    let json_path = out.join("eval.json");
+    table.write(&json_path)?;
+    let plot_path = out.join("tradeoff.png");
+    let title = format!(
+        "Speed against accuracy, {} {width}x{height} ({})",
+        scene.name, device.name
+    );
+    tradeoff_chart(&plot_path, &table, &title)?;
+    if let Some(above) = above {
+        pictures.push(("gold (traced)".into(), references[above].beauty.clone()));
+        side_by_side(
+            &out.join("modes_above.png"),
+            &pictures,
+            &references[above].mask,
+            width,
+            height,
+        )?;
+    }
+    let mut text = format!(
+        "{} | {} {width}x{height} | {} views per category, above = +{}°, reference {} spp\n",
+        device.name, scene.name, opts.views, opts.elevation, opts.spp
+    );
+    text += &table.to_markdown();
+    for s in &skipped {
+        text += &format!("skipped {s}\n");
+    }
+    text += &format!(
+        "wrote {} and {}\n",
+        json_path.display(),
+        plot_path.display()
+    );
+    Ok(text)
+}
+
+/// The rows whose labels are in `wanted` (all when empty).
+fn selected_rows(wanted: &[String]) -> Result<Vec<Row>> {
+    let all = all_rows();
+    let rows: Vec<Row> = all
+        .iter()
+        .filter(|r| wanted.is_empty() || wanted.contains(&r.label))
+        .cloned()
+        .collect();
+    if rows.is_empty() {
+        bail!(
+            "--rows {wanted:?}: no such rows (expected some of: {})",
+            all.iter()
+                .map(|r| r.label.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    Ok(rows)
+}
+
+/// One row's frames of one view: timed (maps resident, no decoding
+/// ahead), scored against the reference; returns the last frame too.
+fn measure(
+    source: &mut FrameSource,
+    renderer: &mut crate::renderer::Renderer,
+    scene: &inference::scene::Scene,
+    view: &View,
+    reference: &ReferenceImage,
+    repeats: u32,
+    reflector: &str,
+) -> Result<(ViewResult, Vec<[f32; 4]>)> {
+    let eye = scene.orbit.eye(view.azimuth_deg, view.elevation_deg);
+    let repeats = if matches!(source, FrameSource::Trace(..)) {
+        1
+    } else {
+        source.frame(renderer, scene, eye)?; // maps resident, shaders warm
+        renderer.settle(); // no decoding ahead while timing
+        repeats
+    };
+    let mut times = Vec::new();
+    let mut pixels = Vec::new();
+    for _ in 0..repeats {
+        let start = Instant::now();
+        pixels = source.frame(renderer, scene, eye)?.1;
+        times.push(start.elapsed().as_secs_f64() * 1e3);
+    }
+    let (width, height) = renderer.size();
+    let scores = metrics::scores(&reference.beauty, &pixels, width, height, &reference.mask)?;
+    let (Some(psnr_db), Some(flip)) = (scores.psnr_db, scores.flip) else {
+        bail!(
+            "view at azimuth {}°, elevation {}°: {reflector} covers no pixel",
+            view.azimuth_deg,
+            view.elevation_deg
+        );
+    };
+    let result = ViewResult {
+        category: view.category,
+        psnr_db,
+        flip,
+        frame_ms: median(&times),
+    };
+    Ok((result, pixels))
+}
+
+/// A row of the table: each kind of view's mean scores, the frame times.
+fn table_row(row: &Row, results: &[ViewResult], views: u32) -> EvalRow {
+    let kind = |c: Category, f: fn(&ViewResult) -> f64| {
+        mean(
+            &results
+                .iter()
+                .filter(|r| r.category == c)
+                .map(f)
+                .collect::<Vec<_>>(),
+        )
+    };
+    let times: Vec<f64> = results.iter().map(|r| r.frame_ms).collect();
+    EvalRow {
+        mode: row
+            .label
+            .split(' ')
+            .next()
+            .unwrap_or(&row.label)
+            .to_string(),
+        settings: row.settings(),
+        psnr_on_db: kind(Category::On, |r| r.psnr_db),
+        psnr_between_db: kind(Category::Between, |r| r.psnr_db),
+        psnr_above_db: kind(Category::Above, |r| r.psnr_db),
+        flip_on: kind(Category::On, |r| r.flip),
+        flip_between: kind(Category::Between, |r| r.flip),
+        flip_above: kind(Category::Above, |r| r.flip),
+        frame_ms: median(&times),
+        frame_ms_p95: Some(percentile(&times, 0.95)),
+        views: Some(ViewCounts {
+            on: views,
+            between: views,
+            above: views,
+        }),
+        map_bytes: None,
+    }
+}

@@ -1,0 +1,45 @@
+//! The views `engine eval` scores: on the orbit (exactly on samples),
+//! between samples, and above the orbit plane.
+
+use inference::scene::Scene;
+
+/// Where a view sits relative to the viewpoint samples.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Category {
+    On,
+    Between,
+    Above,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct View {
+    pub category: Category,
+    pub azimuth_deg: f32,
+    pub elevation_deg: f32,
+}
+
+/// `n` views per category, spread evenly along the orbit: on a sample,
+/// half-way to the next, and on a sample's azimuth `elevation` above.
+pub fn views(scene: &Scene, n: u32, elevation: f32) -> Vec<View> {
+    let o = &scene.orbit;
+    let last = o.samples.saturating_sub(1);
+    let samples: Vec<u32> = (0..n)
+        .map(|i| (((i as f32 + 0.5) / n as f32) * last as f32).round() as u32)
+        .map(|k| k.min(last.saturating_sub(1)))
+        .collect();
+    let mut out = Vec::new();
+    for (category, offset, up) in [
+        (Category::On, 0.0, 0.0),
+        (Category::Between, 0.5, 0.0),
+        (Category::Above, 0.0, elevation),
+    ] {
+        for &k in &samples {
+            out.push(View {
+                category,
+                azimuth_deg: o.angle_deg(k) + offset * o.step_deg,
+                elevation_deg: up,
+            });
+        }
+    }
+    out
+}

@@ -1,0 +1,166 @@
+//! What a run of the engine is asked to do, as typed values: the drivers
+//! (play, bench, eval, compile) take these, the binary's command line
+//! builds them, and drivers build them for each other — never argv.
+
+use crate::backend::{DeviceOptions, Filtering};
+use std::path::PathBuf;
+
+/// What each frame draws.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Mode {
+    /// Mirror reflectors from one static cube map (the baseline).
+    StaticEm,
+    /// One inferred sphere-at-infinity EM per viewpoint sample.
+    SpherePem,
+    /// Inferred distant (box) and local (ellipsoid) EMs per sample (the PEM paper).
+    LayeredPem,
+    /// Inferred parameterized texture maps pasted on the surface.
+    Ptm,
+    /// The ray-traced gold standard (CPU, seconds per frame).
+    Trace,
+    /// Every mesh with one texture and nothing else (reference cost).
+    Bare,
+}
+
+impl Mode {
+    /// The flag value, e.g. `layered-pem`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::StaticEm => "static-em",
+            Mode::SpherePem => "sphere-pem",
+            Mode::LayeredPem => "layered-pem",
+            Mode::Ptm => "ptm",
+            Mode::Trace => "trace",
+            Mode::Bare => "bare",
+        }
+    }
+}
+
+/// Where PEM playback reads its maps.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Maps {
+    /// The compressed container (compiled when missing).
+    Container,
+    /// The inferred EXR maps themselves (uncompressed).
+    Exr,
+}
+
+/// PEM playback's inputs and the knobs that trade speed for accuracy.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PemOptions {
+    pub maps: Maps,
+    /// A container to play instead of the one compiled under the output
+    /// folder (read only: never rebuilt).
+    pub container: Option<PathBuf>,
+    /// Inferred maps to play instead of those compiled under the output
+    /// folder (read only: never re-inferred).
+    pub infer_dir: Option<PathBuf>,
+    /// Blend the two nearest samples (false: nearest only).
+    pub blend: bool,
+    /// Layered PEMs: the local layer too (false: distant only).
+    pub local_layer: bool,
+    /// Use every Nth viewpoint sample only (1: all).
+    pub spacing: u32,
+    /// EM resolution to play (a power of two up to the inferred one).
+    pub em_size: Option<u32>,
+    pub filtering: Filtering,
+}
+
+impl Default for PemOptions {
+    fn default() -> Self {
+        Self {
+            maps: Maps::Container,
+            container: None,
+            infer_dir: None,
+            blend: true,
+            local_layer: true,
+            spacing: 1,
+            em_size: None,
+            filtering: Filtering::Trilinear,
+        }
+    }
+}
+
+impl PemOptions {
+    /// The main command's flags that differ from the defaults, e.g.
+    /// `--no-blend --spacing 4` (so a row of the eval table can be replayed).
+    pub fn flags(&self) -> Vec<(String, Option<String>)> {
+        let d = PemOptions::default();
+        let mut f = Vec::new();
+        if self.maps != d.maps {
+            f.push(("maps".into(), Some("exr".into())));
+        }
+        if !self.blend {
+            f.push(("no-blend".into(), None));
+        }
+        if !self.local_layer {
+            f.push(("distant-only".into(), None));
+        }
+        if self.spacing != d.spacing {
+            f.push(("spacing".into(), Some(self.spacing.to_string())));
+        }
+        if let Some(s) = self.em_size {
+            f.push(("em-size".into(), Some(s.to_string())));
+        }
+        if self.filtering != d.filtering {
+            f.push(("filtering".into(), Some(self.filtering.name().into())));
+        }
+        f
+    }
+}
+
+/// Where a run happens: the scene, the output folder, the device, the
+/// frame size.
+#[derive(Clone, Debug)]
+pub struct RunPlace {
+    /// A built-in scene name or a scene file path, as the user gave it
+    /// (hints name it the same way).
+    pub scene: String,
+    /// The output folder [default: `out/<scene>`].
+    pub out: Option<PathBuf>,
+    pub device: DeviceOptions,
+    pub size: (u32, u32),
+}
+
+/// The main job: what to draw along the default path, and what to keep.
+#[derive(Clone, Debug)]
+pub struct PlayOptions {
+    pub mode: Mode,
+    pub pem: PemOptions,
+    /// Frames along the default path [default: 1.5 per viewpoint sample].
+    pub frames: Option<u32>,
+    /// Untimed frames first (lavapipe compiles shaders at the first draw).
+    pub warmup: u32,
+    /// Write each frame as PNG (false: only perf.json).
+    pub capture: bool,
+    /// Also write each frame as linear float EXR.
+    pub exr: bool,
+    /// Samples per pixel of `Mode::Trace` frames.
+    pub trace_spp: u32,
+}
+
+impl PlayOptions {
+    pub fn new(mode: Mode) -> Self {
+        Self {
+            mode,
+            pem: PemOptions::default(),
+            frames: None,
+            warmup: 3,
+            capture: true,
+            exr: false,
+            trace_spp: 16,
+        }
+    }
+}
+
+/// `--filtering trilinear|bilinear|nearest`.
+impl clap::ValueEnum for Filtering {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Filtering::ALL
+    }
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()))
+    }
+}

@@ -1,0 +1,126 @@
+//! Whole-file writes that never leave half a file behind and never collide:
+//! every write goes to a temporary name unique to this process and call, in
+//! the target's folder (so the final rename is atomic), and the temporary
+//! is removed when anything fails.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// `dir/.<name>.<pid>.<n>.tmp`: hidden, beside `path`, unique per process
+/// and call, so concurrent writers of the same file never share one.
+pub fn temp_path(path: &Path) -> PathBuf {
+    static NEXT: AtomicU64 = AtomicU64::new(0);
+    let name = path
+        .file_name()
+        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+    let n = NEXT.fetch_add(1, Ordering::Relaxed);
+    path.with_file_name(format!(".{name}.{}.{n}.tmp", std::process::id()))
+}
+
+/// An atomic write that failed: in the caller's `write` or in the rename.
+#[derive(Debug, thiserror::Error)]
+pub enum AtomicError<E: std::error::Error + 'static> {
+    #[error(transparent)]
+    Write(E),
+    #[error("{}: {source}", path.display())]
+    Rename {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+}
+
+/// Runs `write` on a temporary path, then renames it onto `path`.
+pub fn write_with<E: std::error::Error + 'static>(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), E>,
+) -> Result<(), AtomicError<E>> {
+    let tmp = temp_path(path);
+    if let Err(e) = write(&tmp) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(AtomicError::Write(e));
+    }
+    std::fs::rename(&tmp, path).map_err(|source| {
+        let _ = std::fs::remove_file(&tmp);
+        AtomicError::Rename {
+            path: path.to_owned(),
+            source,
+        }
+    })
+}
+
+/// An I/O error naming the file it happened to.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {source}", path.display())]
+pub struct FileError {
+    pub path: PathBuf,
+    pub source: std::io::Error,
+}
+
+/// Writes `bytes` to `path` atomically.
+pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
+    write_with(path, |tmp| {
+        std::fs::write(tmp, bytes).map_err(|source| FileError {
+            path: path.to_owned(),
+            source,
+        })
+    })
+    .map_err(|e| match e {
+        AtomicError::Write(e) => e,
+        AtomicError::Rename { path, source } => FileError { path, source },
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn temporaries_are_unique_and_beside_the_target() {
+        let p = Path::new("dir/frame.png");
+        let (a, b) = (temp_path(p), temp_path(p));
+        assert_ne!(a, b);
+        assert_eq!(a.parent(), p.parent());
+        assert!(
+            a.file_name()
+                .is_some_and(|n| n.to_string_lossy().starts_with(".frame.png."))
+        );
+    }
+
+    #[test]
+    fn replaces_the_file_and_leaves_no_temporary() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("a.json");
+        write_bytes(&path, b"one").expect("first");
+        write_bytes(&path, b"two").expect("second");
+        assert_eq!(std::fs::read(&path).expect("read"), b"two");
+        let names: Vec<_> = std::fs::read_dir(dir.path()).expect("ls").collect();
+        assert_eq!(names.len(), 1, "{names:?}");
+    }
+
+    #[test]
+    fn a_failed_write_leaves_nothing_and_names_the_file() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("missing/a.json");
+        let e = write_bytes(&path, b"x").expect_err("no folder");
+        assert!(e.to_string().contains("a.json"), "{e}");
+        assert_eq!(std::fs::read_dir(dir.path()).expect("ls").count(), 0);
+    }
+
+    #[test]
+    fn concurrent_writers_of_one_file_all_succeed() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("perf.json");
+        std::thread::scope(|s| {
+            for i in 0..8 {
+                let path = &path;
+                s.spawn(move || write_bytes(path, format!("{i}").as_bytes()).expect("write"));
+            }
+        });
+        assert!(
+            std::fs::read_to_string(&path)
+                .expect("read")
+                .parse::<u32>()
+                .is_ok()
+        );
+    }
+}

@@ -1,0 +1,20 @@
+//! The scenes that ship with the engine, built into the binary so a copied
+//! or installed `engine` finds them wherever it runs (no build-folder paths).
+
+/// `(name, scene file text)`, as in `assets/scenes/<name>.toml`.
+pub const SHIPPED: &[(&str, &str)] =
+    &[("teapot", include_str!("../../../assets/scenes/teapot.toml"))];
+
+/// The text of the shipped scene `name`, if there is one.
+pub fn shipped(name: &str) -> Option<&'static str> {
+    SHIPPED.iter().find(|(n, _)| *n == name).map(|(_, t)| *t)
+}
+
+/// The shipped scenes' names, for "did you mean" messages.
+pub fn shipped_names() -> String {
+    SHIPPED
+        .iter()
+        .map(|(n, _)| *n)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
