@@ -120,11 +120,13 @@ pub fn cached_or_traced(
         let bytes = inference::key::read_verified(&exr).map_err(anyhow::Error::msg)?;
         Ok(output::parse_exr(&bytes, &exr)?)
     };
-    if cache::freshness(stem, key) == Freshness::Fresh {
-        match read() {
+    match cache::freshness(stem, key) {
+        Freshness::Fresh => match read() {
             Ok(layers) => return Ok((layers, false)),
             Err(e) => eprintln!("{e:#}: tracing it again"),
-        }
+        },
+        Freshness::Broken(why) => eprintln!("{why}: tracing it again"),
+        Freshness::Missing | Freshness::Stale(_) => {}
     }
     if let Some(dir) = stem.parent() {
         claim_dir(dir)?;

@@ -189,7 +189,7 @@ impl PemPlayer {
                         "no {}.{} maps to play (run `engine infer --scene {}{}`)",
                         o.name,
                         layer.file_part(),
-                        scene.name,
+                        scene.arg(),
                         if layer == MapLayer::Sphere {
                             " --all --sphere"
                         } else {

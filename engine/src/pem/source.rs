@@ -57,7 +57,7 @@ impl MapSource {
                 textures.len(),
                 scene.name,
                 specs.len(),
-                scene.name
+                scene.arg()
             );
         }
         let mut index = Vec::new();

@@ -97,6 +97,17 @@ impl Scene {
         load::Loader { path }.build(file)
     }
 
+    /// How to name this scene on the command line: the built-in scene's
+    /// name, or the path of the file it was loaded from.
+    pub fn arg(&self) -> String {
+        let builtin = Path::new("assets/scenes").join(format!("{}.toml", self.name));
+        if shipped(&self.name).is_some() && self.source == builtin {
+            self.name.clone()
+        } else {
+            self.source.display().to_string()
+        }
+    }
+
     /// Bounds of all objects, room included: `(min, max)`.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         self.objects
