@@ -45,6 +45,17 @@ struct Reflector {
     bounds: (Vec3, Vec3),
 }
 
+/// Why a frame could not be drawn: the device (kept typed: device lost,
+/// out of memory, …) or the maps it needed (reading or decoding them; the
+/// codec's error stays inside, for `downcast_ref`).
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    #[error(transparent)]
+    Maps(#[from] anyhow::Error),
+}
+
 /// CPU-side costs of one frame, in milliseconds.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CpuTimes {
@@ -196,8 +207,7 @@ impl Renderer {
             scene,
             settings,
             source,
-            COLOR_FORMAT,
-            DEPTH_FORMAT,
+            (COLOR_FORMAT, DEPTH_FORMAT),
         )?);
         Ok(())
     }
@@ -245,7 +255,12 @@ impl Renderer {
     }
 
     /// Renders one frame from `eye` (looking at `center`) and reads it back.
-    pub fn frame(&mut self, mode: FrameMode, eye: Vec3, view: Mat4) -> GpuResult<FrameStats> {
+    pub fn frame(
+        &mut self,
+        mode: FrameMode,
+        eye: Vec3,
+        view: Mat4,
+    ) -> Result<FrameStats, RenderError> {
         let view_proj = self.projection * view;
         let mut cpu = CpuTimes::default();
         if mode == FrameMode::StaticEm {
@@ -263,12 +278,10 @@ impl Renderer {
         let mut blend = None;
         if mode == FrameMode::Pem {
             let Some(pem) = self.pem.as_mut() else {
-                return Err(GpuError::Invalid("PEM frame without set_pem()".into()));
+                return Err(GpuError::Invalid("PEM frame without set_pem()".into()).into());
             };
             let b = sample_blend(&self.orbit, eye, pem.settings.spacing, pem.settings.blend);
-            let prepared = pem
-                .prepare(eye, &b)
-                .map_err(|e| GpuError::Invalid(format!("{e:#}")))?;
+            let prepared = pem.prepare(eye, &b)?;
             cpu.texgen_ms += prepared.texgen_ms;
             cpu.decode_ms += prepared.decode_ms;
             cpu.decoded_maps += prepared.decoded_maps;

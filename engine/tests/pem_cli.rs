@@ -141,11 +141,20 @@ fn main_job_compiles_what_is_missing_then_plays_every_mode() {
             .all(|r| r["frame_ms_median"].as_f64().is_some_and(|v| v > 0.0))
     );
 
-    // Every mode and knob plays cleanly (sphere PEMs are inferred on first use).
+    // Every mode and knob plays cleanly (sphere PEMs are inferred on first
+    // use); each mode's frame between samples matches its golden image.
+    for (mode, golden) in [
+        ("layered-pem", "tiny_layered_pem"),
+        ("sphere-pem", "tiny_sphere_pem"),
+        ("ptm", "tiny_ptm"),
+    ] {
+        let o = play(&scene, &out, &["--mode", mode]);
+        assert!(o.status.success(), "{mode}: {}", text(&o));
+        let (w, h, pixels) = engine::capture::read_png(&out.join("frame_0001.png")).expect("frame");
+        common::assert_matches_golden(golden, w, h, &pixels, 45.0);
+    }
     for extra in [
-        &["--mode", "ptm"][..],
-        &["--mode", "sphere-pem"],
-        &["--mode", "trace", "--trace-spp", "1"],
+        &["--mode", "trace", "--trace-spp", "1"][..],
         &["--mode", "static-em"],
         &["--no-blend", "--distant-only"],
         &["--maps", "exr", "--filtering", "nearest", "--em-size", "4"],

@@ -1,5 +1,5 @@
 //! The rendering matrix built from probe renders on lavapipe predicts
-//! actual renders of random content: `A x` = render(x) to ≥ 60 dB (the
+//! actual renders of random content: `A x` = render(x) to ≥ 140 dB (the
 //! issue's aim) for cube maps indexed by texgen and for 2D textures.
 
 mod common;
@@ -78,7 +78,7 @@ fn cube_map_matrix_matches_renders() {
         matrix.pixels.len(),
         matrix.a.nnz()
     );
-    assert!(report.psnr_db >= 60.0, "{report:?}");
+    assert!(report.psnr_db >= 140.0, "{report:?}");
     assert_no_validation_messages();
 }
 
@@ -111,6 +111,6 @@ fn texture_matrix_matches_renders() {
         matrix.pixels.len(),
         matrix.a.nnz()
     );
-    assert!(report.psnr_db >= 60.0, "{report:?}");
+    assert!(report.psnr_db >= 140.0, "{report:?}");
     assert_no_validation_messages();
 }

@@ -32,8 +32,22 @@ pub enum GpuError {
         name: String,
         source: gpu_allocator::AllocationError,
     },
+    /// A pass failed to record; `source` keeps what failed (device lost,
+    /// out of memory, …).
+    #[error("pass {pass}: {source}")]
+    InPass { pass: String, source: Box<GpuError> },
     #[error("{0}")]
     Invalid(String),
+}
+
+impl GpuError {
+    /// The error under any pass context.
+    pub fn root(&self) -> &GpuError {
+        match self {
+            GpuError::InPass { source, .. } => source.root(),
+            e => e,
+        }
+    }
 }
 
 pub type GpuResult<T> = Result<T, GpuError>;

@@ -61,7 +61,10 @@ impl Executor {
             let recorded = pass.record(cmd);
             self.queries.end(cmd, index);
             self.end_label(cmd);
-            recorded.map_err(|e| GpuError::Invalid(format!("pass {}: {e}", pass.name())))?;
+            recorded.map_err(|e| GpuError::InPass {
+                pass: pass.name().to_owned(),
+                source: Box::new(e),
+            })?;
         }
         // Make every device write visible to the host reading back after
         // the fence (captures, read-back buffers).

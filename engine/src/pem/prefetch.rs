@@ -1,9 +1,11 @@
 //! Decoding ahead on a worker thread: while the device draws the current
-//! frame, the maps of the sample the eye is moving towards are decoded, so
-//! the frame that needs them only copies them into staging. The worker owns
-//! its own map source (and decode cache); results come back by channel.
+//! frame, the maps of the sample the eye is moving towards are decoded
+//! straight into staging buffers the worker borrows from the pool, so the
+//! frame that needs them only records their upload. The worker owns its
+//! own map source (and decode cache); buffers travel by channel.
 
 use super::source::{MapLayer, MapSource};
+use crate::backend::Buffer;
 use half::f16;
 use std::sync::mpsc::{Receiver, Sender, channel};
 use std::thread::JoinHandle;
@@ -17,18 +19,42 @@ pub struct MapKey {
     pub sample: u32,
 }
 
+/// Decodes `key` from `source` into the start of `buffer` (RGBA f16, the
+/// upload layout).
+pub fn decode_into(
+    source: &mut MapSource,
+    key: &MapKey,
+    buffer: &mut Buffer,
+) -> anyhow::Result<()> {
+    let halves = key.layer.layout(key.resolution).len() * 4;
+    let bytes = buffer.mapped_mut()?;
+    let Some(bytes) = bytes.get_mut(..halves * 2) else {
+        anyhow::bail!(
+            "a staging buffer of {} bytes holds no {}-texel map",
+            bytes.len(),
+            halves / 4
+        );
+    };
+    let out: &mut [f16] = bytemuck::try_cast_slice_mut(bytes)
+        .map_err(|e| anyhow::anyhow!("staging buffer not f16-aligned: {e}"))?;
+    source.read(&key.object, key.layer, key.resolution, key.sample, out)
+}
+
 struct Decoded {
     key: MapKey,
-    texels: anyhow::Result<Vec<f16>>,
+    buffer: Buffer,
+    ok: bool,
     ms: f64,
 }
 
 pub struct Prefetcher {
-    jobs: Option<Sender<MapKey>>,
+    jobs: Option<Sender<(MapKey, Buffer)>>,
     results: Receiver<Decoded>,
     worker: Option<JoinHandle<()>>,
     in_flight: Vec<MapKey>,
-    ready: Vec<(MapKey, Vec<f16>, f64)>,
+    ready: Vec<(MapKey, Buffer, f64)>,
+    /// Buffers back from failed decodes or dropped results, for the pool.
+    spare: Vec<Buffer>,
 }
 
 /// Decoded maps kept waiting at most (older ones are dropped).
@@ -36,28 +62,21 @@ const READY_MAX: usize = 8;
 
 impl Prefetcher {
     pub fn new(mut source: MapSource) -> Self {
-        let (jobs, inbox) = channel::<MapKey>();
+        let (jobs, inbox) = channel::<(MapKey, Buffer)>();
         let (outbox, results) = channel();
         let worker = std::thread::Builder::new()
             .name("map-prefetch".into())
             .spawn(move || {
-                for key in inbox {
-                    let layout = inference::solve::layout::TextureLayout::full_chain(
-                        key.layer.shape(key.resolution),
-                    );
-                    let mut texels = vec![f16::ZERO; layout.len() * 4];
-                    let read = source.read(
-                        &key.object,
-                        key.layer,
-                        key.resolution,
-                        key.sample,
-                        &mut texels,
-                    );
+                for (key, mut buffer) in inbox {
+                    // A failed prefetch is simply not used: the frame reads
+                    // the map itself and reports the error there.
+                    let ok = decode_into(&mut source, &key, &mut buffer).is_ok();
                     let ms = source.last_read_ms;
                     if outbox
                         .send(Decoded {
                             key,
-                            texels: read.map(|_| texels),
+                            buffer,
+                            ok,
                             ms,
                         })
                         .is_err()
@@ -73,6 +92,7 @@ impl Prefetcher {
             worker,
             in_flight: Vec::new(),
             ready: Vec::new(),
+            spare: Vec::new(),
         }
     }
 
@@ -84,24 +104,31 @@ impl Prefetcher {
             };
             let Some(done) = next else { return };
             self.in_flight.retain(|k| *k != done.key);
-            // A failed prefetch is simply not used: the frame reads the map
-            // itself and reports the error there.
-            if let Ok(texels) = done.texels {
-                self.ready.push((done.key, texels, done.ms));
-                if self.ready.len() > READY_MAX {
-                    self.ready.remove(0);
-                }
+            if !done.ok {
+                self.spare.push(done.buffer);
+                continue;
+            }
+            self.ready.push((done.key, done.buffer, done.ms));
+            if self.ready.len() > READY_MAX {
+                let (_, buffer, _) = self.ready.remove(0);
+                self.spare.push(buffer);
             }
         }
     }
 
-    /// The decoded texels of `key` if it was prefetched (waiting for it when
-    /// it is still being decoded), with the worker's decode time.
-    pub fn take(&mut self, key: &MapKey) -> Option<(Vec<f16>, f64)> {
+    /// The staging buffer holding `key` if it was decoded ahead (waiting
+    /// for it when it is still being decoded), with the worker's time.
+    pub fn take(&mut self, key: &MapKey) -> Option<(Buffer, f64)> {
         self.collect(Some(key));
         let i = self.ready.iter().position(|(k, ..)| k == key)?;
-        let (_, texels, ms) = self.ready.swap_remove(i);
-        Some((texels, ms))
+        let (_, buffer, ms) = self.ready.swap_remove(i);
+        Some((buffer, ms))
+    }
+
+    /// Whether `key` is decoded or on its way.
+    pub fn has(&mut self, key: &MapKey) -> bool {
+        self.collect(None);
+        self.in_flight.contains(key) || self.ready.iter().any(|(k, ..)| k == key)
     }
 
     /// Waits until the worker has finished every request (so it no longer
@@ -117,17 +144,25 @@ impl Prefetcher {
         }
     }
 
-    /// Asks for `key` unless it is already decoded or on its way.
-    pub fn request(&mut self, key: MapKey) {
+    /// Decodes `key` into `buffer` ahead of need; returns the buffer when
+    /// the worker cannot take it.
+    pub fn request(&mut self, key: MapKey, buffer: Buffer) -> Option<Buffer> {
+        let Some(jobs) = &self.jobs else {
+            return Some(buffer);
+        };
+        match jobs.send((key.clone(), buffer)) {
+            Ok(()) => {
+                self.in_flight.push(key);
+                None
+            }
+            Err(e) => Some(e.0.1),
+        }
+    }
+
+    /// Buffers the pool may have back.
+    pub fn reclaim(&mut self) -> Vec<Buffer> {
         self.collect(None);
-        if self.in_flight.contains(&key) || self.ready.iter().any(|(k, ..)| *k == key) {
-            return;
-        }
-        if let Some(jobs) = &self.jobs
-            && jobs.send(key.clone()).is_ok()
-        {
-            self.in_flight.push(key);
-        }
+        std::mem::take(&mut self.spare)
     }
 }
 

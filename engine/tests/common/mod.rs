@@ -89,7 +89,7 @@ pub fn tiny_scene(dir: &Path) -> PathBuf {
     for (from, to) in [
         ("samples = 100", "samples = 3"),
         ("resolution = 256", "resolution = 16"),
-        ("segments = 25", "segments = 6"),
+        ("segments = 25 }", "segments = 6 }"),
     ] {
         assert!(text.contains(from), "teapot.toml lacks {from:?}");
         text = text.replacen(from, to, 1);

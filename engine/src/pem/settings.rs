@@ -1,0 +1,53 @@
+//! What PEM playback draws: the kind of maps and the knobs that trade speed
+//! for accuracy.
+
+use super::source::MapLayer;
+use crate::backend::Filtering;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct PemSettings {
+    pub kind: PemKind,
+    /// Layered PEMs: draw the local layer (false = distant layer only).
+    pub local_layer: bool,
+    /// Blend the two nearest samples (false = nearest only).
+    pub blend: bool,
+    /// Use every `spacing`-th sample only (1 = all).
+    pub spacing: u32,
+    /// Finest MIP levels dropped: the EM resolution is `res >> drop_levels`.
+    pub drop_levels: u32,
+    pub filtering: Filtering,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PemKind {
+    /// Distant box + local ellipsoid layers (the PEM paper's method).
+    Layered,
+    /// One sphere-at-infinity EM per sample.
+    Sphere,
+    /// Parameterized texture maps on the surface.
+    Ptm,
+}
+
+impl PemSettings {
+    pub fn new(kind: PemKind) -> Self {
+        Self {
+            kind,
+            local_layer: true,
+            blend: true,
+            spacing: 1,
+            drop_levels: 0,
+            filtering: Filtering::Trilinear,
+        }
+    }
+
+    /// The maps one sample needs, in slot order.
+    pub fn layers(&self) -> Vec<MapLayer> {
+        match self.kind {
+            PemKind::Layered if self.local_layer => vec![MapLayer::Distant, MapLayer::Local],
+            PemKind::Layered => vec![MapLayer::Distant],
+            PemKind::Sphere => vec![MapLayer::Sphere],
+            PemKind::Ptm => vec![MapLayer::Ptm],
+        }
+    }
+}
