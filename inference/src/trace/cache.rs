@@ -6,12 +6,12 @@ use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3};
 
-use super::TraceSettings;
 use super::error::TraceError;
+use super::{Caustics, TraceSettings};
 use crate::scene::{Material, Scene};
 
-/// Bump when a change to the tracer changes its images.
-pub const TRACER_VERSION: u32 = 1;
+/// Bump when a change to the tracer changes its images (2: caustics).
+pub const TRACER_VERSION: u32 = 2;
 
 /// FNV-1a, 64-bit: stable across runs, platforms and Rust versions (unlike `DefaultHasher`).
 struct Fnv(u64);
@@ -57,6 +57,15 @@ pub fn key(scene: &Scene, eye: Vec3, settings: &TraceSettings) -> u64 {
     h.v3(t.background);
     h.write_u32(t.max_diffuse_bounces);
     h.write_u32(t.max_specular_bounces);
+    match t.caustics {
+        Caustics::Off => h.write_u8(0),
+        Caustics::Paths => h.write_u8(1),
+        Caustics::Photons { photons, radius } => {
+            h.write_u8(2);
+            h.write_u32(photons);
+            h.f(radius);
+        }
+    }
 
     let c = &scene.camera;
     [c.fov_y_deg, c.near, c.far]

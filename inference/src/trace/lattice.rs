@@ -1,0 +1,260 @@
+//! Photon irradiance pre-filtered onto a sparse lattice, so that a diffuse hit reads the
+//! caustic with eight hash probes instead of gathering hundreds of photons.
+//!
+//! Each photon adds `Φ·K(ρ)` to the lattice points near its surface: `ρ` is the distance
+//! from the photon to the point's projection onto the photon's tangent plane and
+//! `K(ρ) = 2/(πr²)·(1 − ρ²/r²)` (Epanechnikov, ∫K dA = 1 on a plane). On a plane every
+//! point so filled holds the kernel estimate of the irradiance at its projection, and a
+//! query interpolates the eight corners of its cell trilinearly: the kernel estimate,
+//! smoothed once more by the interpolation. Points are filled within `spacing·‖n‖₁` of
+//! the plane, which covers every corner of any cell the plane crosses.
+//!
+//! The spacing is `r`: the interpolation's tent and the kernel then blur about equally
+//! (per-axis standard deviation √(2/6)·r in all), and the lattice stays small enough to
+//! sit in cache (12 MB for the teapot room at r = 3 cm; at r/2 it was 38 MB and lookups
+//! cost as much as the rays).
+//!
+//! Values are kept per normal bucket (±x, ±y, ±z): a photon counts in every bucket whose
+//! axis is within 60° of its normal, a query reads the bucket of its normal's dominant
+//! axis, so the two faces of a wall, or floor and wall at a corner, never mix.
+
+use std::collections::HashMap;
+use std::f32::consts::PI;
+use std::hash::{BuildHasherDefault, Hasher};
+
+use glam::Vec3;
+
+/// Lattice spacing as a fraction of the kernel radius.
+const SPACING: f32 = 1.0;
+/// A photon counts in a normal bucket when `axis · n` exceeds this (60°).
+const MIN_COS: f32 = 0.5;
+const AXES: [Vec3; 6] = [
+    Vec3::X,
+    Vec3::NEG_X,
+    Vec3::Y,
+    Vec3::NEG_Y,
+    Vec3::Z,
+    Vec3::NEG_Z,
+];
+
+/// Bricks are `BRICK³` lattice points, stored together: neighbouring lookups (a tile's
+/// pixels, a cell's eight corners) touch the same few cache lines.
+const BRICK: i32 = 4;
+const BRICK_POINTS: usize = (BRICK * BRICK * BRICK) as usize;
+
+/// Brick (x, y, z in bricks) and normal bucket.
+type BrickKey = [i32; 4];
+
+pub(super) struct Lattice {
+    radius: f32,
+    spacing: f32,
+    index: HashMap<BrickKey, u32, BuildHasherDefault<KeyHasher>>,
+    bricks: Vec<[Vec3; BRICK_POINTS]>,
+}
+
+/// Brick of lattice point `p` in `bucket`, and the point's place in it.
+fn locate(p: [i32; 3], bucket: i32) -> (BrickKey, usize) {
+    let key = [
+        p[0].div_euclid(BRICK),
+        p[1].div_euclid(BRICK),
+        p[2].div_euclid(BRICK),
+        bucket,
+    ];
+    let [x, y, z] = p.map(|c| c.rem_euclid(BRICK));
+    (key, (x + BRICK * (y + BRICK * z)) as usize)
+}
+
+impl Lattice {
+    pub(super) fn new(radius: f32) -> Lattice {
+        Lattice {
+            radius,
+            spacing: radius * SPACING,
+            index: HashMap::default(),
+            bricks: Vec::new(),
+        }
+    }
+
+    /// Bytes of the stored values.
+    pub(super) fn bytes(&self) -> usize {
+        self.bricks.len() * std::mem::size_of::<[Vec3; BRICK_POINTS]>()
+    }
+
+    fn point_mut(
+        &mut self,
+        p: [i32; 3],
+        bucket: i32,
+        last: &mut Option<(BrickKey, u32)>,
+    ) -> &mut Vec3 {
+        let (key, at) = locate(p, bucket);
+        let brick = match *last {
+            Some((k, b)) if k == key => b,
+            _ => {
+                let next = self.bricks.len() as u32;
+                let b = *self.index.entry(key).or_insert(next);
+                if b == next {
+                    self.bricks.push([Vec3::ZERO; BRICK_POINTS]);
+                }
+                *last = Some((key, b));
+                b
+            }
+        };
+        &mut self.bricks[brick as usize][at]
+    }
+
+    /// Adds a photon of flux `power` that arrived at `p` on a surface with normal `n`
+    /// (on the side it came from).
+    pub(super) fn splat(&mut self, p: Vec3, n: Vec3, power: Vec3) {
+        if !(p.is_finite() && n.is_finite() && power.is_finite()) {
+            return;
+        }
+        let (r, c) = (self.radius, self.spacing);
+        let norm = 2.0 / (PI * r * r);
+        let g = p / c;
+        let reach = r / c;
+        let mut last = None;
+        for (bucket, axis) in AXES.iter().enumerate() {
+            if axis.dot(n) <= MIN_COS {
+                continue;
+            }
+            // Walk columns along the bucket's axis `a` over the disc's (u, v) footprint.
+            let a = bucket / 2;
+            let (u, v) = ((a + 1) % 3, (a + 2) % 3);
+            let half = n.abs().element_sum() / n[a].abs();
+            for iu in (g[u] - reach).ceil() as i32..=(g[u] + reach).floor() as i32 {
+                for iv in (g[v] - reach).ceil() as i32..=(g[v] + reach).floor() as i32 {
+                    let (du, dv) = (iu as f32 - g[u], iv as f32 - g[v]);
+                    // The photon's plane crosses this column at `a = on`.
+                    let on = g[a] - (n[u] * du + n[v] * dv) / n[a];
+                    // Open interval: a corner exactly `half` away has zero trilinear weight.
+                    for ia in (on - half).floor() as i32 + 1..(on + half).ceil() as i32 {
+                        let mut d = Vec3::ZERO;
+                        d[u] = du;
+                        d[v] = dv;
+                        d[a] = ia as f32 - g[a];
+                        let d = d * c;
+                        let h = d.dot(n);
+                        let rho2 = (d.length_squared() - h * h).max(0.0);
+                        if rho2 >= r * r {
+                            continue;
+                        }
+                        let mut point = [0; 3];
+                        point[u] = iu;
+                        point[v] = iv;
+                        point[a] = ia;
+                        *self.point_mut(point, bucket as i32, &mut last) +=
+                            power * (norm * (1.0 - rho2 / (r * r)));
+                    }
+                }
+            }
+        }
+    }
+
+    /// Irradiance at `p` on a surface with normal `n` (facing the viewer), W/m².
+    pub(super) fn irradiance(&self, p: Vec3, n: Vec3) -> Vec3 {
+        if self.bricks.is_empty() {
+            return Vec3::ZERO;
+        }
+        let bucket = bucket_of(n);
+        let g = p / self.spacing;
+        let g0 = g.floor();
+        let f = g - g0;
+        // `as` saturates (NaN → 0): far or broken points read empty cells, never panic.
+        let base = [g0.x as i32, g0.y as i32, g0.z as i32];
+        let mut e = Vec3::ZERO;
+        // The corners fall in one to eight bricks: probe each once.
+        let mut last: Option<(BrickKey, Option<u32>)> = None;
+        for corner in 0..8 {
+            let bit = |axis: usize| (corner >> axis) & 1;
+            let point = [0, 1, 2].map(|axis| base[axis].saturating_add(bit(axis)));
+            let (key, at) = locate(point, bucket);
+            let brick = match last {
+                Some((k, b)) if k == key => b,
+                _ => {
+                    let b = self.index.get(&key).copied();
+                    last = Some((key, b));
+                    b
+                }
+            };
+            if let Some(b) = brick {
+                let w = |axis: usize| {
+                    if bit(axis) == 1 {
+                        f[axis]
+                    } else {
+                        1.0 - f[axis]
+                    }
+                };
+                e += self.bricks[b as usize][at] * (w(0) * w(1) * w(2));
+            }
+        }
+        e
+    }
+}
+
+/// Bucket of a normal's dominant axis and sign (an index into `AXES`).
+fn bucket_of(n: Vec3) -> i32 {
+    let m = n.abs();
+    let a = if m.x >= m.y && m.x >= m.z {
+        0
+    } else if m.y >= m.z {
+        1
+    } else {
+        2
+    };
+    2 * a as i32 + i32::from(n[a] < 0.0)
+}
+
+/// A small multiplicative hash for integer keys (std's SipHash costs more than the rest
+/// of a lookup; keys are not attacker-controlled).
+#[derive(Default)]
+struct KeyHasher(u64);
+
+impl Hasher for KeyHasher {
+    fn finish(&self) -> u64 {
+        // The table indexes by low bits, which the multiplications alone leave poorly mixed.
+        let z = (self.0 ^ (self.0 >> 31)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 29)
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x517c_c1b7_2722_0a95);
+    }
+    fn write_i32(&mut self, x: i32) {
+        self.write_u64(u64::from(x as u32));
+    }
+    fn write_usize(&mut self, x: usize) {
+        self.write_u64(x as u64);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Uniform photons on a plane give back their areal flux density everywhere inside.
+    #[test]
+    fn a_uniform_plane_of_photons_reads_back_its_irradiance() {
+        for n in [Vec3::Y, Vec3::new(0.3, 0.8, -0.52).normalize()] {
+            let (t, b) = crate::trace::rng::basis(n);
+            let mut lattice = Lattice::new(0.1);
+            let step = 0.01;
+            let origin = Vec3::new(0.013, 0.27, -0.041);
+            for i in -100..=100 {
+                for j in -100..=100 {
+                    let p = origin + t * (i as f32 * step) + b * (j as f32 * step);
+                    lattice.splat(p, n, Vec3::splat(step * step));
+                }
+            }
+            for (i, j) in [(0.0, 0.0), (0.37, -0.52), (-0.61, 0.2)] {
+                let p = origin + t * i + b * j;
+                let e = lattice.irradiance(p, n);
+                assert!((e.x - 1.0).abs() < 0.02, "{n}: {e} at ({i}, {j})");
+                assert_eq!(lattice.irradiance(p, -n), Vec3::ZERO, "the other side");
+            }
+            assert_eq!(lattice.irradiance(origin + t * 1.5, n), Vec3::ZERO);
+        }
+    }
+}
