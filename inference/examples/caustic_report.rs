@@ -318,10 +318,11 @@ fn render(args: &[String]) -> Result<(), String> {
         let start = std::time::Instant::now();
         let map = PhotonMap::build(&integrator, photons, radius, settings.seed);
         println!(
-            "photon map: {} paths, {} photons stored, {:.1} MB of irradiance, {} rays, {:.2} s",
+            "photon map: {} paths, {} photons stored, {:.1} + {:.1} MB of irradiance, {} rays, {:.2} s",
             map.emitted,
             map.stored,
-            map.bytes() as f64 / 1e6,
+            map.bytes().0 as f64 / 1e6,
+            map.bytes().1 as f64 / 1e6,
             map.rays,
             start.elapsed().as_secs_f64()
         );

@@ -10,8 +10,8 @@
 //! the plane, which covers every corner of any cell the plane crosses.
 //!
 //! The spacing is `r`: the interpolation's tent and the kernel then blur about equally
-//! (per-axis standard deviation √(2/6)·r in all), and the lattice stays small enough to
-//! sit in cache (12 MB for the teapot room at r = 3 cm; at r/2 it was 38 MB and lookups
+//! (per-axis standard deviation √(2/6)·r in all), and the lattice stays small (teapot
+//! room, r = 3 cm: 12 MB; at spacing r/2 it was 38 MB, and lookups missing the cache
 //! cost as much as the rays).
 //!
 //! Values are kept per normal bucket (±x, ±y, ±z): a photon counts in every bucket whose

@@ -35,6 +35,8 @@ use crate::scene::{AreaLight, Material};
 const BATCH: u32 = 4096;
 /// Random stream of photon paths (camera samples use 0 and 1).
 const STREAM: u32 = 2;
+/// Kernel radius of the coarse lattice, in fine radii.
+const COARSE: f32 = 4.0;
 
 #[derive(Clone, Copy, Debug)]
 struct Photon {
@@ -58,6 +60,7 @@ struct Target {
 /// The caustic photons, pre-filtered onto a lattice ([`super::lattice`]).
 pub struct PhotonMap {
     lattice: Lattice,
+    coarse: Lattice,
     /// Photon paths traced (aimed at reflective objects).
     pub emitted: u64,
     /// Photons stored (paths that reached a diffuse surface through a reflector).
@@ -92,13 +95,16 @@ impl PhotonMap {
             .collect();
         // In batch order: the sums are the same whatever the thread count.
         let mut lattice = Lattice::new(radius);
+        let mut coarse = Lattice::new(radius * COARSE);
         let mut stored = 0;
         for ph in traced.iter().flat_map(|(p, _)| p) {
             lattice.splat(ph.p, ph.n, ph.power);
+            coarse.splat(ph.p, ph.n, ph.power);
             stored += 1;
         }
         PhotonMap {
             lattice,
+            coarse,
             emitted: targets.iter().map(|t| u64::from(t.count)).sum(),
             stored,
             rays: traced.iter().map(|(_, r)| r).sum(),
@@ -106,13 +112,19 @@ impl PhotonMap {
     }
 
     /// Bytes of the pre-filtered irradiance.
-    pub fn bytes(&self) -> usize {
-        self.lattice.bytes()
+    pub fn bytes(&self) -> (usize, usize) {
+        (self.lattice.bytes(), self.coarse.bytes())
     }
 
     /// Caustic irradiance at `p` on a surface with normal `n` (facing the viewer), W/m².
     pub fn irradiance(&self, p: Vec3, n: Vec3) -> Vec3 {
         self.lattice.irradiance(p, n)
+    }
+
+    /// The same blurred over `COARSE` times the radius, from a lattice small enough to stay
+    /// in cache: for hits reached by a diffuse bounce, which are scattered over the scene.
+    pub fn coarse_irradiance(&self, p: Vec3, n: Vec3) -> Vec3 {
+        self.coarse.irradiance(p, n)
     }
 }
 

@@ -218,7 +218,8 @@ impl<'a> Integrator<'a> {
                 }
                 Material::Diffuse { albedo, texture } => {
                     let albedo = self.albedo(albedo, texture, s.uv);
-                    l += beta * albedo * (self.direct(&s, rng, rays) + self.caustic(&s));
+                    let caustic = self.caustic(&s, state.diffuse > 0);
+                    l += beta * albedo * (self.direct(&s, rng, rays) + caustic);
                     if state.diffuse >= tr.max_diffuse_bounces {
                         None
                     } else {
@@ -299,9 +300,19 @@ impl<'a> Integrator<'a> {
     }
 
     /// Radiance a white Lambertian surface reflects of the caustic photon map's irradiance.
-    fn caustic(&self, s: &Surface) -> Vec3 {
-        self.photons
-            .map_or(Vec3::ZERO, |map| map.irradiance(s.p, s.ng) / PI)
+    /// Hits reached by a diffuse bounce (`bounced`) read the coarse map: they land all over
+    /// the scene, where the fine one would miss the cache, and the bounce blurs the caustic
+    /// anyway (teapot sample 30: floor within 0.5% of the fine map's, per band).
+    fn caustic(&self, s: &Surface, bounced: bool) -> Vec3 {
+        let Some(map) = self.photons else {
+            return Vec3::ZERO;
+        };
+        let e = if bounced {
+            map.coarse_irradiance(s.p, s.ng)
+        } else {
+            map.irradiance(s.p, s.ng)
+        };
+        e / PI
     }
 
     /// Fresnel weight and reflected direction of a mirror or glossy surface.

@@ -51,6 +51,6 @@ impl Default for Caustics {
 }
 
 /// Photon paths per image by default (see `inference/NOTES-caustics.md`).
-pub const DEFAULT_PHOTONS: u32 = 500_000;
+pub const DEFAULT_PHOTONS: u32 = 250_000;
 /// Photon-gathering radius by default, metres.
-pub const DEFAULT_PHOTON_RADIUS: f32 = 0.03;
+pub const DEFAULT_PHOTON_RADIUS: f32 = 0.04;
