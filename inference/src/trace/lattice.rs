@@ -45,6 +45,17 @@ const BRICK_POINTS: usize = (BRICK * BRICK * BRICK) as usize;
 /// Brick (x, y, z in bricks) and normal bucket.
 type BrickKey = [i32; 4];
 
+/// Brick indices of one normal bucket over its bounds, so lookups index instead of hash.
+struct Directory {
+    lo: [i32; 3],
+    dims: [i32; 3],
+    slots: Vec<u32>,
+}
+
+const EMPTY: u32 = u32::MAX;
+/// Largest directory built (4 bytes a brick); a bucket spread wider keeps hashing.
+const MAX_DIRECTORY: i64 = 1 << 22;
+
 pub(super) struct Lattice {
     radius: f32,
     spacing: f32,
@@ -53,6 +64,8 @@ pub(super) struct Lattice {
     /// Per normal bucket, the lowest and highest lattice point filled: most lookups far
     /// from any caustic end here.
     bounds: [Option<([i32; 3], [i32; 3])>; 6],
+    /// Set by [`Lattice::finish`].
+    directories: [Option<Directory>; 6],
 }
 
 /// Brick of lattice point `p` in `bucket`, and the point's place in it.
@@ -75,12 +88,19 @@ impl Lattice {
             index: HashMap::default(),
             bricks: Vec::new(),
             bounds: [None; 6],
+            directories: [const { None }; 6],
         }
     }
 
-    /// Bytes of the stored values.
+    /// Bytes of the stored values and directories.
     pub(super) fn bytes(&self) -> usize {
-        self.bricks.len() * std::mem::size_of::<[Vec3; BRICK_POINTS]>()
+        let directories: usize = self
+            .directories
+            .iter()
+            .flatten()
+            .map(|d| 4 * d.slots.len())
+            .sum();
+        self.bricks.len() * std::mem::size_of::<[Vec3; BRICK_POINTS]>() + directories
     }
 
     fn point_mut(
@@ -160,6 +180,46 @@ impl Lattice {
         }
     }
 
+    /// After the last splat: brick directories for the buckets whose bounds allow one.
+    /// Lookups hash until then (and in buckets too spread out), with the same results.
+    pub(super) fn finish(&mut self) {
+        for (bucket, bounds) in self.bounds.iter().enumerate() {
+            let Some((lo, hi)) = bounds else {
+                continue;
+            };
+            let (lo, hi) = (
+                lo.map(|c| c.div_euclid(BRICK)),
+                hi.map(|c| c.div_euclid(BRICK)),
+            );
+            let dims = [0, 1, 2].map(|a| i64::from(hi[a]) - i64::from(lo[a]) + 1);
+            let count: i64 = dims.iter().product();
+            if count > MAX_DIRECTORY {
+                continue;
+            }
+            let dims = dims.map(|d| d as i32);
+            let mut slots = vec![EMPTY; count as usize];
+            for (key, &brick) in &self.index {
+                if key[3] == bucket as i32 {
+                    let r = [0, 1, 2].map(|a| key[a] - lo[a]);
+                    slots[((r[2] * dims[1] + r[1]) * dims[0] + r[0]) as usize] = brick;
+                }
+            }
+            self.directories[bucket] = Some(Directory { lo, dims, slots });
+        }
+    }
+
+    fn brick_at(&self, key: [i32; 3], bucket: i32) -> Option<u32> {
+        let Some(d) = &self.directories[bucket as usize] else {
+            return self.index.get(&[key[0], key[1], key[2], bucket]).copied();
+        };
+        let r = [0, 1, 2].map(|a| key[a].wrapping_sub(d.lo[a]));
+        if (0..3).any(|a| r[a] < 0 || r[a] >= d.dims[a]) {
+            return None;
+        }
+        let slot = d.slots[((r[2] * d.dims[1] + r[1]) * d.dims[0] + r[0]) as usize];
+        (slot != EMPTY).then_some(slot)
+    }
+
     /// Irradiance at `p` on a surface with normal `n` (facing the viewer), W/m².
     pub(super) fn irradiance(&self, p: Vec3, n: Vec3) -> Vec3 {
         let bucket = bucket_of(n);
@@ -186,8 +246,10 @@ impl Lattice {
                 .map(|a| (usize::from(crosses[a]) * bit[a]) << a)
                 .sum();
             let found = *probed[side].get_or_insert_with(|| {
-                let key = [0, 1, 2].map(|a| brick[a] + ((side >> a) & 1) as i32);
-                self.index.get(&[key[0], key[1], key[2], bucket]).copied()
+                self.brick_at(
+                    [0, 1, 2].map(|a| brick[a] + ((side >> a) & 1) as i32),
+                    bucket,
+                )
             });
             let Some(b) = found else {
                 continue;
@@ -288,6 +350,16 @@ mod tests {
         for &(p, n, power) in &photons {
             lattice.splat(p, n, power);
         }
+        let hashed = lattice.irradiance(Vec3::new(0.05, 0.0, -0.05), Vec3::Y);
+        lattice.finish();
+        assert!(
+            lattice.directories[2].is_some(),
+            "the +y bucket gets a directory"
+        );
+        assert_eq!(
+            lattice.irradiance(Vec3::new(0.05, 0.0, -0.05), Vec3::Y),
+            hashed
+        );
         let c = lattice.spacing;
         for _ in 0..200 {
             let q = Vec3::new(1.2 * u() - 0.6, 0.2 * u() - 0.1, 1.2 * u() - 0.6);

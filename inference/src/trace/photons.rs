@@ -102,6 +102,8 @@ impl PhotonMap {
             coarse.splat(ph.p, ph.n, ph.power);
             stored += 1;
         }
+        lattice.finish();
+        coarse.finish();
         PhotonMap {
             lattice,
             coarse,
