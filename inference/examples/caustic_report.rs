@@ -10,6 +10,8 @@
 //!   against caustic B = B − OFF_B (each pair: same seed and spp with and without
 //!   caustics, so the same camera paths), per band: mean caustic as % of OFF_A, and the
 //!   RMS of their difference per pixel (PSNR with the peak of A).
+//! - `caustic_report -- mean EXR LAYER MASK`: mean luminance of an RGB layer over the
+//!   pixels a mask layer fully covers.
 //! - `caustic_report -- render SCENE SAMPLE WxH SPP MODE OUT_STEM [SEED]`: traces like
 //!   `engine trace` with caustics MODE = `off`, `paths` or `photons:N:RADIUS`
 //!   (writes OUT_STEM.exr and .png; prints seconds, rays and the photon map's build).
@@ -88,11 +90,12 @@ fn main() -> ExitCode {
     let result = match args.first().map(String::as_str) {
         Some("energy") if args.len() == 5 => energy(&args[1], &args[2], &args[3], &args[4]),
         Some("psnr") if args.len() >= 3 => psnr(&args[1], &args[2..]),
+        Some("mean") if args.len() == 4 => mean(&args[1], &args[2], &args[3]),
         Some("caustic") if args.len() == 7 => caustic(&args[1], &args[2], &args[3..]),
         Some("render") if (7..=8).contains(&args.len()) => render(&args[1..]),
         _ => Err(
             "usage: caustic_report energy SCENE SAMPLE BEFORE.exr AFTER.exr | \
-                  psnr REF.exr TEST.exr... | caustic SCENE SAMPLE OFF_A A OFF_B B | \
+                  psnr REF.exr TEST.exr... | caustic SCENE SAMPLE OFF_A A OFF_B B | mean EXR LAYER MASK | \
                   render SCENE SAMPLE WxH SPP MODE OUT_STEM [SEED]"
                 .into(),
         ),
@@ -187,6 +190,21 @@ fn energy(scene: &str, sample: &str, before: &str, after: &str) -> Result<(), St
     Ok(())
 }
 
+fn mean(path: &str, layer: &str, mask: &str) -> Result<(), String> {
+    let image = Exr::read(path)?;
+    let (values, coverage) = (image.luminance(layer)?, image.channel(mask, "Y")?);
+    let covered: Vec<f64> = (0..values.len())
+        .filter(|&i| coverage[i] >= 0.999)
+        .map(|i| f64::from(values[i]))
+        .collect();
+    let mean = covered.iter().sum::<f64>() / covered.len().max(1) as f64;
+    println!(
+        "{path}: {layer} over {mask}: {} pixels, mean {mean:.5}",
+        covered.len()
+    );
+    Ok(())
+}
+
 /// Compares two caustic estimates, each the difference of a render with caustics and the
 /// same render (same seed and spp, so the same camera paths) without.
 fn caustic(scene: &str, sample: &str, paths: &[String]) -> Result<(), String> {
@@ -263,7 +281,10 @@ fn psnr(reference: &str, tests: &[String]) -> Result<(), String> {
             }
             let mse = se / n.max(1) as f64;
             let db = 10.0 * (f64::from(peak).powi(2) / mse).log10();
-            println!("{layer} {test}: {db:.2} dB (peak {peak:.4})");
+            println!(
+                "{layer} {test}: {db:.2} dB (peak {peak:.4}), RMS {:.5}",
+                mse.sqrt()
+            );
         }
     }
     Ok(())
