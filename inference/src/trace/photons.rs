@@ -11,14 +11,15 @@
 //! emitters found by a bounce, nothing is counted twice.
 //!
 //! A diffuse hit reads the kernel estimate of the photons' irradiance, pre-filtered onto a
-//! lattice ([`super::lattice`]). The estimate adds no per-sample noise; it blurs the
-//! caustic by the kernel radius `r` and carries the photon count's own (low-frequency)
-//! noise.
+//! lattice ([`super::lattice`]): a fine one (radius r) at a path's first diffuse hit, a
+//! coarse one (4r) after a diffuse bounce. The estimate adds no per-sample noise; it
+//! blurs the caustic by the kernel radius `r` and carries the photon count's own
+//! (low-frequency) noise.
 //!
 //! Deterministic: photon `i` aimed at pair `j` (light, object) draws from its own stream
 //! and photons are splatted in batch order, so the map and every lookup are bit-identical
-//! at any thread count. The map does not depend on the
-//! view: every view of a scene with the same seed sees the same caustic.
+//! at any thread count. The map does not depend on the view: every view of a scene with
+//! the same seed sees the same caustic.
 
 use std::f32::consts::PI;
 
@@ -113,7 +114,7 @@ impl PhotonMap {
         }
     }
 
-    /// Bytes of the pre-filtered irradiance.
+    /// Bytes of the fine and the coarse lattice.
     pub fn bytes(&self) -> (usize, usize) {
         (self.lattice.bytes(), self.coarse.bytes())
     }
