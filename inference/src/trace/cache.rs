@@ -8,13 +8,13 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use super::TraceSettings;
 use super::error::TraceError;
+use super::{Caustics, TraceSettings};
 use crate::key::{Fnv, Freshness, Key};
 use crate::scene::{Material, Scene};
 
-/// Bump when a change to the tracer changes its images.
-pub const TRACER_VERSION: u32 = 1;
+/// Bump when a change to the tracer changes its images (2: caustics).
+pub const TRACER_VERSION: u32 = 2;
 
 fn hash(f: impl FnOnce(&mut Fnv)) -> u64 {
     let mut h = Fnv::default();
@@ -135,6 +135,15 @@ pub fn image_key(scene: &Key, eye: Vec3, settings: &TraceSettings) -> Key {
                 h.v3(t.background);
                 h.write_u32(t.max_diffuse_bounces);
                 h.write_u32(t.max_specular_bounces);
+                match t.caustics {
+                    Caustics::Off => h.write_u8(0),
+                    Caustics::Paths => h.write_u8(1),
+                    Caustics::Photons { photons, radius } => {
+                        h.write_u8(2);
+                        h.write_u32(photons);
+                        h.f32(radius);
+                    }
+                }
             }),
         )
 }

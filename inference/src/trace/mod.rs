@@ -40,11 +40,19 @@ pub mod cache;
 pub mod camera;
 mod error;
 pub mod film;
+mod lattice;
 pub mod layers;
+mod optics;
 pub mod output;
+pub mod photons;
 pub mod rng;
 pub mod shading;
+pub mod transport;
 
+#[cfg(test)]
+mod caustic_tests;
+#[cfg(test)]
+mod material_tests;
 #[cfg(test)]
 mod tests;
 
@@ -57,7 +65,9 @@ pub use bvh::SceneBvh;
 pub use camera::CameraRays;
 pub use error::TraceError;
 pub use layers::{Layer, LayerPlan};
-pub use shading::{Integrator, Transport};
+pub use photons::PhotonMap;
+pub use shading::Integrator;
+pub use transport::{Caustics, Transport};
 
 use crate::scene::{Material, Scene};
 use rng::Rng;
@@ -69,6 +79,9 @@ pub const DEFAULT_SIZE: (u32, u32) = (640, 480);
 /// As the CLI (`parse_size`): the film needs ~4 · channels bytes per pixel twice over.
 const MAX_SIZE: u32 = 8192;
 const MAX_SPP: u32 = 1 << 16;
+const MAX_PHOTONS: u32 = 1 << 26;
+/// Photon kernel radii the lattice handles in metre-scale scenes (i32 lattice indices).
+const PHOTON_RADIUS: std::ops::RangeInclusive<f32> = 1e-4..=100.0;
 
 /// Everything besides scene and view that decides an image (plus how to run).
 #[derive(Clone, Debug, PartialEq)]
@@ -129,6 +142,10 @@ pub struct Tracer<'a> {
     scene: &'a Scene,
     bvh: SceneBvh,
     plan: LayerPlan,
+    /// The last photon map and what it was built from (transport, seed):
+    /// it does not depend on the view, so views with the same settings
+    /// share it (`trace --all`, eval references, inference targets).
+    photons: std::sync::Mutex<Option<((Transport, u64), std::sync::Arc<PhotonMap>)>>,
 }
 
 impl<'a> Tracer<'a> {
@@ -139,6 +156,7 @@ impl<'a> Tracer<'a> {
             scene,
             bvh: SceneBvh::build(scene),
             plan: LayerPlan::new(scene),
+            photons: std::sync::Mutex::new(None),
         })
     }
 
@@ -184,6 +202,8 @@ impl<'a> Tracer<'a> {
         let (width, height) = (settings.width, settings.height);
         let camera = CameraRays::new(self.scene, eye, width, height);
         let integrator = Integrator::new(self.scene, &self.bvh, settings.transport);
+        let (photons, photon_rays) = self.photon_map(&integrator, settings);
+        let integrator = integrator.with_photons(photons.as_deref());
         let tiles = film::tiles(width, height);
         let progress = if settings.progress {
             indicatif::ProgressBar::new(tiles.len() as u64)
@@ -207,7 +227,7 @@ impl<'a> Tracer<'a> {
         progress.finish_and_clear();
 
         let mut acc = vec![0.0f32; (width * height) as usize * self.plan.channels()];
-        let mut rays = 0;
+        let mut rays = photon_rays;
         for (buffer, n) in &buffers {
             buffer.add_into(&mut acc, width, height);
             rays += n;
@@ -219,6 +239,30 @@ impl<'a> Tracer<'a> {
             rays,
             elapsed: start.elapsed(),
         }
+    }
+
+    /// The photon map `settings` ask for, built on first use and shared by
+    /// later views with the same transport and seed; with the photon rays
+    /// this image paid for (0 when it reused the map).
+    fn photon_map(
+        &self,
+        integrator: &Integrator,
+        settings: &TraceSettings,
+    ) -> (Option<std::sync::Arc<PhotonMap>>, u64) {
+        let Caustics::Photons { photons, radius } = settings.transport.caustics else {
+            return (None, 0);
+        };
+        let wanted = (settings.transport, settings.seed);
+        let mut cached = self.photons.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((key, map)) = cached.as_ref()
+            && *key == wanted
+        {
+            return (Some(map.clone()), 0);
+        }
+        let map = std::sync::Arc::new(PhotonMap::build(integrator, photons, radius, settings.seed));
+        let rays = map.rays;
+        *cached = Some((wanted, map.clone()));
+        (Some(map), rays)
     }
 
     fn render_tile(
@@ -294,6 +338,19 @@ fn check_settings(s: &TraceSettings) -> Result<(), TraceError> {
                 s.transport.background
             ),
         });
+    }
+    if let Caustics::Photons { photons, radius } = s.transport.caustics {
+        if !(1..=MAX_PHOTONS).contains(&photons) || !PHOTON_RADIUS.contains(&radius) {
+            return Err(TraceError::Settings {
+                field: "caustics",
+                message: format!(
+                    "expected 1 to {MAX_PHOTONS} photons and a radius of {} to {} m, got \
+                     {photons} photons, radius {radius}",
+                    PHOTON_RADIUS.start(),
+                    PHOTON_RADIUS.end()
+                ),
+            });
+        }
     }
     Ok(())
 }

@@ -1,5 +1,6 @@
-//! Correctness tests of the tracer on small images: furnace, mirror geometry, Fresnel,
-//! layer recombination, determinism, extreme inputs and bad input.
+//! Correctness tests of the tracer on small images: furnace, layer recombination,
+//! determinism, extreme inputs and bad input (reflective materials: `material_tests.rs`;
+//! caustics: `caustic_tests.rs`).
 
 use glam::{Vec2, Vec3};
 
@@ -7,7 +8,7 @@ use super::*;
 use crate::scene::{Camera, Mesh, Object, Orbit};
 
 /// UV sphere, outward normals, counter-clockwise seen from outside.
-fn sphere(center: Vec3, radius: f32, rings: u32, segments: u32) -> Mesh {
+pub(super) fn sphere(center: Vec3, radius: f32, rings: u32, segments: u32) -> Mesh {
     let mut m = Mesh::default();
     for r in 0..=rings {
         let theta = std::f32::consts::PI * r as f32 / rings as f32;
@@ -42,7 +43,7 @@ fn sphere(center: Vec3, radius: f32, rings: u32, segments: u32) -> Mesh {
 }
 
 /// Quad `corner + [0,1]·u + [0,1]·v`, facing `u × v`.
-fn quad(corner: Vec3, u: Vec3, v: Vec3) -> Mesh {
+pub(super) fn quad(corner: Vec3, u: Vec3, v: Vec3) -> Mesh {
     let n = u.cross(v).normalize();
     Mesh {
         positions: vec![corner, corner + u, corner + u + v, corner + v],
@@ -53,7 +54,7 @@ fn quad(corner: Vec3, u: Vec3, v: Vec3) -> Mesh {
 }
 
 /// A scene of `(name, mesh, material)` objects, camera on a 2 m orbit around the origin.
-fn scene(objects: Vec<(&str, Mesh, Material)>) -> Scene {
+pub(super) fn scene(objects: Vec<(&str, Mesh, Material)>) -> Scene {
     let mut s = Scene {
         name: "test".into(),
         source: "test.toml".into(),
@@ -89,16 +90,23 @@ fn scene(objects: Vec<(&str, Mesh, Material)>) -> Scene {
     s
 }
 
-fn small(spp: u32) -> TraceSettings {
-    TraceSettings {
+/// A small image; a small photon map keeps the caustic in the tests' images but not their
+/// time (the default map takes a large part of a 32×24 render).
+pub(super) fn small(spp: u32) -> TraceSettings {
+    let mut settings = TraceSettings {
         width: 32,
         height: 24,
         spp,
         ..TraceSettings::default()
-    }
+    };
+    settings.transport.caustics = Caustics::Photons {
+        photons: 20_000,
+        radius: 0.05,
+    };
+    settings
 }
 
-fn teapot() -> Scene {
+pub(super) fn teapot() -> Scene {
     Scene::load("teapot").expect("the teapot scene loads")
 }
 
@@ -113,7 +121,7 @@ fn assert_all_finite(image: &TraceImage) {
 }
 
 /// Mean of `f(x, y)` over pixels where `mask` ≥ `min_coverage`, and how many there were.
-fn mean_over(
+pub(super) fn mean_over(
     image: &TraceImage,
     mask: &str,
     min_coverage: f32,
@@ -167,81 +175,6 @@ fn furnace_diffuse_sphere_returns_its_albedo() {
     }
     // Outside the sphere the environment itself.
     assert!((beauty.get(32, 0, 0, 0) - 1.0).abs() < 1e-5);
-}
-
-#[test]
-fn mirror_rays_land_where_geometry_says() {
-    let mirror = Material::Mirror { f0: Vec3::ONE };
-    // Plane y = 0 (facing +y) and a sphere of radius 0.5 at (0, 2, 0).
-    let s = scene(vec![
-        (
-            "plane",
-            quad(
-                Vec3::new(-5.0, 0.0, 5.0),
-                Vec3::new(10.0, 0.0, 0.0),
-                Vec3::new(0.0, 0.0, -10.0),
-            ),
-            mirror.clone(),
-        ),
-        (
-            "ball",
-            sphere(Vec3::new(0.0, 2.0, 0.0), 0.5, 256, 512),
-            mirror,
-        ),
-    ]);
-    let bvh = SceneBvh::build(&s);
-    let integ = Integrator::new(&s, &bvh, Transport::default());
-
-    let (p, r) = integ
-        .reflect_once(
-            Vec3::new(-1.0, 1.0, 0.3),
-            Vec3::new(1.0, -1.0, 0.0).normalize(),
-        )
-        .expect("hits the plane");
-    assert!(p.abs_diff_eq(Vec3::new(0.0, 0.0, 0.3), 1e-5), "{p}");
-    assert!(
-        r.abs_diff_eq(Vec3::new(1.0, 1.0, 0.0).normalize(), 1e-5),
-        "{r}"
-    );
-
-    // Straight down onto the sphere's top: back up.
-    let (p, r) = integ
-        .reflect_once(Vec3::new(0.0, 4.0, 0.0), -Vec3::Y)
-        .expect("top");
-    assert!((p.y - 2.5).abs() < 1e-4, "{p}");
-    assert!(r.abs_diff_eq(Vec3::Y, 1e-3), "{r}");
-
-    // An off-axis ray: angle of incidence equals angle of reflection about (p − c)/R.
-    let c = Vec3::new(0.0, 2.0, 0.0);
-    let d = Vec3::new(0.2, 0.0, -1.0).normalize();
-    let (p, r) = integ
-        .reflect_once(Vec3::new(-0.6, 2.1, 3.0), d)
-        .expect("side");
-    let n = (p - c).normalize();
-    assert!(((p - c).length() - 0.5).abs() < 1e-3);
-    let expected = d - 2.0 * d.dot(n) * n;
-    assert!(r.abs_diff_eq(expected, 2e-3), "{r} vs {expected}");
-}
-
-#[test]
-fn dielectric_fresnel_is_f0_head_on_and_one_at_grazing() {
-    let f0 = ((1.5f32 - 1.0) / 2.5).powi(2);
-    let (f, t) = shading_dielectric(1.5, 1.0, true);
-    assert!((f - f0).abs() < 1e-6 && t.is_some());
-    let (f, _) = shading_dielectric(1.5, std::f32::consts::FRAC_PI_2.cos(), true);
-    assert!((f - 1.0).abs() < 1e-5);
-    let (f, _) = shading_dielectric(1.5, 0.0, true);
-    assert_eq!(f, 1.0);
-    // Inside, beyond the critical angle: total internal reflection.
-    assert_eq!(shading_dielectric(1.5, 0.3, false), (1.0, None));
-    for e in [f32::NAN, 0.0, -1.0, f32::INFINITY] {
-        assert!(shading_dielectric(e, 0.5, true).0.is_finite());
-    }
-    assert!(shading::phong_exponent(0.0).is_finite() && shading::phong_exponent(1.0) >= 1.0);
-}
-
-fn shading_dielectric(ior: f32, cos: f32, front: bool) -> (f32, Option<f32>) {
-    shading::dielectric_for_tests(ior, cos, front)
 }
 
 #[test]
@@ -343,7 +276,8 @@ fn identical_at_any_thread_count() {
     settings.threads = Some(1);
     let one = tracer.render(eye, &settings).expect("1 thread");
     settings.threads = Some(3);
-    let three = tracer.render(eye, &settings).expect("3 threads");
+    // A tracer of its own, so its photon map is built with 3 threads too.
+    let three = Tracer::new(&s).expect("valid").render(eye, &settings).expect("3 threads");
     assert_eq!(one.rays, three.rays);
     assert_eq!(one.layers, three.layers, "bit-identical layers");
     settings.seed = 1;
@@ -499,6 +433,22 @@ fn cache_key_follows_what_determines_the_image() {
         ["lights"],
         "a stale image names what changed"
     );
+    for caustics in [
+        Caustics::Off,
+        Caustics::Paths,
+        Caustics::Photons {
+            photons: 20_001,
+            radius: 0.05,
+        },
+        Caustics::Photons {
+            photons: 20_000,
+            radius: 0.051,
+        },
+    ] {
+        let mut other = base.clone();
+        other.transport.caustics = caustics;
+        assert_ne!(k, cache::key(&s, eye, &other), "{caustics:?}");
+    }
 }
 
 #[test]
@@ -522,100 +472,4 @@ fn primary_rays_match_the_projection() {
     let closest = o + d * (p - o).dot(d);
     assert!(closest.distance(p) < 1e-4, "{}", closest.distance(p));
     assert!((d.length() - 1.0).abs() < 1e-5);
-}
-
-#[test]
-fn axis_aligned_rays_hit_even_with_negative_zero_components() {
-    // Rays parallel to box faces, with −0.0 components as `-Vec3::Y` has.
-    let s = scene(vec![(
-        "plane",
-        quad(
-            Vec3::new(-5.0, 0.0, 5.0),
-            Vec3::new(10.0, 0.0, 0.0),
-            Vec3::new(0.0, 0.0, -10.0),
-        ),
-        Material::Mirror { f0: Vec3::ONE },
-    )]);
-    let bvh = SceneBvh::build(&s);
-    for d in [
-        Vec3::new(0.0, -1.0, 0.0),
-        -Vec3::Y,
-        Vec3::new(-0.0, -1.0, 0.0),
-    ] {
-        for o in [Vec3::new(0.001, 4.0, 0.0013), Vec3::new(0.5, 4.0, 0.7)] {
-            let hit = bvh.closest(o, d, 0.0, f32::INFINITY, None);
-            assert!(hit.is_some_and(|h| (h.t - 4.0).abs() < 1e-5), "{o} {d}");
-            assert!(bvh.occluded(o, d, 0.0, 10.0), "{o} {d}");
-        }
-    }
-}
-
-/// Mean of `layer` channel `c` over pixels fully covered by object `object`.
-fn covered_mean(image: &TraceImage, object: &str, layer: &str, c: usize) -> f32 {
-    let l = image.layer(layer).expect("layer");
-    let (mean, n) = mean_over(image, &format!("{object}.mask"), 1.0, |x, y| {
-        l.get(image.width, x, y, c)
-    });
-    assert!(n > 50, "{object} covers the frame centre ({n} pixels)");
-    mean
-}
-
-#[test]
-fn lossless_specular_materials_conserve_a_uniform_environment() {
-    // In a white furnace, F0 = 1 glossy and clear glass neither gain nor lose energy.
-    for material in [
-        Material::Glossy {
-            f0: Vec3::ONE,
-            roughness: 0.5,
-        },
-        Material::Glass {
-            ior: 1.5,
-            absorption: Vec3::ZERO,
-        },
-    ] {
-        let s = scene(vec![(
-            "ball",
-            sphere(Vec3::ZERO, 0.5, 48, 96),
-            material.clone(),
-        )]);
-        let tracer = Tracer::new(&s).expect("valid");
-        let mut settings = small(8);
-        settings.transport.background = Vec3::ONE;
-        let image = tracer
-            .render(s.orbit.eye(0.0, 0.0), &settings)
-            .expect("render");
-        let b = covered_mean(&image, "ball", "beauty", 1);
-        assert!((b - 1.0).abs() < 0.02, "{material:?}: {b}");
-    }
-}
-
-#[test]
-fn glass_absorbs_per_channel_and_its_layers_recombine() {
-    let s = scene(vec![(
-        "ball",
-        sphere(Vec3::ZERO, 0.5, 48, 96),
-        Material::Glass {
-            ior: 1.5,
-            absorption: Vec3::new(0.0, 1.0, 4.0),
-        },
-    )]);
-    let tracer = Tracer::new(&s).expect("valid");
-    let names = tracer.layer_names();
-    assert!(names.iter().any(|n| n == "ball.transmission"), "{names:?}");
-    let mut settings = small(8);
-    settings.transport.background = Vec3::ONE;
-    let image = tracer
-        .render(s.orbit.eye(0.0, 0.0), &settings)
-        .expect("render");
-    let [r, g, b] = [0, 1, 2].map(|c| covered_mean(&image, "ball", "beauty", c));
-    assert!(r > 0.97 && g < r && b < g, "{r} {g} {b}");
-    // A sphere never reflects itself: beauty = F·distant + transmission per pixel.
-    let get = |l: &str, x, y, c| image.layer(l).expect(l).get(32, x, y, c);
-    let (err, _) = mean_over(&image, "ball.mask", 1.0, |x, y| {
-        assert_eq!(get("ball.specular_local", x, y, 3), 0.0);
-        let recombined = get("ball.fresnel", x, y, 2) * get("ball.specular_distant", x, y, 2)
-            + get("ball.transmission", x, y, 2);
-        (recombined - get("beauty", x, y, 2)).abs()
-    });
-    assert!(err < 1e-3, "{err}");
 }
