@@ -73,6 +73,39 @@ pub fn create_device(options: &DeviceOptions) -> GpuResult<Device> {
     // SAFETY: loading the system Vulkan loader library; its entry points are
     // only called through ash's checked wrappers below.
     let entry = unsafe { ash::Entry::load()? };
+    let (instance, has_debug_utils) = create_instance(&entry, options)?;
+    let debug_instance = if options.validate && has_debug_utils {
+        let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
+        // SAFETY: the instance enables VK_EXT_debug_utils; the callback is a
+        // plain function with no user data.
+        let messenger =
+            unsafe { loader.create_debug_utils_messenger(&validation::messenger_info(), None) }
+                .vk("vkCreateDebugUtilsMessengerEXT")?;
+        Some((loader, messenger))
+    } else {
+        None
+    };
+    match pick_and_create(&instance, options) {
+        Ok(picked) => shared(entry, instance, picked, has_debug_utils, debug_instance),
+        Err(e) => {
+            // SAFETY: nothing else was created from this instance.
+            unsafe {
+                if let Some((loader, messenger)) = debug_instance {
+                    loader.destroy_debug_utils_messenger(messenger, None);
+                }
+                instance.destroy_instance(None);
+            }
+            Err(e)
+        }
+    }
+}
+
+/// The instance, with the validation layer (and synchronization
+/// validation) when asked for; whether debug utils are available.
+fn create_instance(
+    entry: &ash::Entry,
+    options: &DeviceOptions,
+) -> GpuResult<(ash::Instance, bool)> {
     // SAFETY: plain enumeration calls on a freshly loaded entry.
     let (layers, extensions) = unsafe {
         (
@@ -91,7 +124,6 @@ pub fn create_device(options: &DeviceOptions) -> GpuResult<Device> {
     if options.validate && !has_layer(VALIDATION_LAYER) {
         return Err(GpuError::NoValidationLayer);
     }
-
     let app_info = vk::ApplicationInfo::default()
         .application_name(c"engine")
         .api_version(vk::API_VERSION_1_3);
@@ -119,71 +151,52 @@ pub fn create_device(options: &DeviceOptions) -> GpuResult<Device> {
             .push_next(&mut messenger_info);
     }
     // SAFETY: all pointers in instance_info borrow locals alive for the call.
-    let instance = match unsafe { entry.create_instance(&instance_info, None) } {
+    match unsafe { entry.create_instance(&instance_info, None) } {
         // The loader's answer when no driver (ICD) is installed at all.
-        Err(vk::Result::ERROR_INCOMPATIBLE_DRIVER) => {
-            return Err(GpuError::NoDevice(
-                " (the Vulkan loader found no driver)".into(),
-            ));
-        }
-        other => other.vk("vkCreateInstance")?,
-    };
-
-    let debug_instance = if options.validate && has_debug_utils {
-        let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
-        // SAFETY: the instance enables VK_EXT_debug_utils; the callback is a
-        // plain function with no user data.
-        let messenger =
-            unsafe { loader.create_debug_utils_messenger(&validation::messenger_info(), None) }
-                .vk("vkCreateDebugUtilsMessengerEXT")?;
-        Some((loader, messenger))
-    } else {
-        None
-    };
-
-    match pick_and_create(&instance, options) {
-        Ok((physical, device, queue_family, properties, name)) => {
-            let allocator = Allocator::new(&AllocatorCreateDesc {
-                instance: instance.clone(),
-                device: device.clone(),
-                physical_device: physical,
-                debug_settings: Default::default(),
-                buffer_device_address: false,
-                allocation_sizes: Default::default(),
-            })
-            .map_err(|source| GpuError::Allocation {
-                name: "allocator".into(),
-                source,
-            })?;
-            // SAFETY: the queue family and index 0 were requested at creation.
-            let queue = unsafe { device.get_device_queue(queue_family, 0) };
-            let debug_utils =
-                has_debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
-            Ok(Arc::new(DeviceShared {
-                _entry: entry,
-                instance,
-                physical,
-                device,
-                queue,
-                queue_family,
-                properties,
-                name,
-                debug_utils,
-                debug_instance,
-                allocator: ManuallyDrop::new(Mutex::new(allocator)),
-            }))
-        }
-        Err(e) => {
-            // SAFETY: nothing else was created from this instance.
-            unsafe {
-                if let Some((loader, messenger)) = debug_instance {
-                    loader.destroy_debug_utils_messenger(messenger, None);
-                }
-                instance.destroy_instance(None);
-            }
-            Err(e)
-        }
+        Err(vk::Result::ERROR_INCOMPATIBLE_DRIVER) => Err(GpuError::NoDevice(
+            " (the Vulkan loader found no driver)".into(),
+        )),
+        other => Ok((other.vk("vkCreateInstance")?, has_debug_utils)),
     }
+}
+
+/// The device's shared state around the picked device: allocator, queue.
+fn shared(
+    entry: ash::Entry,
+    instance: ash::Instance,
+    (physical, device, queue_family, properties, name): Picked,
+    has_debug_utils: bool,
+    debug_instance: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+) -> GpuResult<Device> {
+    let allocator = Allocator::new(&AllocatorCreateDesc {
+        instance: instance.clone(),
+        device: device.clone(),
+        physical_device: physical,
+        debug_settings: Default::default(),
+        buffer_device_address: false,
+        allocation_sizes: Default::default(),
+    })
+    .map_err(|source| GpuError::Allocation {
+        name: "allocator".into(),
+        source,
+    })?;
+    // SAFETY: the queue family and index 0 were requested at creation.
+    let queue = unsafe { device.get_device_queue(queue_family, 0) };
+    let debug_utils =
+        has_debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
+    Ok(Arc::new(DeviceShared {
+        _entry: entry,
+        instance,
+        physical,
+        device,
+        queue,
+        queue_family,
+        properties,
+        name,
+        debug_utils,
+        debug_instance,
+        allocator: ManuallyDrop::new(Mutex::new(allocator)),
+    }))
 }
 
 type Picked = (

@@ -125,8 +125,16 @@ impl Image {
             target_views: Vec::new(),
             allocation: None,
         };
-        // SAFETY: `raw` was just created on this device.
-        let requirements = unsafe { device.device.get_image_memory_requirements(raw) };
+        image.bind_memory(name)?;
+        image.make_views()?;
+        Ok(image)
+    }
+
+    /// Allocates device memory for the image and binds it.
+    fn bind_memory(&mut self, name: &str) -> GpuResult<()> {
+        let device = &self.device;
+        // SAFETY: `raw` was created on this device and has no memory yet.
+        let requirements = unsafe { device.device.get_image_memory_requirements(self.raw) };
         let allocation = device
             .allocator()
             .allocate(&AllocationCreateDesc {
@@ -144,17 +152,23 @@ impl Image {
         unsafe {
             device
                 .device
-                .bind_image_memory(raw, allocation.memory(), allocation.offset())
+                .bind_image_memory(self.raw, allocation.memory(), allocation.offset())
         }
         .vk("vkBindImageMemory")?;
-        image.allocation = Some(allocation);
+        self.allocation = Some(allocation);
+        Ok(())
+    }
 
+    /// The sampling view over everything, and one 2D view per level and
+    /// layer for images that are rendered to.
+    fn make_views(&mut self) -> GpuResult<()> {
+        let desc = self.desc;
         let view_type = match desc.kind {
             ImageKind::D1 => vk::ImageViewType::TYPE_1D,
             ImageKind::D2 => vk::ImageViewType::TYPE_2D,
             ImageKind::Cube => vk::ImageViewType::CUBE,
         };
-        image.view = image.create_view(view_type, desc.full_range())?;
+        self.view = self.create_view(view_type, desc.full_range())?;
         let wants_targets = desc.usage.intersects(
             vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
         );
@@ -168,12 +182,12 @@ impl Image {
                         base_array_layer: layer,
                         layer_count: 1,
                     };
-                    let view = image.create_view(vk::ImageViewType::TYPE_2D, range)?;
-                    image.target_views.push(view);
+                    let view = self.create_view(vk::ImageViewType::TYPE_2D, range)?;
+                    self.target_views.push(view);
                 }
             }
         }
-        Ok(image)
+        Ok(())
     }
 
     fn create_view(

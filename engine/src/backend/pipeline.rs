@@ -61,7 +61,15 @@ impl Pipeline {
             pool: vk::DescriptorPool::null(),
             push_constant_size: desc.push_constant_size,
         };
-        let d = &device.device;
+        pipeline.make_layouts(desc)?;
+        pipeline.make_pipeline(desc)?;
+        Ok(pipeline)
+    }
+
+    /// The descriptor set layout (one binding per `desc.bindings`, fragment
+    /// stage), its pool and the pipeline layout with the push constants.
+    fn make_layouts(&mut self, desc: &PipelineDesc) -> GpuResult<()> {
+        let d = &self.device.device;
         let bindings: Vec<_> = desc
             .bindings
             .iter()
@@ -75,9 +83,9 @@ impl Pipeline {
             })
             .collect();
         // SAFETY (this block): each handle is created on this device and
-        // stored in `pipeline` at once, so Drop destroys whatever was made.
+        // stored in `self` at once, so Drop destroys whatever was made.
         unsafe {
-            pipeline.set_layout = d
+            self.set_layout = d
                 .create_descriptor_set_layout(
                     &vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings),
                     None,
@@ -92,7 +100,7 @@ impl Pipeline {
                         descriptor_count: MAX_SETS,
                     })
                     .collect();
-                pipeline.pool = d
+                self.pool = d
                     .create_descriptor_pool(
                         &vk::DescriptorPoolCreateInfo::default()
                             .max_sets(MAX_SETS)
@@ -106,29 +114,40 @@ impl Pipeline {
                 offset: 0,
                 size: desc.push_constant_size,
             }];
-            let set_layouts = [pipeline.set_layout];
+            let set_layouts = [self.set_layout];
             let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
             if desc.push_constant_size > 0 {
                 layout_info = layout_info.push_constant_ranges(&ranges);
             }
-            pipeline.layout = d
+            self.layout = d
                 .create_pipeline_layout(&layout_info, None)
                 .vk("vkCreatePipelineLayout")?;
+        }
+        Ok(())
+    }
 
-            let vertex = shader_module(device, desc.vertex_spirv, desc.name)?;
-            let fragment = match shader_module(device, desc.fragment_spirv, desc.name) {
-                Ok(m) => m,
-                Err(e) => {
-                    d.destroy_shader_module(vertex, None);
-                    return Err(e);
-                }
-            };
-            let result = create_graphics_pipeline(d, desc, pipeline.layout, vertex, fragment);
+    /// The graphics pipeline from the shaders of `desc` (modules destroyed
+    /// again whatever happens).
+    fn make_pipeline(&mut self, desc: &PipelineDesc) -> GpuResult<()> {
+        let d = &self.device.device;
+        let vertex = shader_module(&self.device, desc.vertex_spirv, desc.name)?;
+        let fragment = match shader_module(&self.device, desc.fragment_spirv, desc.name) {
+            Ok(m) => m,
+            Err(e) => {
+                // SAFETY: the module was made above and is used by nothing.
+                unsafe { d.destroy_shader_module(vertex, None) };
+                return Err(e);
+            }
+        };
+        // SAFETY: layout and modules were made on this device and are alive.
+        let result = unsafe { create_graphics_pipeline(d, desc, self.layout, vertex, fragment) };
+        // SAFETY: pipeline creation has returned; modules are no longer needed.
+        unsafe {
             d.destroy_shader_module(vertex, None);
             d.destroy_shader_module(fragment, None);
-            pipeline.raw = result?;
         }
-        Ok(pipeline)
+        self.raw = result?;
+        Ok(())
     }
 
     /// A descriptor set binding `resources[i]` at binding i.

@@ -63,94 +63,147 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
         .name
         .clone();
     let views = views(&scene, opts.views, opts.elevation);
-    let (width, height) = place.size;
-    // The gold standard of every view (traced once, cached).
-    let settings = TraceSettings {
-        width,
-        height,
-        spp: opts.spp,
-        progress: true,
-        ..TraceSettings::default()
+    let references = references(&scene, &views, place.size, opts.spp, &out, &reflector)?;
+    let run = RowRun {
+        views: &views,
+        references: &references,
+        repeats: opts.repeats,
+        reflector: &reflector,
     };
-    let tracing = References::new(&scene, &out.join("reference"), settings)?;
-    let references = views
-        .iter()
-        .map(|v| tracing.get(RefView::new(v.azimuth_deg, v.elevation_deg), &reflector))
-        .collect::<Result<Vec<_>>>()?;
     let ctx = compile_context(place, &scene, &data);
-    let mut table_rows = Vec::new();
-    let mut pictures: Vec<(String, Vec<[f32; 4]>)> = Vec::new();
     let progress = indicatif::ProgressBar::new((rows.len() * views.len()) as u64).with_style(
         indicatif::ProgressStyle::with_template("eval {msg} [{bar:30}] {pos}/{len} {elapsed}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    let mut skipped = Vec::new();
-    let above = views.iter().position(|v| v.category == Category::Above);
+    let (mut table_rows, mut pictures, mut skipped) = (Vec::new(), Vec::new(), Vec::new());
     for row in &rows {
         progress.set_message(row.label.clone());
         let mut source = match setup_mode(&ctx, &mut renderer, row.mode, &row.pem, row.trace_spp) {
             Ok(s) => s,
             Err(e) => {
-                // A row whose maps cannot be made (e.g. sphere PEMs not
-                // inferred) is reported, not fatal.
+                // A row whose maps cannot be made is reported, not fatal.
                 skipped.push(format!("{}: {e:#}", row.label));
                 progress.inc(views.len() as u64);
                 continue;
             }
         };
-        let mut results = Vec::new();
-        for (i, (view, reference)) in views.iter().zip(&references).enumerate() {
-            let (result, pixels) = measure(
-                &mut source,
-                &mut renderer,
-                &scene,
-                view,
-                reference,
-                opts.repeats,
-                &reflector,
-            )?;
-            results.push(result);
-            if Some(i) == above && !row.label.contains(' ') {
-                pictures.push((row.label.clone(), pixels));
-            }
-            progress.inc(1);
+        let (results, picture) = run.measure_row(&mut source, &mut renderer, &scene, &progress)?;
+        if !row.label.contains(' ') {
+            pictures.extend(picture.map(|p| (row.label.clone(), p)));
         }
         table_rows.push(table_row(row, &results, opts.views));
     }
     progress.finish_and_clear();
     let table = EvalTable { rows: table_rows };
-    let json_path = out.join("eval.json");
-    table.write(&json_path)?;
-    let plot_path = out.join("tradeoff.png");
     let title = format!(
-        "Speed against accuracy, {} {width}x{height} ({})",
-        scene.name, device.name
+        "Speed against accuracy, {} {}x{} ({})",
+        scene.name, place.size.0, place.size.1, device.name
     );
-    tradeoff_chart(&plot_path, &table, &title)?;
-    if let Some(above) = above {
-        pictures.push(("gold (traced)".into(), references[above].beauty.clone()));
-        side_by_side(
-            &out.join("modes_above.png"),
-            &pictures,
-            &references[above].mask,
-            width,
-            height,
-        )?;
-    }
+    let written = write_outputs(&out, &table, &title, &run, pictures, place.size)?;
     let mut text = format!(
-        "{} | {} {width}x{height} | {} views per category, above = +{}°, reference {} spp\n",
-        device.name, scene.name, opts.views, opts.elevation, opts.spp
+        "{} | {} {}x{} | {} views per category, above = +{}°, reference {} spp\n",
+        device.name, scene.name, place.size.0, place.size.1, opts.views, opts.elevation, opts.spp
     );
     text += &table.to_markdown();
     for s in &skipped {
         text += &format!("skipped {s}\n");
     }
-    text += &format!(
+    Ok(text + &written)
+}
+
+/// The traced gold standard of every view (traced once, cached under
+/// `out/reference`).
+fn references(
+    scene: &inference::scene::Scene,
+    views: &[View],
+    (width, height): (u32, u32),
+    spp: u32,
+    out: &std::path::Path,
+    reflector: &str,
+) -> Result<Vec<ReferenceImage>> {
+    let settings = TraceSettings {
+        width,
+        height,
+        spp,
+        progress: true,
+        ..TraceSettings::default()
+    };
+    let tracing = References::new(scene, &out.join("reference"), settings)?;
+    views
+        .iter()
+        .map(|v| tracing.get(RefView::new(v.azimuth_deg, v.elevation_deg), reflector))
+        .collect()
+}
+
+/// eval.json, the chart and the side-by-side picture; returns what it says.
+fn write_outputs(
+    out: &std::path::Path,
+    table: &EvalTable,
+    title: &str,
+    run: &RowRun,
+    mut pictures: Vec<(String, Vec<[f32; 4]>)>,
+    (width, height): (u32, u32),
+) -> Result<String> {
+    let json_path = out.join("eval.json");
+    table.write(&json_path)?;
+    let plot_path = out.join("tradeoff.png");
+    tradeoff_chart(&plot_path, table, title)?;
+    if let Some(above) = run.above() {
+        pictures.push(("gold (traced)".into(), run.references[above].beauty.clone()));
+        let mask = &run.references[above].mask;
+        side_by_side(&out.join("modes_above.png"), &pictures, mask, width, height)?;
+    }
+    Ok(format!(
         "wrote {} and {}\n",
         json_path.display(),
         plot_path.display()
-    );
-    Ok(text)
+    ))
+}
+
+/// What every row is measured on.
+struct RowRun<'a> {
+    views: &'a [View],
+    references: &'a [ReferenceImage],
+    repeats: u32,
+    reflector: &'a str,
+}
+
+impl RowRun<'_> {
+    /// The first view above the plane (the side-by-side picture's).
+    fn above(&self) -> Option<usize> {
+        self.views
+            .iter()
+            .position(|v| v.category == Category::Above)
+    }
+
+    /// One row on every view; with its frame of the first view above.
+    fn measure_row(
+        &self,
+        source: &mut FrameSource,
+        renderer: &mut crate::renderer::Renderer,
+        scene: &inference::scene::Scene,
+        progress: &indicatif::ProgressBar,
+    ) -> Result<(Vec<ViewResult>, Option<Vec<[f32; 4]>>)> {
+        let mut results = Vec::new();
+        let mut picture = None;
+        for (i, (view, reference)) in self.views.iter().zip(self.references).enumerate() {
+            let (result, pixels) = measure(
+                source,
+                renderer,
+                scene,
+                view,
+                reference,
+                self.repeats,
+                self.reflector,
+            )?;
+            results.push(result);
+            if Some(i) == self.above() {
+                picture = Some(pixels);
+            }
+            progress.inc(1);
+        }
+        Ok((results, picture))
+    }
 }
 
 /// The rows whose labels are in `wanted` (all when empty).

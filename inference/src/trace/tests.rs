@@ -277,7 +277,10 @@ fn identical_at_any_thread_count() {
     let one = tracer.render(eye, &settings).expect("1 thread");
     settings.threads = Some(3);
     // A tracer of its own, so its photon map is built with 3 threads too.
-    let three = Tracer::new(&s).expect("valid").render(eye, &settings).expect("3 threads");
+    let three = Tracer::new(&s)
+        .expect("valid")
+        .render(eye, &settings)
+        .expect("3 threads");
     assert_eq!(one.rays, three.rays);
     assert_eq!(one.layers, three.layers, "bit-identical layers");
     settings.seed = 1;
