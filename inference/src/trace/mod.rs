@@ -145,8 +145,11 @@ pub struct Tracer<'a> {
     /// The last photon map and what it was built from (transport, seed):
     /// it does not depend on the view, so views with the same settings
     /// share it (`trace --all`, eval references, inference targets).
-    photons: std::sync::Mutex<Option<((Transport, u64), std::sync::Arc<PhotonMap>)>>,
+    photons: std::sync::Mutex<Option<SharedPhotons>>,
 }
+
+/// A photon map and the (transport, seed) it was built with.
+type SharedPhotons = ((Transport, u64), std::sync::Arc<PhotonMap>);
 
 impl<'a> Tracer<'a> {
     /// Checks that the tracer can render `scene`, then builds its BVH.
