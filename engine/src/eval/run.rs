@@ -160,6 +160,9 @@ fn write_outputs(
     ))
 }
 
+/// A frame's linear RGBA pixels.
+type Pixels = Vec<[f32; 4]>;
+
 /// What every row is measured on.
 struct RowRun<'a> {
     views: &'a [View],
@@ -183,7 +186,7 @@ impl RowRun<'_> {
         renderer: &mut crate::renderer::Renderer,
         scene: &inference::scene::Scene,
         progress: &indicatif::ProgressBar,
-    ) -> Result<(Vec<ViewResult>, Option<Vec<[f32; 4]>>)> {
+    ) -> Result<(Vec<ViewResult>, Option<Pixels>)> {
         let mut results = Vec::new();
         let mut picture = None;
         for (i, (view, reference)) in self.views.iter().zip(self.references).enumerate() {
