@@ -117,17 +117,46 @@ pub fn parse_map(
             path: path.to_owned(),
             cause,
         })?;
-    let shape = |what: String, expected: String| MapError::Shape {
-        path: path.to_owned(),
-        what,
-        expected,
+    let reading = Reading {
+        path,
+        layout,
+        channels,
     };
-    let faces = layout.faces();
     let mut map = vec![vec![0.0f32; layout.len()]; channels];
     for level in 0..layout.levels() {
+        let part = reading.level_part(&image.layer_data, level)?;
+        for (c, out) in map.iter_mut().enumerate() {
+            reading.copy_channel(part, level, c, out)?;
+        }
+    }
+    Ok(map)
+}
+
+/// One EXR part (a MIP level) with its channels as read.
+type Part = Layer<AnyChannels<FlatSamples>>;
+
+/// A map being read: the file (named in errors), and the layout and
+/// channel count it must have.
+struct Reading<'a> {
+    path: &'a Path,
+    layout: &'a TextureLayout,
+    channels: usize,
+}
+
+impl Reading<'_> {
+    fn shape(&self, what: String, expected: String) -> MapError {
+        MapError::Shape {
+            path: self.path.to_owned(),
+            what,
+            expected,
+        }
+    }
+
+    /// The part named `mip<level>`, checked to hold the level's faces side
+    /// by side.
+    fn level_part<'i>(&self, parts: &'i [Part], level: u32) -> Result<&'i Part, MapError> {
         let name = format!("mip{level}");
-        let layer = image
-            .layer_data
+        let part = parts
             .iter()
             .find(|l| {
                 l.attributes
@@ -138,48 +167,61 @@ pub fn parse_map(
                     == Some(name.as_str())
             })
             .ok_or_else(|| {
-                shape(
+                self.shape(
                     format!("no part {name}"),
-                    format!("{} MIP levels", layout.levels()),
+                    format!("{} MIP levels", self.layout.levels()),
                 )
             })?;
-        let (w, h) = layout.level_size(level);
-        if layer.size != Vec2((w * faces) as usize, h as usize) {
-            return Err(shape(
-                format!("part {name} is {}x{}", layer.size.0, layer.size.1),
+        let (w, h) = self.layout.level_size(level);
+        let faces = self.layout.faces();
+        if part.size != Vec2((w * faces) as usize, h as usize) {
+            return Err(self.shape(
+                format!("part {name} is {}x{}", part.size.0, part.size.1),
                 format!("{}x{h}", w * faces),
             ));
         }
-        for (c, out) in map.iter_mut().enumerate() {
-            let channel = layer
-                .channel_data
-                .list
-                .iter()
-                .find(|ch| ch.name.to_string() == CHANNELS[c])
-                .ok_or_else(|| {
-                    shape(
-                        format!("part {name} has no channel {}", CHANNELS[c]),
-                        format!("{channels} channels"),
-                    )
-                })?;
-            let values: Vec<f32> = channel.sample_data.values_as_f32().collect();
-            for y in 0..h {
-                for face in 0..faces {
-                    for x in 0..w {
-                        let v = values[((y * faces + face) * w + x) as usize];
-                        if !v.is_finite() {
-                            return Err(shape(
-                                format!("part {name} holds {v}"),
-                                "finite values".into(),
-                            ));
-                        }
-                        out[layout.index(face, level, x, y)] = v;
+        Ok(part)
+    }
+
+    /// Copies channel `c` (R, G, B, A) of MIP `level`'s part into `out`, in
+    /// layout order; every value must be finite.
+    fn copy_channel(
+        &self,
+        part: &Part,
+        level: u32,
+        c: usize,
+        out: &mut [f32],
+    ) -> Result<(), MapError> {
+        let name = format!("mip{level}");
+        let channel = part
+            .channel_data
+            .list
+            .iter()
+            .find(|ch| ch.name.to_string() == CHANNELS[c])
+            .ok_or_else(|| {
+                self.shape(
+                    format!("part {name} has no channel {}", CHANNELS[c]),
+                    format!("{} channels", self.channels),
+                )
+            })?;
+        let values: Vec<f32> = channel.sample_data.values_as_f32().collect();
+        let (w, h) = self.layout.level_size(level);
+        let faces = self.layout.faces();
+        for y in 0..h {
+            for face in 0..faces {
+                for x in 0..w {
+                    let v = values[((y * faces + face) * w + x) as usize];
+                    if !v.is_finite() {
+                        return Err(
+                            self.shape(format!("part {name} holds {v}"), "finite values".into())
+                        );
                     }
+                    out[self.layout.index(face, level, x, y)] = v;
                 }
             }
         }
+        Ok(())
     }
-    Ok(map)
 }
 
 #[cfg(test)]

@@ -5,7 +5,7 @@
 //! says "done", the residual is recomputed and CG restarts from there if
 //! drift fooled it. Every loop is bounded by `max_iterations`.
 
-use super::operator::Operator;
+use super::operator::{Operator, Scratch};
 use super::vecops::{cg_update, dot, for_each_mut, norm};
 
 pub(crate) struct CgOutcome {
@@ -25,36 +25,21 @@ pub(crate) fn pcg(
     tolerance: f64,
     max_iterations: u32,
 ) -> CgOutcome {
-    let n = rhs.len();
     let rhs_norm = norm(rhs);
-    // Non-positive diagonal entries (columns nothing touches) get 1: those
-    // residual components stay zero, so the value only has to be finite.
-    let inv_diag: Vec<f64> = (0..n)
-        .map(|i| {
-            let d = op.diag[i] + extra.map_or(0.0, |e| e[i]);
-            if d > 0.0 && d.is_finite() {
-                1.0 / d
-            } else {
-                1.0
-            }
-        })
-        .collect();
-    let mut scratch = op.scratch();
-    let (mut r, mut z, mut p, mut q) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    let mut iterations = 0u32;
     let target = tolerance * rhs_norm;
-    loop {
-        // True residual r = rhs − M x.
-        op.apply(x, &mut q, &mut scratch, extra);
-        for_each_mut(&mut r, |i, v| *v = rhs[i] - q[i]);
-        let r_norm = norm(&r);
-        let rel = if rhs_norm > 0.0 {
+    let relative = |r_norm: f64| {
+        if rhs_norm > 0.0 {
             r_norm / rhs_norm
         } else {
             r_norm
-        };
+        }
+    };
+    let mut cg = Cg::new(op, extra, rhs);
+    loop {
+        let r_norm = cg.true_residual(x);
+        let rel = relative(r_norm);
         let done = |converged, diagnostic| CgOutcome {
-            iterations,
+            iterations: cg.iterations,
             relative_residual: rel,
             converged,
             diagnostic,
@@ -65,7 +50,7 @@ pub(crate) fn pcg(
         if r_norm <= target || (rhs_norm == 0.0 && r_norm == 0.0) {
             return done(true, None);
         }
-        if iterations >= max_iterations {
+        if cg.iterations >= max_iterations {
             return done(
                 false,
                 Some(format!(
@@ -73,46 +58,117 @@ pub(crate) fn pcg(
                 )),
             );
         }
-        for_each_mut(&mut z, |i, v| *v = r[i] * inv_diag[i]);
-        p.copy_from_slice(&z);
-        let mut rz = dot(&r, &z);
-        let mut breakdown = None;
-        while iterations < max_iterations {
-            op.apply(&p, &mut q, &mut scratch, extra);
-            let pq = dot(&p, &q);
+        if let Err(breakdown) = cg.run(x, target, max_iterations) {
+            let r_norm = cg.true_residual(x);
+            return CgOutcome {
+                iterations: cg.iterations,
+                relative_residual: relative(r_norm),
+                converged: r_norm <= target,
+                diagnostic: Some(breakdown),
+            };
+        }
+    }
+}
+
+/// The operator, its Jacobi preconditioner and the CG vectors, kept across
+/// restarts.
+struct Cg<'a> {
+    op: &'a Operator<'a>,
+    extra: Option<&'a [f64]>,
+    rhs: &'a [f64],
+    /// 1 / diag(M + diag(extra)).
+    inv_diag: Vec<f64>,
+    scratch: Scratch,
+    /// Residual, preconditioned residual, search direction, M p.
+    r: Vec<f64>,
+    z: Vec<f64>,
+    p: Vec<f64>,
+    q: Vec<f64>,
+    /// Iterations so far, over all restarts.
+    iterations: u32,
+}
+
+impl<'a> Cg<'a> {
+    fn new(op: &'a Operator<'a>, extra: Option<&'a [f64]>, rhs: &'a [f64]) -> Self {
+        let n = rhs.len();
+        Self {
+            op,
+            extra,
+            rhs,
+            inv_diag: jacobi_inverse(op, extra, n),
+            scratch: op.scratch(),
+            r: vec![0.0; n],
+            z: vec![0.0; n],
+            p: vec![0.0; n],
+            q: vec![0.0; n],
+            iterations: 0,
+        }
+    }
+
+    /// r = rhs − (M + diag(extra)) x; returns ‖r‖.
+    fn true_residual(&mut self, x: &[f64]) -> f64 {
+        self.op.apply(x, &mut self.q, &mut self.scratch, self.extra);
+        let (rhs, q) = (self.rhs, &self.q);
+        for_each_mut(&mut self.r, |i, v| *v = rhs[i] - q[i]);
+        norm(&self.r)
+    }
+
+    /// CG from `x` and its residual in `r` until the recurrence's residual
+    /// reaches `target` or `max_iterations` is spent. Errs with a message
+    /// if the operator breaks down (pᵀMp not positive and finite).
+    fn run(&mut self, x: &mut [f64], target: f64, max_iterations: u32) -> Result<(), String> {
+        let inv_diag = &self.inv_diag;
+        let r = &self.r;
+        for_each_mut(&mut self.z, |i, v| *v = r[i] * inv_diag[i]);
+        self.p.copy_from_slice(&self.z);
+        let mut rz = dot(&self.r, &self.z);
+        while self.iterations < max_iterations {
+            self.op
+                .apply(&self.p, &mut self.q, &mut self.scratch, self.extra);
+            let pq = dot(&self.p, &self.q);
             // pᵀMp ≤ 0 means M is not positive definite along p (singular A
             // with ε_f = 0, or rounding): stop rather than divide by it.
             if !(pq > 0.0 && pq.is_finite() && rz.is_finite()) {
-                breakdown = Some(format!(
-                    "CG breakdown at iteration {iterations}: pᵀMp = {pq:.3e} (operator singular or ill-conditioned)"
+                return Err(format!(
+                    "CG breakdown at iteration {}: pᵀMp = {pq:.3e} (operator singular or ill-conditioned)",
+                    self.iterations
                 ));
-                break;
             }
             let alpha = rz / pq;
-            let (rr, rz_new) = cg_update(alpha, &p, &q, &inv_diag, x, &mut r, &mut z);
-            iterations += 1;
+            let (rr, rz_new) = cg_update(
+                alpha,
+                &self.p,
+                &self.q,
+                &self.inv_diag,
+                x,
+                &mut self.r,
+                &mut self.z,
+            );
+            self.iterations += 1;
             if rr.sqrt() <= target {
                 break;
             }
             let beta = rz_new / rz;
             rz = rz_new;
-            for_each_mut(&mut p, |i, v| *v = z[i] + beta * *v);
+            let z = &self.z;
+            for_each_mut(&mut self.p, |i, v| *v = z[i] + beta * *v);
         }
-        if let Some(msg) = breakdown {
-            op.apply(x, &mut q, &mut scratch, extra);
-            for_each_mut(&mut r, |i, v| *v = rhs[i] - q[i]);
-            let r_norm = norm(&r);
-            let rel = if rhs_norm > 0.0 {
-                r_norm / rhs_norm
-            } else {
-                r_norm
-            };
-            return CgOutcome {
-                iterations,
-                relative_residual: rel,
-                converged: r_norm <= target,
-                diagnostic: Some(msg),
-            };
-        }
+        Ok(())
     }
+}
+
+/// 1 / diag(M + diag(extra)). Non-positive entries (columns nothing
+/// touches) get 1: those residual components stay zero, so the value only
+/// has to be finite.
+fn jacobi_inverse(op: &Operator, extra: Option<&[f64]>, n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|i| {
+            let d = op.diag[i] + extra.map_or(0.0, |e| e[i]);
+            if d > 0.0 && d.is_finite() {
+                1.0 / d
+            } else {
+                1.0
+            }
+        })
+        .collect()
 }

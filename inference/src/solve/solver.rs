@@ -4,7 +4,7 @@
 use rayon::prelude::*;
 
 use super::SolveError;
-use super::cg::pcg;
+use super::cg::{CgOutcome, pcg};
 use super::csr::CsrMatrix;
 use super::layout::TextureLayout;
 use super::newton;
@@ -109,37 +109,21 @@ impl<'a> Solver<'a> {
     /// Solves one channel. `x0` is the warm start (e.g. the neighbouring
     /// parameter sample's solution).
     pub fn solve(&self, b: &[f32], x0: Option<&[f32]>) -> Result<Solution, SolveError> {
-        let (n_s, n_t) = (self.a.rows, self.a.cols);
-        check_len("b (rows of A)", n_s, b.len())?;
-        check_finite("b", b)?;
-        if let Some(x0) = x0 {
-            check_len("x0 (columns of A)", n_t, x0.len())?;
-            check_finite("x0", x0)?;
-        }
-        let form = self.form();
-        let trivial = |x: Vec<f32>, why: String| Solution {
-            x,
-            iterations: 0,
-            relative_residual: 0.0,
-            converged: true,
-            form,
-            diagnostic: Some(why),
-        };
-        if n_s == 0 || self.a.nnz() == 0 {
+        self.check_inputs(b, x0)?;
+        let n_t = self.a.cols;
+        if self.a.rows == 0 || self.a.nnz() == 0 {
             let why = "A has no nonzeros (the object covers no pixel): nothing to fit";
             return Ok(match x0 {
-                Some(x0) => trivial(x0.to_vec(), format!("{why}; returning x0")),
-                None => trivial(vec![0.0; n_t], format!("{why}; returning zeros")),
+                Some(x0) => self.trivial(x0.to_vec(), format!("{why}; returning x0")),
+                None => self.trivial(vec![0.0; n_t], format!("{why}; returning zeros")),
             });
         }
         let bd: Vec<f64> = b.iter().map(|&v| v as f64).collect();
         let mut rhs = vec![0.0f64; n_t];
         self.a.mul_transpose(&bd, &mut rhs);
         if rhs.iter().all(|&v| v == 0.0) {
-            return Ok(trivial(
-                vec![0.0; n_t],
-                "Aᵀb = 0 (all-zero layer): x = 0".into(),
-            ));
+            let why = "Aᵀb = 0 (all-zero layer): x = 0";
+            return Ok(self.trivial(vec![0.0; n_t], why.into()));
         }
         let mut x: Vec<f64> = match x0 {
             Some(x0) => x0.iter().map(|&v| v as f64).collect(),
@@ -149,47 +133,85 @@ impl<'a> Solver<'a> {
         let max_it = self.options.max_iterations;
         let mut out = pcg(&self.op, None, &rhs, &mut x, tol, max_it);
         if self.lambda_b > 0.0 {
-            let bmax = b.iter().fold(0.0f32, |m, &v| m.max(v));
-            let s = self
-                .options
-                .range_max
-                .unwrap_or(if bmax > 0.0 { bmax } else { 1.0 }) as f64;
-            let quad_note = out.diagnostic.take();
-            out = newton::refine(
-                &self.op,
-                &rhs,
-                &mut x,
-                &newton::RangeTerm {
-                    lambda_b: self.lambda_b,
-                    s,
-                    tolerance: tol,
-                    max_iterations: max_it,
-                },
-                out.iterations,
-            );
-            if out.diagnostic.is_none() && !out.converged {
-                out.diagnostic = quad_note;
-            }
-        }
-        let mut diagnostic = out.diagnostic;
-        if !self.unseen_faces.is_empty() {
-            let note = format!(
-                "cube faces {:?} are seen by no pixel: kept at the start value ({})",
-                self.unseen_faces,
-                if x0.is_some() { "x0" } else { "0" }
-            );
-            diagnostic = Some(match diagnostic {
-                Some(d) => format!("{d}; {note}"),
-                None => note,
-            });
+            out = self.refine_range(b, &rhs, &mut x, out);
         }
         Ok(Solution {
             x: x.iter().map(|&v| v as f32).collect(),
             iterations: out.iterations,
             relative_residual: out.relative_residual as f32,
             converged: out.converged,
-            form,
-            diagnostic,
+            form: self.form(),
+            diagnostic: self.note_unseen_faces(out.diagnostic, x0.is_some()),
+        })
+    }
+
+    /// b and x0 match A's dimensions and are finite.
+    fn check_inputs(&self, b: &[f32], x0: Option<&[f32]>) -> Result<(), SolveError> {
+        check_len("b (rows of A)", self.a.rows, b.len())?;
+        check_finite("b", b)?;
+        if let Some(x0) = x0 {
+            check_len("x0 (columns of A)", self.a.cols, x0.len())?;
+            check_finite("x0", x0)?;
+        }
+        Ok(())
+    }
+
+    /// A result that needed no iterations, with the reason.
+    fn trivial(&self, x: Vec<f32>, why: String) -> Solution {
+        Solution {
+            x,
+            iterations: 0,
+            relative_residual: 0.0,
+            converged: true,
+            form: self.form(),
+            diagnostic: Some(why),
+        }
+    }
+
+    /// Newton refinement for the range term, continuing from the quadratic
+    /// solution `quadratic`. The texel range is [0, s], s = `range_max` or
+    /// max(b) (1 if b has no positive value). If the refinement fails
+    /// without saying why, the quadratic solve's note is kept.
+    fn refine_range(
+        &self,
+        b: &[f32],
+        rhs: &[f64],
+        x: &mut [f64],
+        mut quadratic: CgOutcome,
+    ) -> CgOutcome {
+        let bmax = b.iter().fold(0.0f32, |m, &v| m.max(v));
+        let s = self
+            .options
+            .range_max
+            .unwrap_or(if bmax > 0.0 { bmax } else { 1.0 }) as f64;
+        let quad_note = quadratic.diagnostic.take();
+        let term = newton::RangeTerm {
+            lambda_b: self.lambda_b,
+            s,
+            tolerance: self.options.tolerance as f64,
+            max_iterations: self.options.max_iterations,
+        };
+        let mut out = newton::refine(&self.op, rhs, x, &term, quadratic.iterations);
+        if out.diagnostic.is_none() && !out.converged {
+            out.diagnostic = quad_note;
+        }
+        out
+    }
+
+    /// Appends the names of unseen cube faces (kept at the start value:
+    /// x0 when `warm`, else 0) to `diagnostic`.
+    fn note_unseen_faces(&self, diagnostic: Option<String>, warm: bool) -> Option<String> {
+        if self.unseen_faces.is_empty() {
+            return diagnostic;
+        }
+        let note = format!(
+            "cube faces {:?} are seen by no pixel: kept at the start value ({})",
+            self.unseen_faces,
+            if warm { "x0" } else { "0" }
+        );
+        Some(match diagnostic {
+            Some(d) => format!("{d}; {note}"),
+            None => note,
         })
     }
 }

@@ -1,6 +1,7 @@
 //! From a parsed scene file to a validated `Scene`: every check names the file and field.
 
 mod check;
+mod lights;
 mod materials;
 mod objects;
 
@@ -10,10 +11,11 @@ use glam::Vec3;
 
 use super::camera::{Camera, Orbit};
 use super::error::SceneError;
-use super::file::{LightFile, RoomFile, SceneFile};
+use super::file::{RoomFile, SceneFile};
 use super::light::AreaLight;
 use super::material::Material;
 use super::{Object, Scene, room};
+use materials::Materials;
 
 /// Validation context: the scene file (for messages and relative mesh paths).
 pub struct Loader<'a> {
@@ -22,6 +24,15 @@ pub struct Loader<'a> {
 
 /// Most viewpoint samples a scene may ask for (a 64 × 64 grid).
 pub const MAX_SAMPLES: u32 = 4096;
+
+/// What the room, the lights and the file's objects add up to, in order.
+struct SceneParts {
+    /// Declared materials' names, then one per light (the light's name).
+    material_names: Vec<String>,
+    materials: Vec<Material>,
+    objects: Vec<Object>,
+    lights: Vec<AreaLight>,
+}
 
 impl Loader<'_> {
     /// Objects come out as: floor, walls, ceiling, one per light, then the file's objects.
@@ -35,23 +46,65 @@ impl Loader<'_> {
         let camera = self.camera(&file)?;
         let orbit = self.orbit(&file)?;
         let declared = self.materials(&file.materials)?;
+        // Objects refer to declared materials only, not to the lights' ones.
+        let lookup =
+            |field: &str, wanted: &str| self.material_index(&declared.names, field, wanted);
 
-        // Objects refer to declared materials only.
-        let lookup = |field: &str, wanted: &str| -> Result<usize, SceneError> {
-            let known = &declared.names;
-            known.iter().position(|k| k == wanted).ok_or_else(|| {
-                let list = known.join(", ");
-                self.err(
-                    field,
-                    format!("unknown material \"{wanted}\" (known: {list})"),
-                )
-            })
+        let room = self.room_box(&file.room)?;
+        let mut parts = SceneParts {
+            material_names: declared.names.clone(),
+            materials: declared.materials.clone(),
+            objects: self.room_objects(&file.room, room, &declared, &lookup)?,
+            lights: Vec::new(),
         };
+        for (i, l) in file.lights.iter().enumerate() {
+            self.add_light(i, l, room, &mut parts)?;
+        }
+        for (i, o) in file.objects.iter().enumerate() {
+            parts.objects.push(self.object(i, o, &lookup)?);
+        }
+        self.check_unique_names(&parts.objects)?;
 
-        let (min, max) = self.room_box(&file.room)?;
-        let mut objects = Vec::new();
+        Ok(Scene {
+            name,
+            source: self.path.to_owned(),
+            camera,
+            orbit,
+            lights: parts.lights,
+            materials: parts.materials,
+            material_names: parts.material_names,
+            objects: parts.objects,
+            textures: declared.textures,
+        })
+    }
+
+    /// Index of material `wanted` among `known`; `field` names the reference.
+    fn material_index(
+        &self,
+        known: &[String],
+        field: &str,
+        wanted: &str,
+    ) -> Result<usize, SceneError> {
+        known.iter().position(|k| k == wanted).ok_or_else(|| {
+            let list = known.join(", ");
+            self.err(
+                field,
+                format!("unknown material \"{wanted}\" (known: {list})"),
+            )
+        })
+    }
+
+    /// Floor, walls and ceiling of the room box `(min, max)`, with their
+    /// materials' tile sizes for the UVs.
+    fn room_objects(
+        &self,
+        r: &RoomFile,
+        (min, max): (Vec3, Vec3),
+        declared: &Materials,
+        lookup: &dyn Fn(&str, &str) -> Result<usize, SceneError>,
+    ) -> Result<Vec<Object>, SceneError> {
         let tile = |m: &str| declared.tile_sizes.get(m).copied().unwrap_or(1.0);
-        let r = &file.room;
+        let mut objects = Vec::new();
         for (oname, mname, mesh) in [
             ("floor", &r.floor, room::floor(min, max, tile(&r.floor))),
             ("walls", &r.walls, room::walls(min, max, tile(&r.walls))),
@@ -69,38 +122,10 @@ impl Loader<'_> {
                 em: None,
             });
         }
+        Ok(objects)
+    }
 
-        // Each light is also an object with its own emissive material, so rasterisers draw it.
-        let mut material_names = declared.names.clone();
-        let mut materials = declared.materials.clone();
-        let mut lights = Vec::new();
-        for (i, l) in file.lights.iter().enumerate() {
-            let light = self.light(i, l, (min, max))?;
-            if material_names.contains(&light.name) {
-                return Err(self.err(
-                    format!("lights[{i}].name"),
-                    format!(
-                        "\"{}\" is also a material name (a light's name names its emissive material)",
-                        light.name
-                    ),
-                ));
-            }
-            material_names.push(light.name.clone());
-            materials.push(Material::Emissive {
-                radiance: light.radiance,
-            });
-            objects.push(Object {
-                name: light.name.clone(),
-                mesh: light.mesh(),
-                material: materials.len() - 1,
-                em: None,
-            });
-            lights.push(light);
-        }
-
-        for (i, o) in file.objects.iter().enumerate() {
-            objects.push(self.object(i, o, &lookup)?);
-        }
+    fn check_unique_names(&self, objects: &[Object]) -> Result<(), SceneError> {
         for (i, o) in objects.iter().enumerate() {
             if objects[..i].iter().any(|p| p.name == o.name) {
                 return Err(self.err(
@@ -112,18 +137,7 @@ impl Loader<'_> {
                 ));
             }
         }
-
-        Ok(Scene {
-            name,
-            source: self.path.to_owned(),
-            camera,
-            orbit,
-            lights,
-            materials,
-            material_names,
-            objects,
-            textures: declared.textures,
-        })
+        Ok(())
     }
 
     fn camera(&self, file: &SceneFile) -> Result<Camera, SceneError> {
@@ -188,36 +202,5 @@ impl Loader<'_> {
             ));
         }
         Ok((min, max))
-    }
-
-    fn light(
-        &self,
-        i: usize,
-        l: &LightFile,
-        (min, max): (Vec3, Vec3),
-    ) -> Result<AreaLight, SceneError> {
-        let field = |f: &str| format!("lights[{i}].{f}");
-        let light = AreaLight {
-            name: l.name.clone(),
-            center: self.vec3(&field("center"), l.center)?,
-            edge_u: self.vec3(&field("edge_u"), l.edge_u)?,
-            edge_v: self.vec3(&field("edge_v"), l.edge_v)?,
-            radiance: self.vec3_in(&field("radiance"), l.radiance, 0.0, f32::MAX)?,
-        };
-        if light.name.trim().is_empty() {
-            return Err(self.err(field("name"), "empty (expected a unique light name)"));
-        }
-        // Relative test: parallel edges give a rounding-noise cross product.
-        let scale = light.edge_u.length() * light.edge_v.length();
-        if !(light.area() > 1e-6 * scale && light.area() > 1e-12) {
-            return Err(self.err(
-                field("edge_u"),
-                "light has zero area (expected two non-parallel, non-zero edges)",
-            ));
-        }
-        if light.center.cmplt(min).any() || light.center.cmpgt(max).any() {
-            return Err(self.err(field("center"), "light centre is outside the room"));
-        }
-        Ok(light)
     }
 }

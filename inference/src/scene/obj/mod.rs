@@ -1,5 +1,8 @@
-//! OBJ in and out. Loading goes through `tobj`, after a line-by-line check so that errors
-//! name the line (tobj's own errors do not), and ends with a per-face degeneracy check.
+//! OBJ in and out. Loading goes through `tobj`, after a line-by-line check (`check.rs`)
+//! so that errors name the line (tobj's own errors do not), and ends with a per-face
+//! degeneracy check.
+
+mod check;
 
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -10,6 +13,7 @@ use glam::{Vec2, Vec3};
 
 use super::error::SceneError;
 use super::mesh::{Mesh, is_degenerate};
+use check::check_lines;
 
 /// Writes `mesh` as OBJ (v, vt, vn, f v/vt/vn) atomically: a temp file in the same
 /// directory, then a rename, so readers see either no file or a whole one.
@@ -85,51 +89,8 @@ pub fn load_obj(path: &Path) -> Result<Mesh, SceneError> {
     let mut mesh = Mesh::default();
     let mut any_missing_normals = false;
     for model in &models {
-        let m = &model.mesh;
-        let count = m.positions.len() / 3;
-        let base = mesh.positions.len() as u32;
-        mesh.positions.extend(
-            m.positions
-                .chunks_exact(3)
-                .map(|p| Vec3::new(p[0], p[1], p[2])),
-        );
-        if m.normals.len() == m.positions.len() {
-            mesh.normals.extend(
-                m.normals
-                    .chunks_exact(3)
-                    .map(|n| unit(Vec3::new(n[0], n[1], n[2]))),
-            );
-        } else {
-            any_missing_normals = true;
-            mesh.normals.extend(std::iter::repeat_n(Vec3::ZERO, count));
-        }
-        if m.texcoords.len() / 2 == count {
-            mesh.uvs
-                .extend(m.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], t[1])));
-        } else {
-            mesh.uvs.extend(std::iter::repeat_n(Vec2::ZERO, count));
-        }
-        for (face, tri) in m.indices.chunks_exact(3).enumerate() {
-            if tri.iter().any(|&i| i as usize >= count) {
-                return Err(SceneError::obj(
-                    path,
-                    format!("face {face} of object \"{}\"", model.name),
-                    format!("index out of range (expected < {count})"),
-                ));
-            }
-            let corners = [0, 1, 2].map(|k| mesh.positions[(base + tri[k]) as usize]);
-            if is_degenerate(corners) {
-                return Err(SceneError::obj(
-                    path,
-                    format!("face {face} of object \"{}\"", model.name),
-                    format!(
-                        "zero-area triangle {:?} (expected three non-collinear corners)",
-                        corners.map(|c| c.to_array())
-                    ),
-                ));
-            }
-            mesh.indices.extend(tri.iter().map(|&i| base + i));
-        }
+        any_missing_normals |= append_vertices(&mut mesh, &model.mesh);
+        append_faces(path, &mut mesh, model)?;
     }
     if mesh.indices.is_empty() {
         return Err(SceneError::obj(
@@ -142,6 +103,65 @@ pub fn load_obj(path: &Path) -> Result<Mesh, SceneError> {
         fill_missing_normals(&mut mesh);
     }
     Ok(mesh)
+}
+
+/// Appends one tobj mesh's positions, normals (zero where it has none) and
+/// UVs (zero where it has none). Returns whether the normals were missing.
+fn append_vertices(mesh: &mut Mesh, m: &tobj::Mesh) -> bool {
+    let count = m.positions.len() / 3;
+    mesh.positions.extend(
+        m.positions
+            .chunks_exact(3)
+            .map(|p| Vec3::new(p[0], p[1], p[2])),
+    );
+    let missing_normals = m.normals.len() != m.positions.len();
+    if missing_normals {
+        mesh.normals.extend(std::iter::repeat_n(Vec3::ZERO, count));
+    } else {
+        mesh.normals.extend(
+            m.normals
+                .chunks_exact(3)
+                .map(|n| unit(Vec3::new(n[0], n[1], n[2]))),
+        );
+    }
+    if m.texcoords.len() / 2 == count {
+        mesh.uvs
+            .extend(m.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], t[1])));
+    } else {
+        mesh.uvs.extend(std::iter::repeat_n(Vec2::ZERO, count));
+    }
+    missing_normals
+}
+
+/// Appends `model`'s triangles, whose vertices are the last ones in `mesh`,
+/// after checking each for indices in range and a non-zero area.
+fn append_faces(path: &Path, mesh: &mut Mesh, model: &tobj::Model) -> Result<(), SceneError> {
+    let m = &model.mesh;
+    let count = m.positions.len() / 3;
+    let base = (mesh.positions.len() - count) as u32;
+    let at_face = |face: usize| format!("face {face} of object \"{}\"", model.name);
+    for (face, tri) in m.indices.chunks_exact(3).enumerate() {
+        if tri.iter().any(|&i| i as usize >= count) {
+            return Err(SceneError::obj(
+                path,
+                at_face(face),
+                format!("index out of range (expected < {count})"),
+            ));
+        }
+        let corners = [0, 1, 2].map(|k| mesh.positions[(base + tri[k]) as usize]);
+        if is_degenerate(corners) {
+            return Err(SceneError::obj(
+                path,
+                at_face(face),
+                format!(
+                    "zero-area triangle {:?} (expected three non-collinear corners)",
+                    corners.map(|c| c.to_array())
+                ),
+            ));
+        }
+        mesh.indices.extend(tri.iter().map(|&i| base + i));
+    }
+    Ok(())
 }
 
 /// Normalises, but leaves already-unit normals bit-exact (so write → load round-trips);
@@ -169,113 +189,6 @@ fn fill_missing_normals(mesh: &mut Mesh) {
             *n = s.normalize_or(Vec3::Y);
         }
     }
-}
-
-/// Checks numbers and face indices line by line, before tobj sees the text.
-fn check_lines(path: &Path, text: &str) -> Result<(), SceneError> {
-    let (mut nv, mut nvt, mut nvn) = (0usize, 0usize, 0usize);
-    // Counts are needed up front: OBJ indices may refer to vertices defined later.
-    for line in text.lines() {
-        match line.split_whitespace().next() {
-            Some("v") => nv += 1,
-            Some("vt") => nvt += 1,
-            Some("vn") => nvn += 1,
-            _ => {}
-        }
-    }
-    let (mut sv, mut svt, mut svn) = (0usize, 0usize, 0usize); // seen so far, for negatives
-    for (i, line) in text.lines().enumerate() {
-        let at = || format!("line {}", i + 1);
-        let mut words = line.split_whitespace();
-        let Some(keyword) = words.next() else {
-            continue;
-        };
-        let numbers = |min: usize, what: &str| -> Result<(), SceneError> {
-            let values: Vec<&str> = line.split_whitespace().skip(1).collect();
-            if values.len() < min {
-                return Err(SceneError::obj(
-                    path,
-                    at(),
-                    format!("`{keyword}` has {} numbers (expected {what})", values.len()),
-                ));
-            }
-            for w in values {
-                match w.parse::<f32>() {
-                    Ok(x) if x.is_finite() => {}
-                    Ok(x) => {
-                        return Err(SceneError::obj(
-                            path,
-                            at(),
-                            format!(
-                                "non-finite value {x} in `{keyword}` (expected finite numbers)"
-                            ),
-                        ));
-                    }
-                    Err(_) => {
-                        return Err(SceneError::obj(
-                            path,
-                            at(),
-                            format!("`{w}` is not a number (expected {what})"),
-                        ));
-                    }
-                }
-            }
-            Ok(())
-        };
-        match keyword {
-            "v" => {
-                numbers(3, "x y z")?;
-                sv += 1;
-            }
-            "vt" => {
-                numbers(1, "u [v [w]]")?;
-                svt += 1;
-            }
-            "vn" => {
-                numbers(3, "x y z")?;
-                svn += 1;
-            }
-            "f" => {
-                let corners: Vec<&str> = words.collect();
-                if corners.len() < 3 {
-                    return Err(SceneError::obj(
-                        path,
-                        at(),
-                        format!("face has {} corners (expected at least 3)", corners.len()),
-                    ));
-                }
-                for corner in corners {
-                    let kinds = [
-                        ("position", nv, sv),
-                        ("texcoord", nvt, svt),
-                        ("normal", nvn, svn),
-                    ];
-                    for (part, (kind, total, seen)) in corner.split('/').zip(kinds) {
-                        if part.is_empty() {
-                            continue; // `1//3`: no texcoord
-                        }
-                        let ok = match part.parse::<i64>() {
-                            Ok(k) if k > 0 => k as usize <= total,
-                            Ok(k) if k < 0 => k.unsigned_abs() as usize <= seen,
-                            _ => false,
-                        };
-                        if !ok {
-                            return Err(SceneError::obj(
-                                path,
-                                at(),
-                                format!(
-                                    "{kind} index `{part}` in `{corner}` out of range \
-                                     (expected 1..={total} or -1..=-{seen})"
-                                ),
-                            ));
-                        }
-                    }
-                }
-            }
-            _ => {}
-        }
-    }
-    Ok(())
 }
 
 #[cfg(test)]
