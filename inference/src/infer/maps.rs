@@ -106,6 +106,13 @@ pub fn parse_map(
     layout: &TextureLayout,
     channels: usize,
 ) -> Result<Vec<Vec<f32>>, MapError> {
+    if !(1..=CHANNELS.len()).contains(&channels) {
+        return Err(MapError::Shape {
+            path: path.to_owned(),
+            what: format!("{channels} channels asked for"),
+            expected: "1 to 4 channels".into(),
+        });
+    }
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -207,6 +214,16 @@ impl Reading<'_> {
         let values: Vec<f32> = channel.sample_data.values_as_f32().collect();
         let (w, h) = self.layout.level_size(level);
         let faces = self.layout.faces();
+        if values.len() != (w * faces * h) as usize {
+            return Err(self.shape(
+                format!(
+                    "part {name} channel {} holds {} samples",
+                    CHANNELS[c],
+                    values.len()
+                ),
+                format!("{} (no subsampling)", w * faces * h),
+            ));
+        }
         for y in 0..h {
             for face in 0..faces {
                 for x in 0..w {

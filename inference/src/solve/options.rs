@@ -72,6 +72,12 @@ impl SolveOptions {
             "must be finite and >= 0",
         )?;
         check(
+            "eps_seam",
+            self.eps_seam,
+            self.eps_seam >= 0.0,
+            "must be finite and >= 0",
+        )?;
+        check(
             "k_switch",
             self.k_switch,
             self.k_switch > 0.0,
