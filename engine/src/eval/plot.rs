@@ -385,7 +385,9 @@ mod tests {
 
     #[test]
     fn bad_specs_are_errors_naming_the_problem() {
-        let path = Path::new("/nonexistent-eval-dir/chart.png");
+        let dir = tempfile::tempdir().expect("tempdir");
+        let missing = dir.path().join("missing-dir/chart.png");
+        let path = missing.as_path();
         let mut s = spec(true);
         s.series[1].points[0].0 = 0.0;
         let e = xy_chart(path, &s).err().map(|e| format!("{e:#}"));
