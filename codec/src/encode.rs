@@ -36,6 +36,21 @@ pub struct EncodeOptions {
     pub stagger: bool,
     /// Quantiser steps tried per image (half an octave apart).
     pub rd_points: usize,
+    /// What the rate allocation minimises.
+    pub weighting: Weighting,
+}
+
+/// The error the rate allocation minimises under the byte budget.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Weighting {
+    /// The thesis's on-screen error: each texture's per-element MSE times
+    /// its screen area (`TextureInfo::screen_area`), whatever its size.
+    Screen,
+    /// The squared error summed over every element of every texture, the
+    /// MSE that [`crate::quality`]'s pooled texture PSNR measures (screen
+    /// areas ignored). Use with `alpha_cap: f64::INFINITY` for that PSNR's
+    /// optimum: the cap rebalances textures against it.
+    Texels,
 }
 
 impl Default for EncodeOptions {
@@ -43,6 +58,7 @@ impl Default for EncodeOptions {
         Self {
             gamma: 2.0,
             alpha_cap: 1.25,
+            weighting: Weighting::Screen,
             stagger: true,
             rd_points: 24,
         }
@@ -354,12 +370,17 @@ pub fn encode_targets(
         .iter()
         .map(|t| TexWeight {
             // A texture with no area still gets a token weight, not nothing.
-            area: if mean_area > 0.0 {
+            area: if opts.weighting == Weighting::Texels {
+                1.0
+            } else if mean_area > 0.0 {
                 (t.screen_area as f64).max(1e-3 * mean_area)
             } else {
                 1.0
             },
-            elements: t.data.len() as f64,
+            elements: match opts.weighting {
+                Weighting::Screen => t.data.len() as f64,
+                Weighting::Texels => 1.0,
+            },
         })
         .collect();
     let rds: Vec<AtomRd> = jobs
