@@ -160,6 +160,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         eprintln!("    per texture PSNR {}", per.join(" / "));
         bytes_list.push(rep.bytes);
     }
+    baselines(&a, &input, &bytes_list)
+}
+
+/// The MPEG baselines at the codec's bytes, one table per encoder.
+fn baselines(
+    a: &Args,
+    input: &EncodeInput,
+    bytes_list: &[u64],
+) -> Result<(), Box<dyn std::error::Error>> {
     let mut memo_all = load_memo(&a.memo);
     for codec in &a.codecs {
         let mut memo: CrfMemo = memo_all
@@ -167,7 +176,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .filter(|m| m.0 == codec.name())
             .map(|m| (m.1, (m.2, m.3)))
             .collect();
-        let base = mpeg_texture_baselines_memo(*codec, &input, &bytes_list, &mut memo, &mut |m| {
+        let base = mpeg_texture_baselines_memo(*codec, input, bytes_list, &mut memo, &mut |m| {
             eprintln!("    {m}")
         })?;
         memo_all.retain(|m| m.0 != codec.name());

@@ -15,6 +15,7 @@ use crate::error::{CodecError, Result};
 use crate::input::{EncodeInput, ParamTexture, TextureId};
 use crate::planes::{image_offset, proxy, to_planar_domain};
 use crate::pyramid::{self, Plan};
+pub use crate::rate::Weighting;
 use crate::rate::{AtomRd, RdPoint, TexWeight, allocate};
 
 /// How big the container should be.
@@ -38,19 +39,6 @@ pub struct EncodeOptions {
     pub rd_points: usize,
     /// What the rate allocation minimises.
     pub weighting: Weighting,
-}
-
-/// The error the rate allocation minimises under the byte budget.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Weighting {
-    /// The thesis's on-screen error: each texture's per-element MSE times
-    /// its screen area (`TextureInfo::screen_area`), whatever its size.
-    Screen,
-    /// The squared error summed over every element of every texture, the
-    /// MSE that [`crate::quality`]'s pooled texture PSNR measures (screen
-    /// areas ignored). Use with `alpha_cap: f64::INFINITY` for that PSNR's
-    /// optimum: the cap rebalances textures against it.
-    Texels,
 }
 
 impl Default for EncodeOptions {
