@@ -12,6 +12,10 @@
 //!   `ffmpeg` is on PATH; otherwise skipped with a note. `mpeg-view` needs
 //!   the traced images and is the engine's to add through
 //!   [`ffmpeg_round_trip`] and [`smallest_fitting_crf`].
+//! * `mpeg-texture-x265`: the same with libx265 (HEVC 4:4:4, 10 bits), by
+//!   [`mpeg_texture_baselines_with`]; measurement runs only (the report
+//!   itself keeps x264), with [`mpeg_texture_baselines_memo`] to reuse CRF
+//!   sweeps.
 //!
 //! The `*_baselines` functions take several byte targets at once (for
 //! ratio-against-PSNR [`Curve`]s) and encode each knob setting once.
