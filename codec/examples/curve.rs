@@ -1,6 +1,8 @@
 //! Ratio against PSNR on a synthetic PEM, with the JPEG baseline (and the
 //! ffmpeg one when available):
 //! `cargo run --release -p codec --example curve -- [size] [samples] [ratios...]`
+//!
+//! `samples` is `N` (a 1D grid) or `N0xN1` (a 2D grid, 8×8 blocks).
 
 use std::time::Instant;
 
@@ -11,7 +13,11 @@ use codec::{Container, EncodeOptions, ParamGrid, Target, encode};
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let size: u32 = args.first().map_or(Ok(64), |s| s.parse())?;
-    let samples: u32 = args.get(1).map_or(Ok(16), |s| s.parse())?;
+    let grid = match args.get(1).map(|s| s.split_once('x')) {
+        None => ParamGrid::one_d(16),
+        Some(None) => ParamGrid::one_d(args[1].parse()?),
+        Some(Some((a, b))) => ParamGrid::two_d(a.parse()?, b.parse()?),
+    };
     let ratios: Vec<f64> = if args.len() > 2 {
         args[2..]
             .iter()
@@ -21,9 +27,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         vec![96.0, 192.0, 384.0, 768.0]
     };
     let t0 = Instant::now();
-    let input = scene(&SynthSpec::cube(1, 2, ParamGrid::one_d(samples), size));
+    let input = scene(&SynthSpec::cube(1, 2, grid, size));
     eprintln!(
-        "synth {size}x{size}x6, {samples} samples, 2 layers: {:.2}s",
+        "synth {size}x{size}x6, {}x{} samples, 2 layers: {:.2}s",
+        grid.n0,
+        grid.n1,
         t0.elapsed().as_secs_f64()
     );
     for r in ratios {

@@ -15,6 +15,7 @@ use crate::error::{CodecError, Result};
 use crate::input::{EncodeInput, ParamTexture, TextureId};
 use crate::planes::{image_offset, proxy, to_planar_domain};
 use crate::pyramid::{self, Plan};
+pub use crate::rate::Weighting;
 use crate::rate::{AtomRd, RdPoint, TexWeight, allocate};
 
 /// How big the container should be.
@@ -36,6 +37,8 @@ pub struct EncodeOptions {
     pub stagger: bool,
     /// Quantiser steps tried per image (half an octave apart).
     pub rd_points: usize,
+    /// What the rate allocation minimises.
+    pub weighting: Weighting,
 }
 
 impl Default for EncodeOptions {
@@ -43,6 +46,7 @@ impl Default for EncodeOptions {
         Self {
             gamma: 2.0,
             alpha_cap: 1.25,
+            weighting: Weighting::Screen,
             stagger: true,
             rd_points: 24,
         }
@@ -354,12 +358,17 @@ pub fn encode_targets(
         .iter()
         .map(|t| TexWeight {
             // A texture with no area still gets a token weight, not nothing.
-            area: if mean_area > 0.0 {
+            area: if opts.weighting == Weighting::Texels {
+                1.0
+            } else if mean_area > 0.0 {
                 (t.screen_area as f64).max(1e-3 * mean_area)
             } else {
                 1.0
             },
-            elements: t.data.len() as f64,
+            elements: match opts.weighting {
+                Weighting::Screen => t.data.len() as f64,
+                Weighting::Texels => 1.0,
+            },
         })
         .collect();
     let rds: Vec<AtomRd> = jobs

@@ -14,6 +14,19 @@
 //! The cap `MSE_i ≤ α · mean MSE` is the thesis's second pass: textures over
 //! the cap get their own smaller λ (more bits) and the rest is re-solved.
 
+/// The error the rate allocation minimises under the byte budget.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Weighting {
+    /// The thesis's on-screen error: each texture's per-element MSE times
+    /// its screen area (`TextureInfo::screen_area`), whatever its size.
+    Screen,
+    /// The squared error summed over every element of every texture, the
+    /// MSE that [`crate::quality`]'s pooled texture PSNR measures (screen
+    /// areas ignored). Use with `alpha_cap: f64::INFINITY` for that PSNR's
+    /// optimum: the cap rebalances textures against it.
+    Texels,
+}
+
 /// One operational point: quantiser step index (0 = not coded), bits, and
 /// RGB-weighted squared error in the coding domain.
 #[derive(Clone, Copy, Debug)]

@@ -12,6 +12,10 @@
 //!   `ffmpeg` is on PATH; otherwise skipped with a note. `mpeg-view` needs
 //!   the traced images and is the engine's to add through
 //!   [`ffmpeg_round_trip`] and [`smallest_fitting_crf`].
+//! * `mpeg-texture-x265`: the same with libx265 (HEVC 4:4:4, 10 bits), by
+//!   [`mpeg_texture_baselines_with`]; measurement runs only (the report
+//!   itself keeps x264), with [`mpeg_texture_baselines_memo`] to reuse CRF
+//!   sweeps.
 //!
 //! The `*_baselines` functions take several byte targets at once (for
 //! ratio-against-PSNR [`Curve`]s) and encode each knob setting once.
@@ -552,11 +556,60 @@ pub fn ffmpeg_round_trip(
     crf: u32,
     gop: u32,
 ) -> Result<(Vec<Vec<u8>>, u64)> {
+    ffmpeg_round_trip_with(VideoCodec::X264, frames, w, h, crf, gop)
+}
+
+/// The video encoders the MPEG baselines can use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VideoCodec {
+    /// libx264, `yuv444p10le`, preset slow.
+    X264,
+    /// libx265 (HEVC Main 4:4:4 10), `yuv444p10le`, preset slow.
+    X265,
+}
+
+impl VideoCodec {
+    pub fn name(self) -> &'static str {
+        match self {
+            VideoCodec::X264 => "libx264",
+            VideoCodec::X265 => "libx265",
+        }
+    }
+    /// Encoder arguments after `-c:v NAME` for a CRF and an I-frame period.
+    fn args(self, crf: u32, gop: u32) -> Vec<String> {
+        let mut a: Vec<String> = ["-preset", "slow", "-pix_fmt", "yuv444p10le", "-crf"]
+            .map(String::from)
+            .to_vec();
+        a.push(crf.to_string());
+        match self {
+            VideoCodec::X264 => a.extend(["-g".into(), gop.to_string()]),
+            VideoCodec::X265 => a.extend([
+                "-x265-params".into(),
+                format!("keyint={gop}:min-keyint={gop}:log-level=error"),
+            ]),
+        }
+        a
+    }
+}
+
+/// [`ffmpeg_round_trip`] with a choice of encoder.
+pub fn ffmpeg_round_trip_with(
+    codec: VideoCodec,
+    frames: &[Vec<u8>],
+    w: u32,
+    h: u32,
+    crf: u32,
+    gop: u32,
+) -> Result<(Vec<Vec<u8>>, u64)> {
     let err = |what: String| CodecError::Baseline {
         name: "ffmpeg",
         what,
     };
-    let dir = std::env::temp_dir().join(format!("codec-ffmpeg-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!(
+        "codec-ffmpeg-{}-{}",
+        std::process::id(),
+        codec.name()
+    ));
     std::fs::create_dir_all(&dir).map_err(|e| err(e.to_string()))?;
     let mp4 = dir.join("v.mp4");
     let size = format!("{w}x{h}");
@@ -576,18 +629,8 @@ pub fn ffmpeg_round_trip(
             "-i",
             "-",
         ])
-        .args([
-            "-c:v",
-            "libx264",
-            "-preset",
-            "slow",
-            "-pix_fmt",
-            "yuv444p10le",
-            "-crf",
-            &crf.to_string(),
-            "-g",
-            &gop.to_string(),
-        ])
+        .args(["-c:v", codec.name()])
+        .args(codec.args(crf, gop))
         .args(["-f", "mp4"])
         .arg(&mp4)
         .stdin(Stdio::piped())
@@ -655,6 +698,33 @@ pub fn mpeg_texture_baselines(
     targets: &[u64],
     progress: &mut dyn FnMut(String),
 ) -> Result<Vec<Baseline>> {
+    mpeg_texture_baselines_with(VideoCodec::X264, reference, targets, progress)
+}
+
+/// [`mpeg_texture_baselines`] with a choice of encoder (`mpeg-texture` for
+/// x264, `mpeg-texture-x265` for x265).
+pub fn mpeg_texture_baselines_with(
+    codec: VideoCodec,
+    reference: &EncodeInput,
+    targets: &[u64],
+    progress: &mut dyn FnMut(String),
+) -> Result<Vec<Baseline>> {
+    let mut memo = CrfMemo::new();
+    mpeg_texture_baselines_memo(codec, reference, targets, &mut memo, progress)
+}
+
+/// (bytes, PSNR) per CRF already measured on one input.
+pub type CrfMemo = std::collections::BTreeMap<u32, (u64, f64)>;
+
+/// [`mpeg_texture_baselines_with`] reusing and filling `memo` (which must
+/// come from the same input and encoder), so measurement runs can keep it.
+pub fn mpeg_texture_baselines_memo(
+    codec: VideoCodec,
+    reference: &EncodeInput,
+    targets: &[u64],
+    memo: &mut CrfMemo,
+    progress: &mut dyn FnMut(String),
+) -> Result<Vec<Baseline>> {
     let raw_total = reference.raw_bytes();
     let mut streams = Vec::new();
     for t in &reference.textures {
@@ -677,7 +747,10 @@ pub fn mpeg_texture_baselines(
         }
         streams.push((t, peak, order, frames, w, h));
     }
-    let mut memo = std::collections::BTreeMap::new();
+    let name = match codec {
+        VideoCodec::X264 => "mpeg-texture",
+        VideoCodec::X265 => "mpeg-texture-x265",
+    };
     let mut run = |crf: u32| -> Result<(u64, f64)> {
         if let Some(&r) = memo.get(&crf) {
             return Ok(r);
@@ -685,7 +758,7 @@ pub fn mpeg_texture_baselines(
         let mut bytes = 0;
         let mut acc = PsnrAccum::default();
         for (t, peak, order, frames, w, h) in &streams {
-            let (decoded, b) = ffmpeg_round_trip(frames, *w, *h, crf, 8)?;
+            let (decoded, b) = ffmpeg_round_trip_with(codec, frames, *w, *h, crf, 8)?;
             bytes += b;
             let mut out = vec![0.0f32; t.layout.texels() * 4];
             for (&s, f) in order.iter().zip(&decoded) {
@@ -699,7 +772,7 @@ pub fn mpeg_texture_baselines(
             }
         }
         let r = (bytes, acc.psnr_db());
-        progress(format!("mpeg-texture crf {crf}: {bytes} bytes"));
+        progress(format!("{name} crf {crf}: {bytes} bytes"));
         memo.insert(crf, r);
         Ok(r)
     };
@@ -707,12 +780,13 @@ pub fn mpeg_texture_baselines(
     for &target in targets {
         let (best_crf, bytes, psnr_db) = smallest_fitting_crf(target, &mut run)?;
         out.push(Baseline {
-            name: "mpeg-texture".into(),
+            name: name.into(),
             ratio: raw_total as f64 / bytes as f64,
             psnr_db,
             bytes,
             note: Some(format!(
-                "libx264 yuv444p10le (10-bit), crf {best_crf}, GOP 8, one stream per texture, alpha not coded{}",
+                "{} yuv444p10le (10-bit), crf {best_crf}, GOP 8, one stream per texture, alpha not coded{}",
+                codec.name(),
                 if bytes > target {
                     "; cannot reach the codec's bytes"
                 } else {

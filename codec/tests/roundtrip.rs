@@ -4,7 +4,7 @@ use codec::report::{ReportOptions, report};
 use codec::synth::{SynthSpec, scene};
 use codec::{
     CodecError, Container, DecodeCache, EncodeInput, EncodeOptions, Lifetimes, ParamGrid,
-    PsnrAccum, Target, TextureId, encode, encode_to_file,
+    PsnrAccum, Target, TextureId, encode, encode::Weighting, encode_to_file,
 };
 use half::f16;
 
@@ -405,4 +405,37 @@ fn several_targets_at_once_match_separate_encodes() {
         codec::encode_targets(&input, &tiny, &EncodeOptions::default()),
         Err(CodecError::BudgetTooSmall { budget: 100, .. })
     ));
+}
+
+#[test]
+fn texel_weighting_maximises_the_pooled_texture_psnr() {
+    // A cube map and a single-face texture of equal screen area: the
+    // thesis's weighting gives the small one six times the weight per
+    // element, texel weighting weighs every element alike.
+    let cube = scene(&SynthSpec::cube(1, 1, ParamGrid::one_d(8), 32));
+    let mut flat = SynthSpec::cube(2, 1, ParamGrid::one_d(8), 32);
+    flat.faces = 1;
+    let mut input = cube;
+    input.textures.push(scene(&flat).textures.remove(1));
+    for t in &mut input.textures {
+        t.screen_area = 1.0;
+    }
+    let texels = EncodeOptions {
+        weighting: Weighting::Texels,
+        alpha_cap: f64::INFINITY,
+        ..Default::default()
+    };
+    let mut psnr = Vec::new();
+    for opts in [EncodeOptions::default(), texels] {
+        let (bytes, _) = encode(&input, Target::Ratio(384.0), &opts).unwrap();
+        assert!(bytes.len() as u64 <= input.raw_bytes() / 384);
+        psnr.push(measure(&Container::from_bytes(bytes).unwrap(), &input).0);
+    }
+    eprintln!("MEASURE {psnr:?}");
+    assert!(
+        psnr[1] > psnr[0] + 0.1,
+        "screen {} dB, texels {} dB",
+        psnr[0],
+        psnr[1]
+    );
 }
