@@ -58,7 +58,7 @@ impl InferRequest {
     /// Every sample of `scene`, skipping fresh maps, with the defaults.
     pub fn all(scene: &Scene, trace_dir: PathBuf, infer_dir: PathBuf) -> Self {
         Self {
-            samples: (0..scene.orbit.samples).collect(),
+            samples: (0..scene.orbit.sample_count()).collect(),
             skip_fresh: true,
             sphere: false,
             em_size: None,
@@ -103,10 +103,14 @@ pub struct Plan<'a> {
 
 impl<'a> Plan<'a> {
     pub fn new(scene: &'a Scene, req: &InferRequest) -> Result<Self> {
-        if let Some(&k) = req.samples.iter().find(|&&k| k >= scene.orbit.samples) {
+        if let Some(&k) = req
+            .samples
+            .iter()
+            .find(|&&k| k >= scene.orbit.sample_count())
+        {
             bail!(
-                "--sample {k}: out of range 0..{} (the scene's orbit.samples)",
-                scene.orbit.samples
+                "--sample {k}: out of range 0..{} (orbit.samples × orbit.rings)",
+                scene.orbit.sample_count()
             );
         }
         let jobs = jobs_for(scene, req.em_size, req.sphere)?;
