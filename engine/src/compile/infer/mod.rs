@@ -21,7 +21,7 @@ pub use diffuse::{DiffuseRequest, infer_diffuse};
 pub use jobs::{INFERENCE_VERSION, Job, jobs_for, map_key};
 
 use crate::backend::{DeviceOptions, create_device};
-use crate::maps::map_path;
+use crate::maps::{MapLayer, map_path};
 use crate::util::files::claim_dir;
 use anyhow::{Result, bail};
 use inference::key::{Freshness, Key};
@@ -91,6 +91,9 @@ impl InferRequest {
     }
 }
 
+/// Weight of the local layer's prior toward transparent.
+pub const LOCAL_PRIOR: f32 = 0.01;
+
 /// What is known before any work: the scene's maps and the key each map
 /// of each sample must carry.
 pub struct Plan<'a> {
@@ -138,7 +141,22 @@ impl<'a> Plan<'a> {
     /// The key sample `k`'s map of `job` must carry.
     pub fn key(&self, trace_key: &Key, job: &Job) -> Key {
         let size = (self.settings.width, self.settings.height);
-        map_key(trace_key, job, &self.options, size)
+        map_key(trace_key, job, &self.options_for(job), size)
+    }
+
+    /// The solve options of `job`: local layers add a prior toward
+    /// transparent, so texels only off-sample views reach stay see-through
+    /// rather than smearing what the sample's view saw (measured in the
+    /// README, "Off the orbit").
+    pub fn options_for(&self, job: &Job) -> SolveOptions {
+        SolveOptions {
+            eps_prior: if job.layer == MapLayer::Local {
+                LOCAL_PRIOR
+            } else {
+                0.0
+            },
+            ..self.options.clone()
+        }
     }
 
     /// Every (sample, job index) of `samples` whose map is not fresh, with
