@@ -1,0 +1,207 @@
+//! ffmpeg round trips for the MPEG baselines: the encoders, the CRF search
+//! and piping raw 16-bit frames through an encode and a decode.
+
+use std::io::{Read, Write};
+use std::path::Path;
+use std::process::{Command, Stdio};
+
+use crate::error::{CodecError, Result};
+
+/// Bisection for the smallest x264 CRF in `0..=51` whose stream fits
+/// `target` bytes (size falls as CRF rises); CRF 51 if none does. `eval`
+/// gives (bytes, PSNR) at a CRF; callers memoise it across targets.
+/// Returns (CRF, bytes, PSNR).
+pub fn smallest_fitting_crf(
+    target: u64,
+    eval: &mut dyn FnMut(u32) -> Result<(u64, f64)>,
+) -> Result<(u32, u64, f64)> {
+    let (mut lo, mut hi) = (0u32, 51u32);
+    let mut best = eval(hi)?;
+    let mut best_crf = hi;
+    if best.0 <= target {
+        while hi > lo + 1 {
+            let mid = (lo + hi) / 2;
+            let r = eval(mid)?;
+            if r.0 <= target {
+                hi = mid;
+                best = r;
+                best_crf = mid;
+            } else {
+                lo = mid;
+            }
+        }
+    }
+    Ok((best_crf, best.0, best.1))
+}
+
+pub fn ffmpeg_available() -> bool {
+    Command::new("ffmpeg")
+        .arg("-version")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+/// Encodes 16-bit RGB frames (`rgb48le`) with ffmpeg/libx264 at 10 bits
+/// (yuv444p10le, constant rate factor `crf`, an I-frame every `gop`
+/// frames) and decodes them back.
+/// Returns (decoded frames, bytes). Used for MPEG-texture here and
+/// MPEG-view by the engine.
+pub fn ffmpeg_round_trip(
+    frames: &[Vec<u8>],
+    w: u32,
+    h: u32,
+    crf: u32,
+    gop: u32,
+) -> Result<(Vec<Vec<u8>>, u64)> {
+    ffmpeg_round_trip_with(VideoCodec::X264, frames, w, h, crf, gop)
+}
+
+/// The video encoders the MPEG baselines can use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VideoCodec {
+    /// libx264, `yuv444p10le`, preset slow.
+    X264,
+    /// libx265 (HEVC Main 4:4:4 10), `yuv444p10le`, preset slow.
+    X265,
+}
+
+impl VideoCodec {
+    pub fn name(self) -> &'static str {
+        match self {
+            VideoCodec::X264 => "libx264",
+            VideoCodec::X265 => "libx265",
+        }
+    }
+    /// Encoder arguments after `-c:v NAME` for a CRF and an I-frame period.
+    fn args(self, crf: u32, gop: u32) -> Vec<String> {
+        let mut a: Vec<String> = ["-preset", "slow", "-pix_fmt", "yuv444p10le", "-crf"]
+            .map(String::from)
+            .to_vec();
+        a.push(crf.to_string());
+        match self {
+            VideoCodec::X264 => a.extend(["-g".into(), gop.to_string()]),
+            VideoCodec::X265 => a.extend([
+                "-x265-params".into(),
+                format!("keyint={gop}:min-keyint={gop}:log-level=error"),
+            ]),
+        }
+        a
+    }
+}
+
+/// [`ffmpeg_round_trip`] with a choice of encoder.
+pub fn ffmpeg_round_trip_with(
+    codec: VideoCodec,
+    frames: &[Vec<u8>],
+    w: u32,
+    h: u32,
+    crf: u32,
+    gop: u32,
+) -> Result<(Vec<Vec<u8>>, u64)> {
+    let dir = std::env::temp_dir().join(format!(
+        "codec-ffmpeg-{}-{}",
+        std::process::id(),
+        codec.name()
+    ));
+    std::fs::create_dir_all(&dir).map_err(|e| err(e.to_string()))?;
+    let mp4 = dir.join("v.mp4");
+    let bytes = encode_video(codec, frames, w, h, crf, gop, &dir, &mp4)?;
+    let raw = decode_video(&mp4)?;
+    let _ = std::fs::remove_dir_all(&dir);
+    let fsz = (w * h * 6) as usize;
+    if raw.len() < fsz * frames.len() {
+        return Err(err(format!(
+            "decoded {} bytes, expected {}",
+            raw.len(),
+            fsz * frames.len()
+        )));
+    }
+    Ok((
+        raw.chunks_exact(fsz)
+            .take(frames.len())
+            .map(<[u8]>::to_vec)
+            .collect(),
+        bytes,
+    ))
+}
+
+fn err(what: String) -> CodecError {
+    CodecError::Baseline {
+        name: "ffmpeg",
+        what,
+    }
+}
+
+/// Pipes `rgb48le` frames into ffmpeg, writing `mp4` (from within `dir`);
+/// returns the stream's bytes.
+#[allow(clippy::too_many_arguments)]
+fn encode_video(
+    codec: VideoCodec,
+    frames: &[Vec<u8>],
+    w: u32,
+    h: u32,
+    crf: u32,
+    gop: u32,
+    dir: &Path,
+    mp4: &Path,
+) -> Result<u64> {
+    let size = format!("{w}x{h}");
+    let mut child = Command::new("ffmpeg")
+        .args([
+            "-y",
+            "-loglevel",
+            "error",
+            "-f",
+            "rawvideo",
+            "-pix_fmt",
+            "rgb48le",
+            "-s",
+            &size,
+            "-r",
+            "25",
+            "-i",
+            "-",
+        ])
+        .args(["-c:v", codec.name()])
+        .args(codec.args(crf, gop))
+        .args(["-f", "mp4"])
+        .arg(mp4)
+        .stdin(Stdio::piped())
+        .current_dir(dir)
+        .spawn()
+        .map_err(|e| err(e.to_string()))?;
+    {
+        let stdin = child.stdin.as_mut().ok_or_else(|| err("no stdin".into()))?;
+        for f in frames {
+            stdin.write_all(f).map_err(|e| err(e.to_string()))?;
+        }
+    }
+    let st = child.wait().map_err(|e| err(e.to_string()))?;
+    if !st.success() {
+        return Err(err(format!("encoder exited with {st}")));
+    }
+    Ok(std::fs::metadata(mp4)
+        .map_err(|e| err(e.to_string()))?
+        .len())
+}
+
+/// Decodes `mp4` back to raw `rgb48le` frames, back to back.
+fn decode_video(mp4: &Path) -> Result<Vec<u8>> {
+    let mut dec = Command::new("ffmpeg")
+        .args(["-loglevel", "error", "-i"])
+        .arg(mp4)
+        .args(["-f", "rawvideo", "-pix_fmt", "rgb48le", "-"])
+        .stdout(Stdio::piped())
+        .spawn()
+        .map_err(|e| err(e.to_string()))?;
+    let mut raw = Vec::new();
+    dec.stdout
+        .as_mut()
+        .ok_or_else(|| err("no stdout".into()))?
+        .read_to_end(&mut raw)
+        .map_err(|e| err(e.to_string()))?;
+    dec.wait().map_err(|e| err(e.to_string()))?;
+    Ok(raw)
+}

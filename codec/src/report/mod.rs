@@ -1,0 +1,232 @@
+//! The codec report: ratio, PSNR, bytes and decode time of a container
+//! against its reference textures, plus baselines at matched bytes.
+//!
+//! Baselines here:
+//! * `jpeg-per-texture` (image crate): each leaf (all faces and MIPs of one
+//!   sample) as one JPEG atlas of `q(x)` (see [`crate::quality`]) scaled to
+//!   8 bits over the texture's range of `q` (negatives included), alpha as
+//!   a second grey JPEG; the quality
+//!   is bisected so the total bytes come as close to the codec's as JPEG
+//!   allows. Its PSNR is measured the same way as the codec's.
+//! * `mpeg-texture` (ffmpeg/x264 along the parameter path): only when
+//!   `ffmpeg` is on PATH; otherwise skipped with a note. `mpeg-view` needs
+//!   the traced images and is the engine's to add through
+//!   [`ffmpeg_round_trip`] and [`smallest_fitting_crf`].
+//! * `mpeg-texture-x265`: the same with libx265 (HEVC 4:4:4, 10 bits), by
+//!   [`mpeg_texture_baselines_with`]; measurement runs only (the report
+//!   itself keeps x264), with [`mpeg_texture_baselines_memo`] to reuse CRF
+//!   sweeps.
+//!
+//! The `*_baselines` functions take several byte targets at once (for
+//! ratio-against-PSNR [`Curve`]s) and encode each knob setting once.
+//!
+//! PSNR on rendered frames is the engine's part (it renders both); this
+//! report measures the textures.
+
+mod atlas;
+mod ffmpeg;
+mod jpeg;
+mod mpeg_texture;
+
+pub use ffmpeg::{
+    VideoCodec, ffmpeg_available, ffmpeg_round_trip, ffmpeg_round_trip_with, smallest_fitting_crf,
+};
+pub use jpeg::{jpeg_baseline, jpeg_baselines};
+pub use mpeg_texture::{
+    CrfMemo, mpeg_texture_baselines, mpeg_texture_baselines_memo, mpeg_texture_baselines_with,
+};
+
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::container::Container;
+use crate::decode::DecodeCache;
+use crate::error::Result;
+use crate::input::EncodeInput;
+use crate::quality::PsnrAccum;
+use mpeg_texture::mpeg_texture_baseline;
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Baseline {
+    pub name: String,
+    pub ratio: f64,
+    pub psnr_db: f64,
+    pub bytes: u64,
+    pub note: Option<String>,
+    /// Which pixels the PSNR pools, for baselines measured on frames.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pixels: Option<String>,
+}
+
+/// One point of a ratio-against-PSNR curve.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct CurvePoint {
+    pub ratio: f64,
+    pub psnr_db: f64,
+    pub bytes: u64,
+}
+
+/// A ratio-against-PSNR curve: `metric` says which PSNR (`"texture"`: the
+/// codec's texture PSNR, [`PSNR_DEFINITION`]; `"frames_vs_traced"` and
+/// `"frames_vs_uncompressed"`: frames against the traced images or against
+/// the same frames made from uncompressed data; see the report's notes).
+#[derive(Clone, Debug, Serialize)]
+pub struct Curve {
+    pub name: String,
+    pub metric: &'static str,
+    pub points: Vec<CurvePoint>,
+}
+
+impl Curve {
+    pub fn new(name: &str, metric: &'static str) -> Self {
+        Self {
+            name: name.into(),
+            metric,
+            points: Vec::new(),
+        }
+    }
+    pub fn push(&mut self, ratio: f64, psnr_db: f64, bytes: u64) {
+        self.points.push(CurvePoint {
+            ratio,
+            psnr_db,
+            bytes,
+        });
+    }
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct TexturePsnr {
+    pub object: u32,
+    pub layer: u32,
+    pub psnr_db: f64,
+    pub mse: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct CodecReport {
+    /// Raw size as 32-bit floats (all MIPs, all faces) over container bytes.
+    pub ratio: f64,
+    /// The same against 8 bits per channel, the thesis's reference.
+    pub ratio_vs_8bit: f64,
+    /// Texture PSNR (see [`PSNR_DEFINITION`]).
+    pub psnr_db: f64,
+    /// PSNR of rendered frames against the gold standard: filled in by the
+    /// engine, which renders them; `None` here.
+    pub frames_psnr_db: Option<f64>,
+    /// The same frames against the uncompressed maps rendered the same
+    /// way: what compression alone costs on screen (engine; `None` here).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frames_vs_uncompressed_psnr_db: Option<f64>,
+    pub bytes: u64,
+    pub raw_bytes: u64,
+    /// Median wall time to decode one leaf (all faces and MIPs) into an f16
+    /// RGBA slice while stepping along the parameter path with the default
+    /// cache lifetimes (coarse levels mostly cached, the leaf level decoded).
+    pub decode_ms_median: f64,
+    pub decodes_timed: usize,
+    pub textures: Vec<TexturePsnr>,
+    pub baselines: Vec<Baseline>,
+    pub notes: Vec<String>,
+    pub psnr_definition: &'static str,
+    /// Ratio-against-PSNR curves (`engine codec-report --curve`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub curves: Vec<Curve>,
+}
+
+pub const PSNR_DEFINITION: &str = "10*log10(peak^2/MSE) on sign(x)*sqrt(|x|) of RGB and linear alpha; peak = max of the reference over all pooled samples";
+
+#[derive(Clone, Debug)]
+pub struct ReportOptions {
+    pub jpeg_baseline: bool,
+    pub ffmpeg_baseline: bool,
+}
+
+impl Default for ReportOptions {
+    fn default() -> Self {
+        Self {
+            jpeg_baseline: true,
+            ffmpeg_baseline: true,
+        }
+    }
+}
+
+/// Decodes every sample of every texture, measures PSNR and decode time,
+/// and runs the baselines at the container's byte count.
+pub fn report(c: &Container, reference: &EncodeInput, opts: &ReportOptions) -> Result<CodecReport> {
+    let mut total = PsnrAccum::default();
+    let mut textures = Vec::new();
+    let mut times = Vec::new();
+    for t in &reference.textures {
+        let mut acc = PsnrAccum::default();
+        let mut out = vec![half::f16::ZERO; t.layout.texels() * 4];
+        let mut out32 = vec![0.0f32; t.layout.texels() * 4];
+        // Playback along the parameter path with the default lifetimes; a
+        // first, untimed pass fills the cache's buffer pool so the timed pass
+        // measures steady state (recycled memory, not first-touch faults).
+        let mut cache = DecodeCache::default();
+        for pass in 0..2 {
+            for s1 in 0..t.grid.n1 {
+                for s0 in 0..t.grid.n0 {
+                    let start = Instant::now();
+                    cache.decode_leaf_all(c, t.id.object, t.id.layer, [s0, s1], &mut out)?;
+                    let ms = start.elapsed().as_secs_f64() * 1e3;
+                    cache.end_frame();
+                    if pass == 0 {
+                        continue;
+                    }
+                    times.push(ms);
+                    out32
+                        .iter_mut()
+                        .zip(&out)
+                        .for_each(|(d, s)| *d = s.to_f32());
+                    let si = t.grid.index([s0, s1])?;
+                    acc.add(t.sample(si), t.layout.channels as usize, &out32, 4);
+                }
+            }
+            cache.clear();
+        }
+        total.merge(&acc);
+        textures.push(TexturePsnr {
+            object: t.id.object,
+            layer: t.id.layer,
+            psnr_db: acc.psnr_db(),
+            mse: acc.mse(),
+        });
+    }
+    times.sort_by(f64::total_cmp);
+    let median = times.get(times.len() / 2).copied().unwrap_or(0.0);
+    let raw = reference.raw_bytes();
+    let bytes = c.file_len();
+    let mut baselines = Vec::new();
+    let mut notes = Vec::new();
+    if opts.jpeg_baseline {
+        baselines.push(jpeg_baseline(reference, bytes)?);
+    }
+    if opts.ffmpeg_baseline {
+        if ffmpeg_available() {
+            match mpeg_texture_baseline(reference, bytes) {
+                Ok(b) => baselines.push(b),
+                Err(e) => notes.push(format!("mpeg-texture failed: {e}")),
+            }
+        } else {
+            notes.push("ffmpeg not on PATH: mpeg-texture and mpeg-view baselines skipped".into());
+        }
+    }
+    Ok(CodecReport {
+        ratio: raw as f64 / bytes as f64,
+        ratio_vs_8bit: raw as f64 / 4.0 / bytes as f64,
+        psnr_db: total.psnr_db(),
+        frames_psnr_db: None,
+        frames_vs_uncompressed_psnr_db: None,
+        bytes,
+        raw_bytes: raw,
+        decode_ms_median: median,
+        decodes_timed: times.len(),
+        textures,
+        baselines,
+        notes,
+        psnr_definition: PSNR_DEFINITION,
+        curves: Vec::new(),
+    })
+}
