@@ -179,101 +179,115 @@ fn transpose(m: &mut [Lanes; N]) {
 #[inline]
 pub(crate) unsafe fn inverse_avx2(dct: &Dct8, b: &mut [f32; NN]) {
     use std::arch::x86_64::*;
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    unsafe fn pass(x: &mut [__m256; N], tw: &Twiddles) {
-        // Arithmetic intrinsics are safe here from Rust 1.87 on; the block
-        // keeps the declared MSRV (1.85) building.
-        #[allow(unused_unsafe)]
-        unsafe {
-            let c = _mm256_set1_ps;
-            let (mul, add, sub) = (_mm256_mul_ps, _mm256_add_ps, _mm256_sub_ps);
-            let f = c(std::f32::consts::FRAC_1_SQRT_2);
-            let (half, two) = (c(0.5), c(2.0));
-            x[0] = mul(x[0], c(S0X2));
-            for v in &mut x[1..] {
-                *v = mul(*v, c(SK));
-            }
-            let (r4, i4) = (c(tw.t4.0), c(tw.t4.1));
-            let e0 = add(mul(x[0], half), mul(x[4], f));
-            let e2 = sub(mul(x[0], half), mul(x[4], f));
-            let e1 = add(mul(x[2], r4), mul(x[6], i4));
-            let e3 = sub(mul(x[2], i4), mul(x[6], r4));
-            let ev0 = add(e0, e1);
-            let ev1 = add(e2, e3);
-            let ev2 = sub(e2, e3);
-            let ev3 = sub(e0, e1);
-            let h1 = mul(mul(x[1], two), half);
-            let s35 = mul(add(x[3], x[5]), f);
-            let d35 = mul(sub(x[3], x[5]), f);
-            let h7 = mul(mul(x[7], two), half);
-            let n1a = add(h1, s35);
-            let n1b = sub(h1, s35);
-            let n3a = add(d35, h7);
-            let n3b = sub(d35, h7);
-            let (r0, i0) = (c(tw.t8[0].0), c(tw.t8[0].1));
-            let (r1, i1) = (c(tw.t8[1].0), c(tw.t8[1].1));
-            let o0 = add(mul(n1a, r0), mul(n3a, i0));
-            let o1 = sub(mul(n1a, i0), mul(n3a, r0));
-            let o2 = add(mul(n1b, r1), mul(n3b, i1));
-            let o3 = sub(mul(n1b, i1), mul(n3b, r1));
-            *x = [
-                add(ev0, o0),
-                add(ev1, o2),
-                add(ev2, o3),
-                add(ev3, o1),
-                sub(ev3, o1),
-                sub(ev2, o3),
-                sub(ev1, o2),
-                sub(ev0, o0),
-            ];
-        }
-    }
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    unsafe fn transpose(r: &mut [__m256; N]) {
-        #[allow(unused_unsafe)]
-        unsafe {
-            let t0 = _mm256_unpacklo_ps(r[0], r[1]);
-            let t1 = _mm256_unpackhi_ps(r[0], r[1]);
-            let t2 = _mm256_unpacklo_ps(r[2], r[3]);
-            let t3 = _mm256_unpackhi_ps(r[2], r[3]);
-            let t4 = _mm256_unpacklo_ps(r[4], r[5]);
-            let t5 = _mm256_unpackhi_ps(r[4], r[5]);
-            let t6 = _mm256_unpacklo_ps(r[6], r[7]);
-            let t7 = _mm256_unpackhi_ps(r[6], r[7]);
-            let u0 = _mm256_shuffle_ps::<0x44>(t0, t2);
-            let u1 = _mm256_shuffle_ps::<0xEE>(t0, t2);
-            let u2 = _mm256_shuffle_ps::<0x44>(t1, t3);
-            let u3 = _mm256_shuffle_ps::<0xEE>(t1, t3);
-            let u4 = _mm256_shuffle_ps::<0x44>(t4, t6);
-            let u5 = _mm256_shuffle_ps::<0xEE>(t4, t6);
-            let u6 = _mm256_shuffle_ps::<0x44>(t5, t7);
-            let u7 = _mm256_shuffle_ps::<0xEE>(t5, t7);
-            *r = [
-                _mm256_permute2f128_ps::<0x20>(u0, u4),
-                _mm256_permute2f128_ps::<0x20>(u1, u5),
-                _mm256_permute2f128_ps::<0x20>(u2, u6),
-                _mm256_permute2f128_ps::<0x20>(u3, u7),
-                _mm256_permute2f128_ps::<0x31>(u0, u4),
-                _mm256_permute2f128_ps::<0x31>(u1, u5),
-                _mm256_permute2f128_ps::<0x31>(u2, u6),
-                _mm256_permute2f128_ps::<0x31>(u3, u7),
-            ];
-        }
-    }
     // SAFETY: AVX2 is available (the caller's contract); every load and
     // store is 8 floats inside the 64-float block.
     unsafe {
         let p = b.as_mut_ptr();
         let mut r: [__m256; N] = std::array::from_fn(|y| _mm256_loadu_ps(p.add(y * N)));
-        pass(&mut r, &dct.tw);
-        transpose(&mut r);
-        pass(&mut r, &dct.tw);
-        transpose(&mut r);
+        pass_avx2(&mut r, &dct.tw);
+        transpose_avx2(&mut r);
+        pass_avx2(&mut r, &dct.tw);
+        transpose_avx2(&mut r);
         for (y, v) in r.iter().enumerate() {
             _mm256_storeu_ps(p.add(y * N), *v);
         }
+    }
+}
+
+/// One 1D inverse pass of [`inverse_avx2`] on eight lanes at once.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn pass_avx2(x: &mut [std::arch::x86_64::__m256; N], tw: &Twiddles) {
+    use std::arch::x86_64::*;
+    // Arithmetic intrinsics are safe here from Rust 1.87 on; the block
+    // keeps the declared MSRV (1.85) building.
+    #[allow(unused_unsafe)]
+    unsafe {
+        let c = _mm256_set1_ps;
+        let (mul, add, sub) = (_mm256_mul_ps, _mm256_add_ps, _mm256_sub_ps);
+        let f = c(std::f32::consts::FRAC_1_SQRT_2);
+        let (half, two) = (c(0.5), c(2.0));
+        x[0] = mul(x[0], c(S0X2));
+        for v in &mut x[1..] {
+            *v = mul(*v, c(SK));
+        }
+        let (r4, i4) = (c(tw.t4.0), c(tw.t4.1));
+        let e0 = add(mul(x[0], half), mul(x[4], f));
+        let e2 = sub(mul(x[0], half), mul(x[4], f));
+        let e1 = add(mul(x[2], r4), mul(x[6], i4));
+        let e3 = sub(mul(x[2], i4), mul(x[6], r4));
+        let ev0 = add(e0, e1);
+        let ev1 = add(e2, e3);
+        let ev2 = sub(e2, e3);
+        let ev3 = sub(e0, e1);
+        let h1 = mul(mul(x[1], two), half);
+        let s35 = mul(add(x[3], x[5]), f);
+        let d35 = mul(sub(x[3], x[5]), f);
+        let h7 = mul(mul(x[7], two), half);
+        let n1a = add(h1, s35);
+        let n1b = sub(h1, s35);
+        let n3a = add(d35, h7);
+        let n3b = sub(d35, h7);
+        let (r0, i0) = (c(tw.t8[0].0), c(tw.t8[0].1));
+        let (r1, i1) = (c(tw.t8[1].0), c(tw.t8[1].1));
+        let o0 = add(mul(n1a, r0), mul(n3a, i0));
+        let o1 = sub(mul(n1a, i0), mul(n3a, r0));
+        let o2 = add(mul(n1b, r1), mul(n3b, i1));
+        let o3 = sub(mul(n1b, i1), mul(n3b, r1));
+        *x = [
+            add(ev0, o0),
+            add(ev1, o2),
+            add(ev2, o3),
+            add(ev3, o1),
+            sub(ev3, o1),
+            sub(ev2, o3),
+            sub(ev1, o2),
+            sub(ev0, o0),
+        ];
+    }
+}
+
+/// 8×8 transpose of eight AVX registers (rows to columns).
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn transpose_avx2(r: &mut [std::arch::x86_64::__m256; N]) {
+    use std::arch::x86_64::*;
+    #[allow(unused_unsafe)]
+    unsafe {
+        let t0 = _mm256_unpacklo_ps(r[0], r[1]);
+        let t1 = _mm256_unpackhi_ps(r[0], r[1]);
+        let t2 = _mm256_unpacklo_ps(r[2], r[3]);
+        let t3 = _mm256_unpackhi_ps(r[2], r[3]);
+        let t4 = _mm256_unpacklo_ps(r[4], r[5]);
+        let t5 = _mm256_unpackhi_ps(r[4], r[5]);
+        let t6 = _mm256_unpacklo_ps(r[6], r[7]);
+        let t7 = _mm256_unpackhi_ps(r[6], r[7]);
+        let u0 = _mm256_shuffle_ps::<0x44>(t0, t2);
+        let u1 = _mm256_shuffle_ps::<0xEE>(t0, t2);
+        let u2 = _mm256_shuffle_ps::<0x44>(t1, t3);
+        let u3 = _mm256_shuffle_ps::<0xEE>(t1, t3);
+        let u4 = _mm256_shuffle_ps::<0x44>(t4, t6);
+        let u5 = _mm256_shuffle_ps::<0xEE>(t4, t6);
+        let u6 = _mm256_shuffle_ps::<0x44>(t5, t7);
+        let u7 = _mm256_shuffle_ps::<0xEE>(t5, t7);
+        *r = [
+            _mm256_permute2f128_ps::<0x20>(u0, u4),
+            _mm256_permute2f128_ps::<0x20>(u1, u5),
+            _mm256_permute2f128_ps::<0x20>(u2, u6),
+            _mm256_permute2f128_ps::<0x20>(u3, u7),
+            _mm256_permute2f128_ps::<0x31>(u0, u4),
+            _mm256_permute2f128_ps::<0x31>(u1, u5),
+            _mm256_permute2f128_ps::<0x31>(u2, u6),
+            _mm256_permute2f128_ps::<0x31>(u3, u7),
+        ];
     }
 }
 
