@@ -8,7 +8,7 @@ use crate::probe::{
     ProbeError, ProbeGeometry, ProbeRenderer, RenderingMatrix, build_matrix, verify_matrix,
 };
 use crate::solve::layout::{TextureLayout, TextureShape};
-use crate::solve::{SolveOptions, solve_channels};
+use crate::solve::{Solution, SolveOptions, solve_channels};
 use std::time::{Duration, Instant};
 
 /// What the map must reproduce: `channels` (3 or 4) of `pixels`.
@@ -153,26 +153,7 @@ pub fn infer_layer(
     options: &SolveOptions,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<LayerResult, InferError> {
-    let expected = geometry.width as usize * geometry.height as usize;
-    if target.pixels.len() != expected {
-        return Err(InferError::Size {
-            layer: target.name.into(),
-            got: target.pixels.len(),
-            expected,
-        });
-    }
-    if let Some((pixel, channel)) = target
-        .pixels
-        .iter()
-        .enumerate()
-        .find_map(|(p, v)| v.iter().position(|c| !c.is_finite()).map(|c| (p, c)))
-    {
-        return Err(InferError::NonFinite {
-            layer: target.name.into(),
-            pixel,
-            channel,
-        });
-    }
+    let expected = check_target(geometry, target)?;
     let layout = TextureLayout::full_chain(shape);
     let mut timed = Timed {
         inner: renderer,
@@ -184,37 +165,8 @@ pub fn infer_layer(
     let probe_time = timed.spent;
     let verify = verify_matrix(&mut timed, geometry, &layout, &matrix, 1)?;
 
-    let bs: Vec<Vec<f32>> = (0..target.channels)
-        .map(|c| {
-            matrix
-                .pixels
-                .iter()
-                .map(|&p| target.pixels[p as usize][c])
-                .collect()
-        })
-        .collect();
-    let b_refs: Vec<&[f32]> = bs.iter().map(Vec::as_slice).collect();
-    let warm: Option<Vec<&[f32]>> = warm_start
-        .filter(|w| w.len() == target.channels && w.iter().all(|m| m.len() == layout.len()))
-        .map(|w| w.iter().map(Vec::as_slice).collect());
-    let start = Instant::now();
-    let solutions = solve_channels(&matrix.a, &b_refs, &layout, warm.as_deref(), options)?;
-    let solve_time = start.elapsed();
-
-    let width = geometry.width;
-    let object: Vec<bool> = {
-        let mut mask = vec![false; expected];
-        for &p in &matrix.pixels {
-            mask[p as usize] = true;
-        }
-        mask
-    };
-    let forward: Vec<Vec<f32>> = (0..target.channels)
-        .map(|c| {
-            let channel: Vec<f32> = target.pixels.iter().map(|v| v[c]).collect();
-            forward_map(&matrix.a, &matrix.pixels, &layout, width, &channel, &object)
-        })
-        .collect();
+    let (solutions, solve_time) = solve_target(&matrix, target, &layout, warm_start, options)?;
+    let forward = forward_maps(&matrix, target, &layout, geometry.width, expected);
     let map: Vec<Vec<f32>> = solutions.iter().map(|s| s.x.clone()).collect();
     let rendered_ls = render_with_alpha(&mut timed, geometry, &layout, &map)?;
     let rendered_fm = render_with_alpha(&mut timed, geometry, &layout, &forward)?;
@@ -244,4 +196,81 @@ pub fn infer_layer(
         rendered_forward: rendered_fm,
         pixels: matrix.pixels,
     })
+}
+
+/// Checks the target's size against the probe view and that it is all
+/// finite; returns its pixel count.
+fn check_target(geometry: &ProbeGeometry, target: &Target) -> Result<usize, InferError> {
+    let expected = geometry.width as usize * geometry.height as usize;
+    if target.pixels.len() != expected {
+        return Err(InferError::Size {
+            layer: target.name.into(),
+            got: target.pixels.len(),
+            expected,
+        });
+    }
+    if let Some((pixel, channel)) = target
+        .pixels
+        .iter()
+        .enumerate()
+        .find_map(|(p, v)| v.iter().position(|c| !c.is_finite()).map(|c| (p, c)))
+    {
+        return Err(InferError::NonFinite {
+            layer: target.name.into(),
+            pixel,
+            channel,
+        });
+    }
+    Ok(expected)
+}
+
+/// Least squares per channel of `A x = b` over the object's pixels, and
+/// the time the solve took.
+fn solve_target(
+    matrix: &RenderingMatrix,
+    target: &Target,
+    layout: &TextureLayout,
+    warm_start: Option<&[Vec<f32>]>,
+    options: &SolveOptions,
+) -> Result<(Vec<Solution>, Duration), InferError> {
+    let bs: Vec<Vec<f32>> = (0..target.channels)
+        .map(|c| {
+            matrix
+                .pixels
+                .iter()
+                .map(|&p| target.pixels[p as usize][c])
+                .collect()
+        })
+        .collect();
+    let b_refs: Vec<&[f32]> = bs.iter().map(Vec::as_slice).collect();
+    let warm: Option<Vec<&[f32]>> = warm_start
+        .filter(|w| w.len() == target.channels && w.iter().all(|m| m.len() == layout.len()))
+        .map(|w| w.iter().map(Vec::as_slice).collect());
+    let start = Instant::now();
+    let solutions = solve_channels(&matrix.a, &b_refs, layout, warm.as_deref(), options)?;
+    Ok((solutions, start.elapsed()))
+}
+
+/// The forward-mapped map per channel (the baseline the solve is measured
+/// against).
+fn forward_maps(
+    matrix: &RenderingMatrix,
+    target: &Target,
+    layout: &TextureLayout,
+    width: u32,
+    expected: usize,
+) -> Vec<Vec<f32>> {
+    let object: Vec<bool> = {
+        let mut mask = vec![false; expected];
+        for &p in &matrix.pixels {
+            mask[p as usize] = true;
+        }
+        mask
+    };
+    (0..target.channels)
+        .map(|c| {
+            let channel: Vec<f32> = target.pixels.iter().map(|v| v[c]).collect();
+            forward_map(&matrix.a, &matrix.pixels, layout, width, &channel, &object)
+        })
+        .collect()
 }

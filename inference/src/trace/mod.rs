@@ -360,12 +360,25 @@ fn check_settings(s: &TraceSettings) -> Result<(), TraceError> {
 
 /// What the tracer needs beyond what the loader checks (scenes can also be built in code).
 fn validate(scene: &Scene) -> Result<(), TraceError> {
-    let bad = |field: String, message: String| TraceError::Scene {
+    validate_lights(scene)?;
+    validate_materials(scene)?;
+    validate_objects(scene)
+}
+
+fn scene_error(scene: &Scene, field: String, message: String) -> TraceError {
+    TraceError::Scene {
         path: scene.source.clone(),
         field,
         message,
-    };
-    let finite_nonneg = |v: Vec3| v.is_finite() && v.min_element() >= 0.0;
+    }
+}
+
+fn finite_nonneg(v: Vec3) -> bool {
+    v.is_finite() && v.min_element() >= 0.0
+}
+
+fn validate_lights(scene: &Scene) -> Result<(), TraceError> {
+    let bad = |field, message| scene_error(scene, field, message);
     for (i, l) in scene.lights.iter().enumerate() {
         let area = l.area();
         if !(area.is_finite() && area > 1e-12 && l.center.is_finite()) {
@@ -384,38 +397,51 @@ fn validate(scene: &Scene) -> Result<(), TraceError> {
             ));
         }
     }
+    Ok(())
+}
+
+fn validate_materials(scene: &Scene) -> Result<(), TraceError> {
     for (i, m) in scene.materials.iter().enumerate() {
         let name = scene.material_names.get(i).map_or("?", String::as_str);
         let field = format!("materials.{name}");
-        let problem = match *m {
-            Material::Diffuse { albedo, texture } => {
-                if !finite_nonneg(albedo) {
-                    Some(format!(
-                        "albedo must be finite and non-negative, got {albedo}"
-                    ))
-                } else if texture.is_some_and(|t| t >= scene.textures.len()) {
-                    Some(format!("texture index {texture:?} out of range"))
-                } else {
-                    None
-                }
-            }
-            Material::Mirror { f0 } => (!finite_nonneg(f0)).then(|| format!("bad f0 {f0}")),
-            Material::Glossy { f0, roughness } => (!(finite_nonneg(f0)
-                && roughness > 0.0
-                && roughness <= 1.0))
-                .then(|| format!("f0 {f0}, roughness {roughness}: expected roughness in (0, 1]")),
-            Material::Glass { ior, absorption } => {
-                (!(ior.is_finite() && ior >= 1.0 && finite_nonneg(absorption)))
-                    .then(|| format!("ior {ior}, absorption {absorption}: expected ior ≥ 1"))
-            }
-            Material::Emissive { radiance } => {
-                (!finite_nonneg(radiance)).then(|| format!("bad radiance {radiance}"))
-            }
-        };
-        if let Some(message) = problem {
-            return Err(bad(field, message));
+        if let Some(message) = material_problem(m, scene.textures.len()) {
+            return Err(scene_error(scene, field, message));
         }
     }
+    Ok(())
+}
+
+/// What is wrong with a material's parameters, if anything.
+fn material_problem(m: &Material, n_textures: usize) -> Option<String> {
+    match *m {
+        Material::Diffuse { albedo, texture } => {
+            if !finite_nonneg(albedo) {
+                Some(format!(
+                    "albedo must be finite and non-negative, got {albedo}"
+                ))
+            } else if texture.is_some_and(|t| t >= n_textures) {
+                Some(format!("texture index {texture:?} out of range"))
+            } else {
+                None
+            }
+        }
+        Material::Mirror { f0 } => (!finite_nonneg(f0)).then(|| format!("bad f0 {f0}")),
+        Material::Glossy { f0, roughness } => {
+            (!(finite_nonneg(f0) && roughness > 0.0 && roughness <= 1.0))
+                .then(|| format!("f0 {f0}, roughness {roughness}: expected roughness in (0, 1]"))
+        }
+        Material::Glass { ior, absorption } => {
+            (!(ior.is_finite() && ior >= 1.0 && finite_nonneg(absorption)))
+                .then(|| format!("ior {ior}, absorption {absorption}: expected ior ≥ 1"))
+        }
+        Material::Emissive { radiance } => {
+            (!finite_nonneg(radiance)).then(|| format!("bad radiance {radiance}"))
+        }
+    }
+}
+
+fn validate_objects(scene: &Scene) -> Result<(), TraceError> {
+    let bad = |field, message| scene_error(scene, field, message);
     for (i, o) in scene.objects.iter().enumerate() {
         if o.material >= scene.materials.len() {
             return Err(bad(

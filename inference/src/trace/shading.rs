@@ -387,30 +387,7 @@ impl<'a> Integrator<'a> {
             specular: 1,
             ..camera
         };
-        let (fresnel, r, transmission) = match *material {
-            Material::Glass { ior, absorption } => {
-                let cos_i = s.ns.dot(-dir).clamp(0.0, 1.0);
-                let (f, cos_t) = dielectric(ior, cos_i, s.front);
-                let transmission = match cos_t {
-                    Some(cos_t) if f < 1.0 => {
-                        let t = refract(dir, s.ns, ior, s.front, cos_i, cos_t);
-                        let inside = PathState {
-                            medium: s.front.then_some(absorption),
-                            ..after
-                        };
-                        let (l_t, _) =
-                            self.radiance(offset(s.p, -s.ng), t, None, rng, inside, rays);
-                        (1.0 - f) * l_t
-                    }
-                    _ => Vec3::ZERO,
-                };
-                (Vec3::splat(f), reflect(dir, s.ns), transmission)
-            }
-            _ => {
-                let (f, r) = self.specular(&s, dir, material, rng);
-                (f, r, Vec3::ZERO)
-            }
-        };
+        let (fresnel, r, transmission) = self.camera_bounce(&s, dir, material, rng, after, rays);
         let o = offset(s.p, s.ng);
         let (l_r, first) = self.radiance(o, r, None, rng, after, rays);
         let self_hit = first.is_some_and(|h| h.prim.object == object);
@@ -430,6 +407,44 @@ impl<'a> Integrator<'a> {
                 local: self_hit.then_some(l_r),
                 transmission,
             },
+        }
+    }
+
+    /// The Fresnel weight, the reflected direction and the transmitted
+    /// radiance of the camera ray's bounce on a non-diffuse surface (glass
+    /// refracts and traces the transmitted path here).
+    fn camera_bounce(
+        &self,
+        s: &Surface,
+        dir: Vec3,
+        material: &Material,
+        rng: &mut Rng,
+        after: PathState,
+        rays: &mut u64,
+    ) -> (Vec3, Vec3, Vec3) {
+        match *material {
+            Material::Glass { ior, absorption } => {
+                let cos_i = s.ns.dot(-dir).clamp(0.0, 1.0);
+                let (f, cos_t) = dielectric(ior, cos_i, s.front);
+                let transmission = match cos_t {
+                    Some(cos_t) if f < 1.0 => {
+                        let t = refract(dir, s.ns, ior, s.front, cos_i, cos_t);
+                        let inside = PathState {
+                            medium: s.front.then_some(absorption),
+                            ..after
+                        };
+                        let (l_t, _) =
+                            self.radiance(offset(s.p, -s.ng), t, None, rng, inside, rays);
+                        (1.0 - f) * l_t
+                    }
+                    _ => Vec3::ZERO,
+                };
+                (Vec3::splat(f), reflect(dir, s.ns), transmission)
+            }
+            _ => {
+                let (f, r) = self.specular(s, dir, material, rng);
+                (f, r, Vec3::ZERO)
+            }
         }
     }
 }
