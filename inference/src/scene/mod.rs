@@ -4,6 +4,7 @@
 pub mod camera;
 pub mod error;
 mod file;
+pub mod glass;
 pub mod light;
 mod load;
 pub mod material;
@@ -23,6 +24,7 @@ use glam::Vec3;
 pub use crate::fresnel::schlick_fresnel;
 pub use camera::{Camera, Orbit};
 pub use error::SceneError;
+pub use glass::GlassSettings;
 pub use light::AreaLight;
 pub use material::{EM_RESOLUTIONS, EmLayer, EmSettings, Material};
 pub use mesh::Mesh;
@@ -56,6 +58,8 @@ pub struct Object {
     pub material: usize,
     /// Set for objects that get parameterized environment maps.
     pub em: Option<EmSettings>,
+    /// Set for glass objects rendered by hybrid rendering (`[objects.glass]`).
+    pub glass: Option<GlassSettings>,
 }
 
 impl Scene {
