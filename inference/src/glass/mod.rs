@@ -3,6 +3,7 @@
 //! lens object, only at its vertices; their exit rays index layered,
 //! inferred environment shells.
 //!
+//! - [`baseline`]: the static refraction EM it is measured against.
 //! - [`lens`]: the glass object in its own BVH, surfaces as the tracer sees them.
 //! - [`path`]: the greedy two-path model, `T·F_T·G_T + R·F_R·G_R`.
 //! - [`tessellate`]: adaptive tessellation to τ subpixels, no T-junctions.
@@ -12,6 +13,7 @@
 //! - [`targets`]: the per-term, per-shell images the shell maps are
 //!   inferred against, with their confidence.
 
+pub mod baseline;
 pub mod cluster;
 pub mod lens;
 pub mod path;
