@@ -75,7 +75,10 @@ pub fn setup_mode<'s>(
     trace_spp: u32,
 ) -> Result<FrameSource<'s>> {
     Ok(match mode {
-        Mode::StaticEm => FrameSource::Raster(FrameMode::StaticEm),
+        Mode::StaticEm => {
+            crate::glass::load_shell(renderer, ctx.scene, ctx.out)?;
+            FrameSource::Raster(FrameMode::StaticEm)
+        }
         Mode::Bare => FrameSource::Raster(FrameMode::Bare),
         Mode::Trace => {
             let (width, height) = ctx.size;
@@ -88,7 +91,7 @@ pub fn setup_mode<'s>(
             FrameSource::Trace(Box::new(Tracer::new(ctx.scene)?), settings)
         }
         Mode::Hybrid => {
-            crate::glass::setup(renderer, ctx.scene, pem.tau)?;
+            crate::glass::setup(renderer, ctx.scene, ctx.out, pem.tau)?;
             FrameSource::Raster(FrameMode::Hybrid)
         }
         Mode::LayeredPem | Mode::SpherePem | Mode::Ptm => {

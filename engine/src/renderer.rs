@@ -372,6 +372,20 @@ impl Renderer {
         })
     }
 
+    /// Replaces the glass object's shell map (all levels, f16 RGBA in
+    /// upload order) — the traced room instead of the rasterised capture.
+    pub fn load_glass_shell(&mut self, bytes: &[u8]) -> GpuResult<()> {
+        let Some(g) = self.glass.as_ref() else {
+            return Err(GpuError::Invalid("no glass object".into()));
+        };
+        let image = g.shell_map();
+        crate::backend::upload::upload_image(&self.device, self.executor.commands(), image, bytes)?;
+        self.executor
+            .states
+            .assume(image, crate::graph::Usage::Sampled);
+        Ok(())
+    }
+
     /// The glass object's vertex ray paths for a static-EM or hybrid frame.
     fn prepare_glass(
         &mut self,

@@ -9,6 +9,8 @@
 //! refraction at the front surface, the same map read at infinity.
 //! Inferred, layered shells are not played yet.
 
+pub mod shell;
+
 use crate::backend::{Device, GpuError, GpuResult, Image};
 use crate::passes::em_capture::CubeTarget;
 use crate::passes::glass::{GlassGeometry, GlassPass};
@@ -157,12 +159,15 @@ impl GlassPlayer {
     }
 }
 
-/// Sets `renderer` up for hybrid frames with `tau` (the scene's when None).
+/// Sets `renderer` up for hybrid frames with `tau` (the scene's when
+/// None), the room shell map compiled under `out` when missing.
 pub fn setup(
     renderer: &mut crate::renderer::Renderer,
     scene: &Scene,
+    out: &std::path::Path,
     tau: Option<f32>,
 ) -> anyhow::Result<()> {
+    load_shell(renderer, scene, out)?;
     let Some(glass) = renderer.glass.as_mut() else {
         anyhow::bail!(
             "{}: --mode hybrid needs an object with [objects.glass] (a glass material)",
@@ -178,5 +183,21 @@ pub fn setup(
     } else if let Some(settings) = scene.objects.iter().find_map(|o| o.glass.as_ref()) {
         glass.tau = settings.tau;
     }
+    Ok(())
+}
+
+/// Loads the traced room shell map of the scene's glass object (compiled
+/// under `out` when missing); a scene without glass needs none.
+pub fn load_shell(
+    renderer: &mut crate::renderer::Renderer,
+    scene: &Scene,
+    out: &std::path::Path,
+) -> anyhow::Result<()> {
+    let Some(g) = renderer.glass.as_ref() else {
+        return Ok(());
+    };
+    let (object, origin, size) = (g.lens.object, g.cube.origin, g.cube.color.desc.width);
+    let bytes = shell::room_shell_bytes(scene, out, object, origin, size)?;
+    renderer.load_glass_shell(&bytes)?;
     Ok(())
 }
