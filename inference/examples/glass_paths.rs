@@ -25,6 +25,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         lens.mesh.positions.len(),
         lens.triangle_count()
     );
+    // Raw ray cost: from the centroid outwards, one thread.
+    let c = lens.mesh.area_weighted_centroid();
+    let n = 200_000;
+    let start = Instant::now();
+    let mut hits = 0;
+    for i in 0..n {
+        let a = i as f32 * 0.618_034 * std::f32::consts::TAU;
+        let z = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
+        let r = (1.0 - z * z).sqrt();
+        let d = glam::Vec3::new(r * a.cos(), z, r * a.sin());
+        hits += usize::from(lens.closest(c, d).is_some());
+    }
+    println!(
+        "raw: {:.3} µs per ray from the centroid, one thread ({hits} hits)",
+        start.elapsed().as_secs_f64() * 1e6 / n as f64
+    );
     for tau in [3.0, 5.0, 10.0, 30.0, 1e6] {
         let mut times = Vec::new();
         let mut last = None;
