@@ -282,7 +282,8 @@ impl Renderer {
         if matches!(mode, FrameMode::StaticEm | FrameMode::Hybrid) {
             self.texgen(eye, &mut cpu)?;
         }
-        self.prepare_glass(mode, eye, view_proj, &mut cpu)?;
+        let size = (self.width, self.height);
+        crate::glass::prepare_frame(self.glass.as_mut(), mode, (eye, view_proj), size, &mut cpu)?;
         let target = Target {
             color: &self.color,
             depth: &self.depth,
@@ -383,28 +384,6 @@ impl Renderer {
         self.executor
             .states
             .assume(image, crate::graph::Usage::Sampled);
-        Ok(())
-    }
-
-    /// The glass object's vertex ray paths for a static-EM or hybrid frame.
-    fn prepare_glass(
-        &mut self,
-        mode: FrameMode,
-        eye: Vec3,
-        view_proj: Mat4,
-        cpu: &mut CpuTimes,
-    ) -> GpuResult<()> {
-        let kind = match mode {
-            FrameMode::Hybrid => crate::glass::GlassKind::Hybrid,
-            FrameMode::StaticEm => crate::glass::GlassKind::StaticEm,
-            _ => return Ok(()),
-        };
-        let size = (self.width, self.height);
-        if let Some(g) = self.glass.as_mut() {
-            let (paths_ms, upload_ms) = g.prepare(kind, eye, view_proj, size)?;
-            cpu.texgen_ms += paths_ms;
-            cpu.upload_ms += upload_ms;
-        }
         Ok(())
     }
 

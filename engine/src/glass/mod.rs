@@ -159,6 +159,29 @@ impl GlassPlayer {
     }
 }
 
+/// The glass object's CPU side for a static-EM or hybrid frame from `eye`
+/// (`view_proj`); other frames draw no glass.
+pub fn prepare_frame(
+    glass: Option<&mut GlassPlayer>,
+    mode: crate::renderer::FrameMode,
+    (eye, view_proj): (Vec3, Mat4),
+    size: (u32, u32),
+    cpu: &mut crate::renderer::CpuTimes,
+) -> GpuResult<()> {
+    use crate::renderer::FrameMode;
+    let kind = match mode {
+        FrameMode::Hybrid => GlassKind::Hybrid,
+        FrameMode::StaticEm => GlassKind::StaticEm,
+        _ => return Ok(()),
+    };
+    if let Some(g) = glass {
+        let (paths_ms, upload_ms) = g.prepare(kind, eye, view_proj, size)?;
+        cpu.texgen_ms += paths_ms;
+        cpu.upload_ms += upload_ms;
+    }
+    Ok(())
+}
+
 /// Sets `renderer` up for hybrid frames with `tau` (the scene's when
 /// None), the room shell map compiled under `out` when missing.
 pub fn setup(

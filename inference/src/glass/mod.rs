@@ -26,6 +26,10 @@ pub mod tessellate;
 pub mod vertices;
 
 #[cfg(test)]
+mod scene_tests;
+#[cfg(test)]
+mod shell_tests;
+#[cfg(test)]
 mod tests;
 
 pub use lens::Lens;
