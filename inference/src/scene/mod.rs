@@ -16,6 +16,8 @@ pub mod shipped;
 pub mod texture;
 
 #[cfg(test)]
+mod glass_tests;
+#[cfg(test)]
 mod tests;
 
 use std::path::{Path, PathBuf};

@@ -9,6 +9,24 @@ use crate::scene::glass::{GLASS_TAU, GLASS_VIEWS, GlassSettings};
 use crate::scene::material::{EM_RESOLUTIONS, Material};
 
 impl Loader<'_> {
+    /// Hybrid rendering plays one glass object per scene.
+    pub(super) fn check_one_glass(
+        &self,
+        objects: &[crate::scene::file::ObjectFile],
+    ) -> Result<(), SceneError> {
+        let mut glass = objects
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| o.glass.is_some());
+        if let (Some(_), Some((i, _))) = (glass.next(), glass.next()) {
+            return Err(self.err(
+                format!("objects[{i}].glass"),
+                "a second object with [objects.glass] (hybrid rendering plays one per scene)",
+            ));
+        }
+        Ok(())
+    }
+
     pub(super) fn glass(
         &self,
         field: &str,

@@ -71,6 +71,7 @@ impl Loader<'_> {
                 .push(self.object(i, o, &lookup, &declared.materials)?);
         }
         self.check_unique_names(&parts.objects)?;
+        self.check_one_glass(&file.objects)?;
 
         Ok(Scene {
             name,
