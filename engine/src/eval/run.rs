@@ -1,4 +1,4 @@
-//! `engine eval`: every row of [`all_rows`] measured against the traced
+//! `engine eval`: every row of [`rows_for`] measured against the traced
 //! gold standard on three kinds of views — on the orbit, between samples,
 //! above the orbit plane — beside its frame time.
 
@@ -7,7 +7,7 @@ use super::metrics;
 use super::pictures::side_by_side;
 use super::reference::{ReferenceImage, References, View as RefView};
 use super::rows::{Row, rows_for};
-use super::table::{EvalRow, EvalTable, ViewCounts};
+use super::table::{AboveScore, EvalRow, EvalTable, ViewCounts};
 use super::views::{Category, View, views};
 use crate::options::RunPlace;
 use crate::play::{FrameSource, Session, compile_context, setup_mode};
@@ -25,7 +25,9 @@ pub struct EvalOptions {
     /// Views per category, spread evenly along the orbit.
     pub views: u32,
     /// Elevation of the "above" views over the orbit plane, degrees.
-    pub elevation: f32,
+    /// Elevations of the views above the plane (the first is the
+    /// `*_above` fields'; each has its own `above[]` entry).
+    pub elevations: Vec<f32>,
     /// Samples per pixel of the traced references.
     pub spp: u32,
     /// Timed frames per view and row (after one untimed frame).
@@ -37,6 +39,7 @@ pub struct EvalOptions {
 /// What one row measured on one view.
 struct ViewResult {
     category: Category,
+    elevation_deg: f32,
     psnr_db: f64,
     flip: f64,
     frame_ms: f64,
@@ -65,7 +68,7 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
         })?
         .name
         .clone();
-    let views = views(&scene, opts.views, opts.elevation);
+    let views = views(&scene, opts.views, &opts.elevations);
     let references = references(&scene, &views, place.size, opts.spp, &out, &reflector)?;
     let run = RowRun {
         views: &views,
@@ -104,10 +107,11 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
     );
     let written = write_outputs(&out, &table, &title, &run, pictures, place.size)?;
     let mut text = format!(
-        "{} | {} {}x{} | {} views per category, above = +{}°, reference {} spp\n",
-        device.name, scene.name, place.size.0, place.size.1, opts.views, opts.elevation, opts.spp
+        "{} | {} {}x{} | {} views per category, above = +{:?}°, reference {} spp\n",
+        device.name, scene.name, place.size.0, place.size.1, opts.views, opts.elevations, opts.spp
     );
     text += &table.to_markdown();
+    text += &table.above_markdown();
     for s in &skipped {
         text += &format!("skipped {s}\n");
     }
@@ -269,6 +273,7 @@ fn measure(
     };
     let result = ViewResult {
         category: view.category,
+        elevation_deg: view.elevation_deg,
         psnr_db,
         flip,
         frame_ms: median(&times),
@@ -288,6 +293,30 @@ fn table_row(row: &Row, results: &[ViewResult], views: u32) -> EvalRow {
         )
     };
     let times: Vec<f64> = results.iter().map(|r| r.frame_ms).collect();
+    let mut elevations: Vec<f32> = results
+        .iter()
+        .filter(|r| r.category == Category::Above)
+        .map(|r| r.elevation_deg)
+        .collect();
+    elevations.dedup();
+    let at = |e: f32, f: fn(&ViewResult) -> f64| {
+        mean(
+            &results
+                .iter()
+                .filter(|r| r.category == Category::Above && r.elevation_deg == e)
+                .map(f)
+                .collect::<Vec<_>>(),
+        )
+    };
+    let above: Vec<AboveScore> = elevations
+        .iter()
+        .map(|&e| AboveScore {
+            elevation_deg: e,
+            psnr_db: at(e, |r| r.psnr_db),
+            flip: at(e, |r| r.flip),
+        })
+        .collect();
+    let first = |f: fn(&AboveScore) -> f64| above.first().map_or(f64::NAN, f);
     EvalRow {
         mode: row
             .label
@@ -298,10 +327,10 @@ fn table_row(row: &Row, results: &[ViewResult], views: u32) -> EvalRow {
         settings: row.settings(),
         psnr_on_db: kind(Category::On, |r| r.psnr_db),
         psnr_between_db: kind(Category::Between, |r| r.psnr_db),
-        psnr_above_db: kind(Category::Above, |r| r.psnr_db),
+        psnr_above_db: first(|a| a.psnr_db),
         flip_on: kind(Category::On, |r| r.flip),
         flip_between: kind(Category::Between, |r| r.flip),
-        flip_above: kind(Category::Above, |r| r.flip),
+        flip_above: first(|a| a.flip),
         frame_ms: median(&times),
         frame_ms_p95: Some(percentile(&times, 0.95)),
         views: Some(ViewCounts {
@@ -310,5 +339,6 @@ fn table_row(row: &Row, results: &[ViewResult], views: u32) -> EvalRow {
             above: views,
         }),
         map_bytes: None,
+        above,
     }
 }
