@@ -334,6 +334,25 @@ impl<'a> Integrator<'a> {
         }
     }
 
+    /// Radiance leaving `hit` back along `dir`, for a camera path that reached
+    /// it through `specular` specular bounces and no diffuse one (so emitters
+    /// count): what the glass targets' exit rays see.
+    pub fn radiance_at(
+        &self,
+        hit: Hit,
+        dir: Vec3,
+        specular: u32,
+        rng: &mut Rng,
+        rays: &mut u64,
+    ) -> Vec3 {
+        let state = PathState {
+            specular,
+            count_emission: true,
+            ..PathState::default()
+        };
+        self.shade(hit, dir, rng, state, rays)
+    }
+
     /// First hit point of a ray and the mirror direction there (shading normal): the
     /// geometry every reflective layer is built on, exposed for checks.
     pub fn reflect_once(&self, origin: Vec3, dir: Vec3) -> Option<(Vec3, Vec3)> {
