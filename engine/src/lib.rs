@@ -17,6 +17,7 @@ pub mod compare;
 pub mod compile;
 pub mod cube;
 pub mod eval;
+pub mod glass;
 pub mod gpu_scene;
 pub mod graph;
 pub mod maps;

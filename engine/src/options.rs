@@ -22,6 +22,9 @@ pub enum Mode {
     Trace,
     /// Every mesh with one texture and nothing else (reference cost).
     Bare,
+    /// Glass by hybrid rendering: CPU ray paths through the glass at the
+    /// vertices of an adaptive tessellation, exit rays into a shell map.
+    Hybrid,
 }
 
 impl Mode {
@@ -34,6 +37,17 @@ impl Mode {
             Mode::Ptm => "ptm",
             Mode::Trace => "trace",
             Mode::Bare => "bare",
+            Mode::Hybrid => "hybrid",
+        }
+    }
+
+    /// The mode a scene plays when none is asked for: hybrid for a scene
+    /// with a glass object, layered PEMs otherwise.
+    pub fn default_for(scene: &inference::scene::Scene) -> Mode {
+        if scene.objects.iter().any(|o| o.glass.is_some()) {
+            Mode::Hybrid
+        } else {
+            Mode::LayeredPem
         }
     }
 }
@@ -69,6 +83,9 @@ pub struct PemOptions {
     pub filtering: Filtering,
     /// How blended samples and layers are composited.
     pub compositing: Compositing,
+    /// Hybrid glass: tessellation threshold in subpixels [default: the
+    /// scene's `[objects.glass] tau`].
+    pub tau: Option<f32>,
 }
 
 impl Default for PemOptions {
@@ -83,6 +100,7 @@ impl Default for PemOptions {
             em_size: None,
             filtering: Filtering::Trilinear,
             compositing: Compositing::Deferred,
+            tau: None,
         }
     }
 }
@@ -114,6 +132,9 @@ impl PemOptions {
         if self.compositing != d.compositing {
             f.push(("compositing".into(), Some("multipass".into())));
         }
+        if let Some(tau) = self.tau {
+            f.push(("tau".into(), Some(tau.to_string())));
+        }
         f
     }
 }
@@ -134,7 +155,8 @@ pub struct RunPlace {
 /// The main job: what to draw along the default path, and what to keep.
 #[derive(Clone, Debug)]
 pub struct PlayOptions {
-    pub mode: Mode,
+    /// None: the scene's default ([`Mode::default_for`]).
+    pub mode: Option<Mode>,
     pub pem: PemOptions,
     /// Frames along the default path [default: 1.5 per viewpoint sample].
     pub frames: Option<u32>,
@@ -151,7 +173,7 @@ pub struct PlayOptions {
 impl PlayOptions {
     pub fn new(mode: Mode) -> Self {
         Self {
-            mode,
+            mode: Some(mode),
             pem: PemOptions::default(),
             frames: None,
             warmup: 3,

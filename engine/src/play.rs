@@ -75,7 +75,10 @@ pub fn setup_mode<'s>(
     trace_spp: u32,
 ) -> Result<FrameSource<'s>> {
     Ok(match mode {
-        Mode::StaticEm => FrameSource::Raster(FrameMode::StaticEm),
+        Mode::StaticEm => {
+            crate::glass::load_shell(renderer, ctx.scene, ctx.out)?;
+            FrameSource::Raster(FrameMode::StaticEm)
+        }
         Mode::Bare => FrameSource::Raster(FrameMode::Bare),
         Mode::Trace => {
             let (width, height) = ctx.size;
@@ -86,6 +89,10 @@ pub fn setup_mode<'s>(
                 ..TraceSettings::default()
             };
             FrameSource::Trace(Box::new(Tracer::new(ctx.scene)?), settings)
+        }
+        Mode::Hybrid => {
+            crate::glass::setup(renderer, ctx.scene, ctx.out, pem.tau)?;
+            FrameSource::Raster(FrameMode::Hybrid)
         }
         Mode::LayeredPem | Mode::SpherePem | Mode::Ptm => {
             let settings = pem_settings(mode, pem, ctx.scene)?;
@@ -109,7 +116,8 @@ pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<PerfReport> {
         ..
     } = Session::open(place)?;
     let ctx = compile_context(place, &scene, &out);
-    let mut source = setup_mode(&ctx, &mut renderer, opts.mode, &opts.pem, opts.trace_spp)?;
+    let mode = opts.mode.unwrap_or_else(|| Mode::default_for(&scene));
+    let mut source = setup_mode(&ctx, &mut renderer, mode, &opts.pem, opts.trace_spp)?;
     let renderer = &mut renderer;
     let scene = &scene;
     let (width, height) = place.size;
@@ -128,7 +136,7 @@ pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<PerfReport> {
         indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames {elapsed}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    progress.set_message(format!("{} {}", scene.name, opts.mode.name()));
+    progress.set_message(format!("{} {}", scene.name, mode.name()));
     let mut log = PerfLog::default();
     for i in 0..frames {
         let start = Instant::now();
@@ -148,7 +156,7 @@ pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<PerfReport> {
     let report = log.report(
         &device.name,
         &scene.name,
-        &format!("{:?}", opts.mode),
+        &format!("{mode:?}"),
         [width, height],
         &renderer.setup_timings,
     );

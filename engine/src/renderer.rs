@@ -35,6 +35,8 @@ pub enum FrameMode {
     Bare,
     /// The lit room, reflectors from parameterized maps (see `set_pem`).
     Pem,
+    /// The lit room, glass by hybrid rendering (`crate::glass`).
+    Hybrid,
 }
 
 /// A reflective object and the static environment map it samples.
@@ -95,6 +97,8 @@ pub struct Renderer {
     pem: Option<PemPlayer>,
     /// Per-pixel lookups of deferred PEM compositing (frame-sized).
     gbuffer: GBuffer,
+    /// The scene's glass object (drawn in static-EM and hybrid frames).
+    pub glass: Option<crate::glass::GlassPlayer>,
     /// The last frame's view-projection (where its G-buffer was written).
     last_view_proj: Mat4,
     /// What set-up cost on the GPU (static EM capture, MIP chain).
@@ -170,6 +174,8 @@ impl Renderer {
             vk::BufferUsageFlags::TRANSFER_DST,
             gpu_allocator::MemoryLocation::GpuToCpu,
         )?;
+        let glass =
+            crate::glass::GlassPlayer::for_scene(device, scene, (COLOR_FORMAT, DEPTH_FORMAT))?;
         // Shared with the tracer so traced and rasterised pixels line up exactly.
         let far = inference::trace::camera::far_plane(scene);
         let projection = inference::trace::camera::projection(scene, width, height);
@@ -190,6 +196,7 @@ impl Renderer {
             texgen_scratch: Vec::new(),
             pem: None,
             gbuffer: GBuffer::new(device, width, height)?,
+            glass,
             last_view_proj: Mat4::IDENTITY,
             setup_timings: Vec::new(),
         };
@@ -240,18 +247,19 @@ impl Renderer {
     /// six faces, then each MIP level from the one above.
     fn capture_static_ems(&mut self, near: f32, far: f32) -> GpuResult<Vec<PassTiming>> {
         let mut passes: Vec<Box<dyn Pass + '_>> = Vec::new();
-        for r in &self.reflectors {
+        let glass = self.glass.as_ref().map(|g| &g.cube);
+        for cube in self.reflectors.iter().map(|r| &r.cube).chain(glass) {
             passes.push(Box::new(EmCapturePass {
                 room: &self.room,
                 gpu: &self.gpu,
-                cube: &r.cube,
+                cube,
                 near,
                 far,
             }));
-            for level in 1..r.cube.color.desc.mip_levels {
+            for level in 1..cube.color.desc.mip_levels {
                 passes.push(Box::new(MipPass {
                     device: &self.device,
-                    image: &r.cube.color,
+                    image: &cube.color,
                     level,
                     name: format!("em_mip{level}"),
                 }));
@@ -271,9 +279,11 @@ impl Renderer {
         let view_proj = self.projection * view;
         self.last_view_proj = view_proj;
         let mut cpu = CpuTimes::default();
-        if mode == FrameMode::StaticEm {
+        if matches!(mode, FrameMode::StaticEm | FrameMode::Hybrid) {
             self.texgen(eye, &mut cpu)?;
         }
+        let size = (self.width, self.height);
+        crate::glass::prepare_frame(self.glass.as_mut(), mode, (eye, view_proj), size, &mut cpu)?;
         let target = Target {
             color: &self.color,
             depth: &self.depth,
@@ -298,7 +308,7 @@ impl Renderer {
         }
         let mut passes: Vec<Box<dyn Pass + '_>> = Vec::new();
         match mode {
-            FrameMode::StaticEm | FrameMode::Pem => {
+            FrameMode::StaticEm | FrameMode::Pem | FrameMode::Hybrid => {
                 let upload = match (&self.pem, mode) {
                     (Some(pem), FrameMode::Pem) => pem.upload_pass()?,
                     _ => None,
@@ -337,6 +347,10 @@ impl Renderer {
                         view_proj,
                     )));
                 }
+                if let Some(g) = self.glass.as_ref().filter(|_| mode != FrameMode::Pem) {
+                    let area = area_of(view_proj, [g.bounds()], self.width, self.height);
+                    passes.push(Box::new(g.pass(Target { area, ..later }, view_proj)));
+                }
             }
             FrameMode::Bare => {
                 passes.push(Box::new(
@@ -357,6 +371,20 @@ impl Renderer {
             passes: timings,
             cpu,
         })
+    }
+
+    /// Replaces the glass object's shell map (all levels, f16 RGBA in
+    /// upload order) — the traced room instead of the rasterised capture.
+    pub fn load_glass_shell(&mut self, bytes: &[u8]) -> GpuResult<()> {
+        let Some(g) = self.glass.as_ref() else {
+            return Err(GpuError::Invalid("no glass object".into()));
+        };
+        let image = g.shell_map();
+        crate::backend::upload::upload_image(&self.device, self.executor.commands(), image, bytes)?;
+        self.executor
+            .states
+            .assume(image, crate::graph::Usage::Sampled);
+        Ok(())
     }
 
     /// CPU texgen for every reflector, then the copy into its vertex buffer

@@ -142,6 +142,29 @@ pub struct CompositePush {
     pub info: Vec4,
 }
 
+/// `shaders/glass.vert` / `glass.frag` push constants.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GlassPush {
+    pub view_proj: Mat4,
+}
+
+/// `shaders/glass.vert`: one interleaved stream of
+/// `inference::glass::vertices::vertex_stream` for one shell — position,
+/// `F_T·G_T`, `F_R·G_R`, the refraction term's lookup, the reflection term's.
+pub const GLASS_BINDING: vk::VertexInputBindingDescription = vk::VertexInputBindingDescription {
+    binding: 0,
+    stride: 15 * 4,
+    input_rate: vk::VertexInputRate::VERTEX,
+};
+pub const GLASS_ATTRIBUTES: [vk::VertexInputAttributeDescription; 5] = [
+    attribute(0, 0, vk::Format::R32G32B32_SFLOAT, 0),
+    attribute(1, 0, vk::Format::R32G32B32_SFLOAT, 12),
+    attribute(2, 0, vk::Format::R32G32B32_SFLOAT, 24),
+    attribute(3, 0, vk::Format::R32G32B32_SFLOAT, 36),
+    attribute(4, 0, vk::Format::R32G32B32_SFLOAT, 48),
+];
+
 /// Most viewpoint samples one frame blends (a 2D cell's corners).
 pub const MAX_BLEND: usize = 4;
 
@@ -165,4 +188,6 @@ pub mod spirv {
     pub const PEM_GBUFFER_FRAG: &[u8] = shader!("pem_gbuffer.frag");
     pub const PEM_COMPOSITE_VERT: &[u8] = shader!("pem_composite.vert");
     pub const PEM_COMPOSITE_FRAG: &[u8] = shader!("pem_composite.frag");
+    pub const GLASS_VERT: &[u8] = shader!("glass.vert");
+    pub const GLASS_FRAG: &[u8] = shader!("glass.frag");
 }

@@ -7,6 +7,7 @@
 pub mod em_geometry;
 pub mod files;
 pub mod fresnel;
+pub mod glass;
 pub mod hull;
 pub mod infer;
 pub mod key;

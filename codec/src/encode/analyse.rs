@@ -26,6 +26,9 @@ pub(super) struct BlockJob {
     pub(super) atoms: Vec<Atom>,
 }
 
+/// Images up to this many coefficients per plane get a longer R-D sweep.
+const SMALL_IMAGE: usize = 16 * 16;
+
 fn rd_curve(img: &CoefImage, points: usize) -> Vec<RdPoint> {
     let energy = img.energy();
     let mut out = vec![RdPoint {
@@ -37,6 +40,16 @@ fn rd_curve(img: &CoefImage, points: usize) -> Vec<RdPoint> {
         return out;
     }
     let hi = idx_at_least(2.0 * img.max_abs()) as i32;
+    // `points` half-octave steps span 12 octaves below the largest
+    // coefficient; a small image whose detail sits further below its DC
+    // needs more to approach lossless at generous budgets. Its extra points
+    // are cheap (encoding cost scales with the coefficients), so small
+    // images get 4 more octaves and large ones keep their encode time.
+    let points = if img.w * img.h <= SMALL_IMAGE {
+        points + 8
+    } else {
+        points
+    };
     for k in 0..points as i32 {
         let idx = hi - 2 * k;
         if idx < 1 {

@@ -100,6 +100,37 @@ pub fn all_rows() -> Vec<Row> {
     ]
 }
 
+/// The rows of a scene with a glass object: hybrid at τ = 3 (labelled
+/// plainly, so the eval pictures it), 5 and 10 subpixels, the static
+/// refraction EM baseline and the tracer.
+pub fn glass_rows() -> Vec<Row> {
+    let mut rows: Vec<Row> = [3.0f32, 5.0, 10.0]
+        .iter()
+        .map(|&tau| {
+            let label = match tau {
+                3.0 => "hybrid".to_string(),
+                _ => format!("hybrid tau{tau}"),
+            };
+            Row::new(&label, Mode::Hybrid).with(|p| p.tau = Some(tau))
+        })
+        .collect();
+    rows.push(Row::new("static-em", Mode::StaticEm));
+    rows.push(Row {
+        trace_spp: 4,
+        ..Row::new("trace 4spp", Mode::Trace)
+    });
+    rows
+}
+
+/// The rows of `scene`: [`glass_rows`] when it has a glass object.
+pub fn rows_for(scene: &inference::scene::Scene) -> Vec<Row> {
+    if scene.objects.iter().any(|o| o.glass.is_some()) {
+        glass_rows()
+    } else {
+        all_rows()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -126,5 +157,18 @@ mod tests {
         assert_eq!(nearest.settings()["no_blend"], serde_json::json!(true));
         let trace = rows.iter().find(|r| r.mode == Mode::Trace).expect("row");
         assert_eq!(trace.flags(), "--mode trace --trace-spp 4");
+    }
+
+    #[test]
+    fn glass_rows_carry_tau() {
+        let rows = glass_rows();
+        let taus: Vec<_> = rows.iter().filter_map(|r| r.pem.tau).collect();
+        assert_eq!(taus, vec![3.0, 5.0, 10.0]);
+        assert_eq!(rows[0].flags(), "--mode hybrid --tau 3");
+        assert_eq!(rows[0].label, "hybrid");
+        assert_eq!(rows[1].label, "hybrid tau5");
+        assert_eq!(rows[0].settings()["tau"], serde_json::json!(3));
+        assert!(rows.iter().any(|r| r.mode == Mode::StaticEm));
+        assert!(rows.iter().any(|r| r.mode == Mode::Trace));
     }
 }

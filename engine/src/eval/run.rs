@@ -1,4 +1,4 @@
-//! `engine eval`: every row of [`all_rows`] measured against the traced
+//! `engine eval`: every row of [`rows_for`] measured against the traced
 //! gold standard on three kinds of views — on the orbit, between samples,
 //! above the orbit plane — beside its frame time.
 
@@ -6,7 +6,7 @@ use super::chart::tradeoff_chart;
 use super::metrics;
 use super::pictures::side_by_side;
 use super::reference::{ReferenceImage, References, View as RefView};
-use super::rows::{Row, all_rows};
+use super::rows::{Row, rows_for};
 use super::table::{AboveScore, EvalRow, EvalTable, ViewCounts};
 use super::views::{Category, View, views};
 use crate::options::RunPlace;
@@ -48,7 +48,6 @@ struct ViewResult {
 /// Runs the rows of `opts` in `place` (whose output folder holds the
 /// compiled maps); returns the printed table.
 pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
-    let rows = selected_rows(&opts.rows)?;
     let Session {
         scene,
         out: data,
@@ -56,13 +55,17 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
         mut renderer,
         ..
     } = Session::open(place)?;
+    let rows = selected_rows(&opts.rows, &scene)?;
     let out = opts.out.clone().unwrap_or_else(|| data.join("eval"));
     crate::util::files::claim_dir(&out)?;
     let reflector = scene
         .objects
         .iter()
-        .find(|o| o.em.is_some())
-        .with_context(|| format!("{}: no reflector with [objects.em]", scene.source.display()))?
+        .find(|o| o.em.is_some() || o.glass.is_some())
+        .with_context(|| {
+            let source = scene.source.display();
+            format!("{source}: no reflector with [objects.em] or glass with [objects.glass]")
+        })?
         .name
         .clone();
     let views = views(&scene, opts.views, &opts.elevations);
@@ -214,8 +217,8 @@ impl RowRun<'_> {
 }
 
 /// The rows whose labels are in `wanted` (all when empty).
-fn selected_rows(wanted: &[String]) -> Result<Vec<Row>> {
-    let all = all_rows();
+fn selected_rows(wanted: &[String], scene: &inference::scene::Scene) -> Result<Vec<Row>> {
+    let all = rows_for(scene);
     let rows: Vec<Row> = all
         .iter()
         .filter(|r| wanted.is_empty() || wanted.contains(&r.label))

@@ -1,6 +1,7 @@
 //! One module per pass.
 
 pub mod em_capture;
+pub mod glass;
 pub mod mirror;
 pub mod pem;
 pub mod pem_deferred;

@@ -122,6 +122,7 @@ pub struct ObjectFile {
     #[serde(default)]
     pub transform: TransformFile,
     pub em: Option<EmFile>,
+    pub glass: Option<GlassFile>,
 }
 
 /// Either `{ generator = "newell_teapot", segments = 25, part = "whole" }` or
@@ -164,6 +165,17 @@ pub struct EmFile {
     pub resolution: u32,
     #[serde(default = "default_layers")]
     pub layers: Vec<EmLayer>,
+}
+
+/// `[objects.glass]`; see `scene::glass::GlassSettings` for the meanings.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GlassFile {
+    pub resolution: Option<u32>,
+    pub shells: Option<u32>,
+    pub tau: Option<f32>,
+    pub views: Option<u32>,
+    pub view_spread_deg: Option<f32>,
 }
 
 fn one() -> f32 {

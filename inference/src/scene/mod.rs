@@ -4,6 +4,7 @@
 pub mod camera;
 pub mod error;
 mod file;
+pub mod glass;
 pub mod grid;
 pub mod light;
 mod load;
@@ -15,6 +16,8 @@ pub mod shipped;
 pub mod texture;
 
 #[cfg(test)]
+mod glass_tests;
+#[cfg(test)]
 mod tests;
 
 use std::path::{Path, PathBuf};
@@ -24,6 +27,7 @@ use glam::Vec3;
 pub use crate::fresnel::schlick_fresnel;
 pub use camera::{Camera, Orbit};
 pub use error::SceneError;
+pub use glass::GlassSettings;
 pub use grid::{SampleBlend, ViewGrid};
 pub use light::AreaLight;
 pub use material::{EM_RESOLUTIONS, EmLayer, EmSettings, Material};
@@ -58,6 +62,8 @@ pub struct Object {
     pub material: usize,
     /// Set for objects that get parameterized environment maps.
     pub em: Option<EmSettings>,
+    /// Set for glass objects rendered by hybrid rendering (`[objects.glass]`).
+    pub glass: Option<GlassSettings>,
 }
 
 impl Scene {

@@ -8,6 +8,7 @@ pub const SHIPPED: &[(&str, &str)] = &[
         "teapot_rings",
         include_str!("../../../assets/scenes/teapot_rings.toml"),
     ),
+    ("glass", include_str!("../../../assets/scenes/glass.toml")),
 ];
 
 /// The text of the shipped scene `name`, if there is one.

@@ -10,7 +10,7 @@ use obvhs::cwbvh::builder::build_cwbvh_from_tris;
 use obvhs::ray::{Ray, RayHit};
 use obvhs::triangle::Triangle;
 
-use crate::scene::Scene;
+use crate::scene::{Mesh, Scene};
 
 /// Which object and which of its triangles a BVH primitive is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -39,11 +39,22 @@ pub struct SceneBvh {
 
 impl SceneBvh {
     pub fn build(scene: &Scene) -> SceneBvh {
+        let meshes: Vec<(u32, &Mesh)> = scene
+            .objects
+            .iter()
+            .enumerate()
+            .map(|(o, object)| (o as u32, &object.mesh))
+            .collect();
+        SceneBvh::from_meshes(&meshes)
+    }
+
+    /// A BVH over some meshes only, each tagged with the object index its
+    /// hits report (the glass lens: one object in its own BVH).
+    pub fn from_meshes(meshes: &[(u32, &Mesh)]) -> SceneBvh {
         let start = Instant::now();
         let mut tris = Vec::new();
         let mut prims = Vec::new();
-        for (o, object) in scene.objects.iter().enumerate() {
-            let mesh = &object.mesh;
+        for &(o, mesh) in meshes {
             for t in 0..mesh.triangle_count() {
                 let [a, b, c] = mesh.triangle(t);
                 tris.push(Triangle {
@@ -52,7 +63,7 @@ impl SceneBvh {
                     v2: c.into(),
                 });
                 prims.push(PrimRef {
-                    object: o as u32,
+                    object: o,
                     triangle: t as u32,
                 });
             }
@@ -110,6 +121,38 @@ impl SceneBvh {
                 }
             }),
         };
+        if !found {
+            return None;
+        }
+        let id = hit.primitive_id as usize;
+        let tri = self.tris.get(id)?;
+        Some(Hit {
+            t: hit.t,
+            prim: self.prims[id],
+            bary: barycentrics(tri, origin + dir * hit.t),
+        })
+    }
+
+    /// Nearest hit with `t` in `[tmin, tmax]` on an object `keep` accepts;
+    /// every other object is transparent (the glass targets' continued rays).
+    pub fn closest_where(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        tmin: f32,
+        tmax: f32,
+        keep: impl Fn(u32) -> bool,
+    ) -> Option<Hit> {
+        let bvh = self.bvh.as_ref()?;
+        let ray = make_ray(origin, dir, tmin, tmax);
+        let mut hit = RayHit::none();
+        let found = bvh.ray_traverse(ray, &mut hit, |r, id| {
+            if keep(self.prims[id].object) {
+                self.tris[id].intersect(r)
+            } else {
+                f32::INFINITY
+            }
+        });
         if !found {
             return None;
         }

@@ -42,7 +42,7 @@ mod error;
 pub mod film;
 mod lattice;
 pub mod layers;
-mod optics;
+pub(crate) mod optics;
 pub mod output;
 pub mod photons;
 pub mod rng;
@@ -163,6 +163,11 @@ impl<'a> Tracer<'a> {
         })
     }
 
+    /// The scene this tracer renders.
+    pub fn scene(&self) -> &'a Scene {
+        self.scene
+    }
+
     pub fn bvh_build_time(&self) -> Duration {
         self.bvh.build_time
     }
@@ -242,6 +247,20 @@ impl<'a> Tracer<'a> {
             rays,
             elapsed: start.elapsed(),
         }
+    }
+
+    /// Runs `f` with the integrator (and caustic photon map) that `settings`
+    /// trace with: for tracers of other quantities on the same scene (the
+    /// glass targets), so they see exactly the radiance the layers see.
+    pub fn with_integrator<R>(
+        &self,
+        settings: &TraceSettings,
+        f: impl FnOnce(&Integrator, &SceneBvh) -> R,
+    ) -> R {
+        let integrator = Integrator::new(self.scene, &self.bvh, settings.transport);
+        let (photons, _) = self.photon_map(&integrator, settings);
+        let integrator = integrator.with_photons(photons.as_deref());
+        f(&integrator, &self.bvh)
     }
 
     /// The photon map `settings` ask for, built on first use and shared by

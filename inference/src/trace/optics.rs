@@ -6,11 +6,11 @@ use glam::Vec3;
 use crate::fresnel::schlick_fresnel;
 
 /// Offset along the normal that clears f32 rounding at `p`'s magnitude (metre-scale scenes).
-pub(super) fn offset(p: Vec3, n: Vec3) -> Vec3 {
+pub(crate) fn offset(p: Vec3, n: Vec3) -> Vec3 {
     p + n * (1e-4 * p.abs().max_element().max(1.0))
 }
 
-pub(super) fn reflect(d: Vec3, n: Vec3) -> Vec3 {
+pub(crate) fn reflect(d: Vec3, n: Vec3) -> Vec3 {
     d - 2.0 * d.dot(n) * n
 }
 
@@ -31,13 +31,17 @@ pub fn phong_exponent(roughness: f32) -> f32 {
 }
 
 /// Dielectric Fresnel for a ray hitting from the `front` side: `(F, cos_t)`, F = 1 under
-/// total internal reflection. Uses the runtime's Schlick formula.
-pub(super) fn dielectric(ior: f32, cos_i: f32, front: bool) -> (f32, Option<f32>) {
+/// total internal reflection, 0 at IOR 1 (no interface). Uses the runtime's Schlick formula.
+pub(crate) fn dielectric(ior: f32, cos_i: f32, front: bool) -> (f32, Option<f32>) {
     let ior = if ior.is_finite() && ior > 0.0 {
         ior
     } else {
         1.0
     };
+    if ior == 1.0 {
+        // No optical interface: Schlick's grazing term would still reflect.
+        return (0.0, Some(cos_i));
+    }
     let f0 = ((ior - 1.0) / (ior + 1.0)).powi(2);
     let eta = if front { 1.0 / ior } else { ior };
     let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
@@ -56,7 +60,7 @@ pub(crate) fn dielectric_for_tests(ior: f32, cos_i: f32, front: bool) -> (f32, O
 }
 
 /// Refracted direction through a surface with shading normal `n` (facing the incoming ray).
-pub(super) fn refract(d: Vec3, n: Vec3, ior: f32, front: bool, cos_i: f32, cos_t: f32) -> Vec3 {
+pub(crate) fn refract(d: Vec3, n: Vec3, ior: f32, front: bool, cos_i: f32, cos_t: f32) -> Vec3 {
     let eta = if front { 1.0 / ior } else { ior };
     (eta * d + (eta * cos_i - cos_t) * n).normalize_or(-n)
 }

@@ -87,6 +87,7 @@ pub(super) fn scene(objects: Vec<(&str, Mesh, Material)>) -> Scene {
             mesh,
             material: s.materials.len() - 1,
             em: None,
+            glass: None,
         });
     }
     s

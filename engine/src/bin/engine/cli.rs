@@ -255,9 +255,10 @@ pub struct PlayArgs {
     /// or that were empty.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// What each frame draws.
-    #[arg(long, value_enum, default_value_t = Mode::LayeredPem)]
-    pub mode: Mode,
+    /// What each frame draws [default: hybrid for a scene with a glass
+    /// object, layered-pem otherwise].
+    #[arg(long, value_enum)]
+    pub mode: Option<Mode>,
     #[command(flatten)]
     pub pem: PemArgs,
     /// Turn the Khronos validation layer on; the run ends with
@@ -317,6 +318,11 @@ pub struct PemArgs {
     /// sample, blended.
     #[arg(long, value_enum, default_value_t = Compositing::Deferred)]
     pub compositing: Compositing,
+    /// Hybrid glass: split triangles whose vertex ray paths differ until
+    /// their projected edges are below TAU subpixels (⅓ pixel) [default:
+    /// the scene's `[objects.glass] tau`].
+    #[arg(long)]
+    pub tau: Option<f32>,
 }
 
 /// Parses `WIDTHxHEIGHT`, each 1..=8192.
@@ -378,6 +384,7 @@ impl PemArgs {
             em_size: self.em_size,
             filtering: self.filtering,
             compositing: self.compositing,
+            tau: self.tau,
         }
     }
 }

@@ -40,6 +40,7 @@ impl Loader<'_> {
             mesh: light.mesh(),
             material: parts.materials.len() - 1,
             em: None,
+            glass: None,
         });
         parts.lights.push(light);
         Ok(())

@@ -1,6 +1,7 @@
 //! From a parsed scene file to a validated `Scene`: every check names the file and field.
 
 mod check;
+mod glass;
 mod lights;
 mod materials;
 mod objects;
@@ -65,9 +66,12 @@ impl Loader<'_> {
             self.add_light(i, l, room, &mut parts)?;
         }
         for (i, o) in file.objects.iter().enumerate() {
-            parts.objects.push(self.object(i, o, &lookup)?);
+            parts
+                .objects
+                .push(self.object(i, o, &lookup, &declared.materials)?);
         }
         self.check_unique_names(&parts.objects)?;
+        self.check_one_glass(&file.objects)?;
 
         Ok(Scene {
             name,
@@ -124,6 +128,7 @@ impl Loader<'_> {
                 mesh,
                 material,
                 em: None,
+                glass: None,
             });
         }
         Ok(objects)

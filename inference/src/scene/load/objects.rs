@@ -21,6 +21,7 @@ impl Loader<'_> {
         i: usize,
         o: &ObjectFile,
         lookup: &dyn Fn(&str, &str) -> Result<usize, SceneError>,
+        materials: &[crate::scene::Material],
     ) -> Result<Object, SceneError> {
         let f = |k: &str| format!("objects[{i}].{k}");
         if o.name.trim().is_empty() {
@@ -43,11 +44,16 @@ impl Loader<'_> {
             Some(em) => Some(self.em(&f("em"), em)?),
             None => None,
         };
+        let glass = match &o.glass {
+            Some(g) => Some(self.glass(&f("glass"), g, materials.get(material))?),
+            None => None,
+        };
         Ok(Object {
             name: o.name.clone(),
             mesh,
             material,
             em,
+            glass,
         })
     }
 

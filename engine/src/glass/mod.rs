@@ -1,0 +1,226 @@
+//! Glass objects (Hakura's thesis ch. 6) on the device: the lens's shell
+//! map and, every frame, its vertex ray paths traced on the CPU and drawn
+//! by the glass pass.
+//!
+//! Hybrid frames tessellate the lens adaptively to τ subpixels and index
+//! ONE shell: the room's box, whose map is the static EM captured at the
+//! lens centroid (lookup = exit ray's hit on the box − centroid). The
+//! baseline (static refraction EM) draws the lens's own mesh with one
+//! refraction at the front surface, the same map read at infinity.
+//! Inferred, layered shells are not played yet.
+
+pub mod shell;
+
+use crate::backend::{Device, GpuError, GpuResult, Image};
+use crate::passes::em_capture::CubeTarget;
+use crate::passes::glass::{GlassGeometry, GlassPass};
+use crate::passes::target::Target;
+use ash::vk;
+use glam::{Mat4, Vec3};
+use inference::glass::baseline::baseline_mesh;
+use inference::glass::vertices::vertex_stream;
+use inference::glass::{Lens, Screen, Shell, ShellSet, ShellShape, TessSettings, tessellate};
+use inference::scene::Scene;
+use std::time::Instant;
+
+/// How a frame draws the glass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GlassKind {
+    /// Adaptive tessellation, greedy two paths, the room shell.
+    Hybrid,
+    /// The static refraction EM baseline.
+    StaticEm,
+}
+
+/// What the last frame's CPU side did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GlassFrameStats {
+    pub vertices: usize,
+    pub triangles: usize,
+    /// Rays cast through the lens.
+    pub rays: u64,
+    /// Vertex ray paths (tessellation) and stream building, ms.
+    pub paths_ms: f64,
+    pub stream_ms: f64,
+}
+
+/// One glass object's device state.
+pub struct GlassPlayer {
+    lens: Lens,
+    pub cube: CubeTarget,
+    geometry: GlassGeometry,
+    room: ShellSet,
+    infinity: ShellSet,
+    /// Tessellation threshold, subpixels.
+    pub tau: f32,
+    bounds: (Vec3, Vec3),
+    stream: Vec<f32>,
+    pub last: GlassFrameStats,
+}
+
+impl GlassPlayer {
+    /// The first object with `[objects.glass]` settings, if any.
+    pub fn for_scene(
+        device: &Device,
+        scene: &Scene,
+        formats: (vk::Format, vk::Format),
+    ) -> GpuResult<Option<GlassPlayer>> {
+        let Some(object) = scene.objects.iter().find(|o| o.glass.is_some()) else {
+            return Ok(None);
+        };
+        let settings = object.glass.clone().unwrap_or_default();
+        let lens = Lens::new(scene, &object.name).map_err(|e| GpuError::Invalid(e.to_string()))?;
+        let origin = object.mesh.area_weighted_centroid();
+        let cube = CubeTarget::new(
+            device,
+            &format!("{} shell map", object.name),
+            settings.resolution,
+            formats.0,
+            origin,
+        )?;
+        let geometry = GlassGeometry::new(device, &cube.color, formats)?;
+        let (min, max) = inference::glass::room_box(scene);
+        let shell = |shape| ShellSet {
+            origin: origin.to_array(),
+            shells: vec![Shell {
+                shape,
+                objects: inference::glass::room_objects(scene),
+                distance: 0.0,
+            }],
+        };
+        Ok(Some(GlassPlayer {
+            room: shell(ShellShape::Box {
+                min: min.to_array(),
+                max: max.to_array(),
+            }),
+            infinity: shell(ShellShape::Infinity),
+            bounds: object.mesh.bounds(),
+            lens,
+            cube,
+            geometry,
+            tau: settings.tau,
+            stream: Vec::new(),
+            last: GlassFrameStats::default(),
+        }))
+    }
+
+    /// The lens's world-space bounds (the pass's render area).
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.bounds
+    }
+
+    /// The CPU side of a frame from `eye`: vertex ray paths, the stream,
+    /// the upload. Returns (paths + stream ms, upload ms).
+    pub fn prepare(
+        &mut self,
+        kind: GlassKind,
+        eye: Vec3,
+        view_proj: Mat4,
+        (width, height): (u32, u32),
+    ) -> GpuResult<(f64, f64)> {
+        let start = Instant::now();
+        let (tess, shells) = match kind {
+            GlassKind::Hybrid => {
+                let screen = Screen {
+                    view_proj,
+                    width,
+                    height,
+                };
+                let settings = TessSettings::new(self.tau);
+                (tessellate(&self.lens, eye, screen, settings), &self.room)
+            }
+            GlassKind::StaticEm => (baseline_mesh(&self.lens, eye), &self.infinity),
+        };
+        let traced = Instant::now();
+        vertex_stream(&tess, shells, &mut self.stream);
+        let streamed = Instant::now();
+        self.geometry.upload(&self.stream, &tess.indices)?;
+        self.last = GlassFrameStats {
+            vertices: tess.positions.len(),
+            triangles: tess.indices.len() / 3,
+            rays: tess.stats.rays,
+            paths_ms: (traced - start).as_secs_f64() * 1e3,
+            stream_ms: (streamed - traced).as_secs_f64() * 1e3,
+        };
+        Ok((
+            (streamed - start).as_secs_f64() * 1e3,
+            streamed.elapsed().as_secs_f64() * 1e3,
+        ))
+    }
+
+    /// The pass drawing what [`GlassPlayer::prepare`] uploaded.
+    pub fn pass<'a>(&'a self, target: Target<'a>, view_proj: Mat4) -> GlassPass<'a> {
+        self.geometry.pass(&self.cube.color, target, view_proj)
+    }
+
+    /// The shell map (the capture renders into it).
+    pub fn shell_map(&self) -> &Image {
+        &self.cube.color
+    }
+}
+
+/// The glass object's CPU side for a static-EM or hybrid frame from `eye`
+/// (`view_proj`); other frames draw no glass.
+pub fn prepare_frame(
+    glass: Option<&mut GlassPlayer>,
+    mode: crate::renderer::FrameMode,
+    (eye, view_proj): (Vec3, Mat4),
+    size: (u32, u32),
+    cpu: &mut crate::renderer::CpuTimes,
+) -> GpuResult<()> {
+    use crate::renderer::FrameMode;
+    let kind = match mode {
+        FrameMode::Hybrid => GlassKind::Hybrid,
+        FrameMode::StaticEm => GlassKind::StaticEm,
+        _ => return Ok(()),
+    };
+    if let Some(g) = glass {
+        let (paths_ms, upload_ms) = g.prepare(kind, eye, view_proj, size)?;
+        cpu.texgen_ms += paths_ms;
+        cpu.upload_ms += upload_ms;
+    }
+    Ok(())
+}
+
+/// Sets `renderer` up for hybrid frames with `tau` (the scene's when
+/// None), the room shell map compiled under `out` when missing.
+pub fn setup(
+    renderer: &mut crate::renderer::Renderer,
+    scene: &Scene,
+    out: &std::path::Path,
+    tau: Option<f32>,
+) -> anyhow::Result<()> {
+    load_shell(renderer, scene, out)?;
+    let Some(glass) = renderer.glass.as_mut() else {
+        anyhow::bail!(
+            "{}: --mode hybrid needs an object with [objects.glass] (a glass material)",
+            scene.source.display()
+        );
+    };
+    if let Some(tau) = tau {
+        let range = inference::scene::glass::GLASS_TAU;
+        if !range.contains(&tau) {
+            anyhow::bail!("--tau {tau}: expected {range:?} subpixels");
+        }
+        glass.tau = tau;
+    } else if let Some(settings) = scene.objects.iter().find_map(|o| o.glass.as_ref()) {
+        glass.tau = settings.tau;
+    }
+    Ok(())
+}
+
+/// Loads the traced room shell map of the scene's glass object (compiled
+/// under `out` when missing); a scene without glass needs none.
+pub fn load_shell(
+    renderer: &mut crate::renderer::Renderer,
+    scene: &Scene,
+    out: &std::path::Path,
+) -> anyhow::Result<()> {
+    let Some(g) = renderer.glass.as_ref() else {
+        return Ok(());
+    };
+    let (object, origin, size) = (g.lens.object, g.cube.origin, g.cube.color.desc.width);
+    let bytes = shell::room_shell_bytes(scene, out, object, origin, size)?;
+    renderer.load_glass_shell(&bytes)?;
+    Ok(())
+}

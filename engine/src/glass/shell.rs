@@ -1,0 +1,70 @@
+//! Compiling the room shell's map (`inference::glass::shell_map`): traced
+//! once per scene and size, cached beside the other compiled files as f16
+//! RGBA texels in upload order with a content-key record.
+
+use anyhow::{Context, Result};
+use glam::Vec3;
+use half::f16;
+use inference::key::Freshness;
+use inference::scene::Scene;
+use inference::trace::{TraceSettings, Tracer, cache};
+use std::path::{Path, PathBuf};
+
+/// Samples per texel of the traced shell map.
+pub const SHELL_SPP: u32 = 8;
+/// Bumped when what the map holds changes.
+const SHELL_VERSION: u64 = 1;
+
+/// Where the room shell map of `scene` is cached under `out`.
+pub fn shell_path(out: &Path) -> PathBuf {
+    out.join("glass").join("room_shell.bin")
+}
+
+/// The f16 RGBA bytes (every level, level-major, face, rows) of the room
+/// shell map at `origin`, `size`² per face, the object `skip` (the lens)
+/// transparent: read from `out` when fresh, else traced and written.
+pub fn room_shell_bytes(
+    scene: &Scene,
+    out: &Path,
+    skip: u32,
+    origin: Vec3,
+    size: u32,
+) -> Result<Vec<u8>> {
+    let settings = TraceSettings {
+        width: size,
+        height: 6 * size,
+        spp: SHELL_SPP,
+        ..TraceSettings::default()
+    };
+    let key = cache::image_key(&cache::scene_key(scene), origin, &settings)
+        .with("glass shell", SHELL_VERSION)
+        .with("lens", u64::from(skip));
+    let file = shell_path(out);
+    if inference::key::freshness(&file, &key) == Freshness::Fresh {
+        match inference::key::read_verified(&file) {
+            Ok(bytes) => return Ok(bytes),
+            Err(why) => eprintln!("{why}: tracing it again"),
+        }
+    }
+    let start = std::time::Instant::now();
+    let tracer = Tracer::new(scene)?;
+    let level0 =
+        inference::glass::shell_map::trace_shell_map(&tracer, skip, origin, size, &settings);
+    let levels = inference::glass::shell_map::mip_chain(level0, size);
+    let halves: Vec<f16> = levels
+        .iter()
+        .flatten()
+        .flat_map(|t| [t[0], t[1], t[2], 1.0].map(f16::from_f32))
+        .collect();
+    let bytes: Vec<u8> = bytemuck::cast_slice(&halves).to_vec();
+    let dir = file.parent().unwrap_or(out);
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    inference::files::write_bytes(&file, &bytes)?;
+    inference::key::write_record(&file, &key)?;
+    eprintln!(
+        "traced the room shell map ({size}² × 6, {SHELL_SPP} spp) in {:.1} s: {}",
+        start.elapsed().as_secs_f64(),
+        file.display()
+    );
+    Ok(bytes)
+}

@@ -1,0 +1,149 @@
+//! Hybrid glass on the device: validation-clean frames; at IOR 1 the glass
+//! vanishes (the frame equals the room without it); at IOR 1.5 it shows.
+
+mod common;
+
+use common::*;
+use engine::options::Mode;
+use engine::renderer::{FrameMode, Renderer};
+use inference::scene::Scene;
+use std::path::Path;
+
+const W: u32 = 160;
+const H: u32 = 120;
+/// Above this PSNR against the room, over the glass's pixels, the glass
+/// has vanished; below it, it shows.
+const VANISHED_DB: f64 = 35.0;
+
+/// The glass scene with `edits` applied, written into `dir` as `name`.
+fn glass_scene(dir: &Path, name: &str, edits: &[(&str, &str)]) -> Scene {
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/scenes/glass.toml");
+    let mut text = std::fs::read_to_string(source).expect("glass.toml");
+    for (from, to) in edits {
+        assert!(text.contains(from), "glass.toml lacks {from:?}");
+        text = text.replacen(from, to, 1);
+    }
+    // Plain colours instead of textures: a rasterised cube capture blurs
+    // textures seen at grazing angles (no anisotropic filtering), which is
+    // the capture's limit, not the lookups' this test is about.
+    let colours = ["[0.7, 0.3, 0.2]", "[0.2, 0.6, 0.3]", "[0.3, 0.4, 0.8]"];
+    let mut albedos = colours.iter();
+    text = text
+        .lines()
+        .filter(|l| !l.starts_with("texture ="))
+        .map(
+            |l| match (l.starts_with("albedo ="), albedos.clone().next()) {
+                (true, Some(c)) => {
+                    albedos.next();
+                    format!("albedo = {c}")
+                }
+                _ => l.to_string(),
+            },
+        )
+        .collect::<Vec<_>>()
+        .join("\n");
+    let path = dir.join(format!("{name}.toml"));
+    std::fs::write(&path, text).expect("write scene");
+    Scene::load(path.to_str().expect("utf-8 path")).expect("scene")
+}
+
+/// One frame of `scene` in `mode` from orbit azimuth 20°, 5° up.
+fn frame(scene: &Scene, mode: FrameMode, tau: Option<f32>) -> Vec<[f32; 4]> {
+    let device = validated_device();
+    let mut renderer = Renderer::new(&device, scene, W, H).expect("renderer");
+    if let (Some(g), Some(tau)) = (renderer.glass.as_mut(), tau) {
+        g.tau = tau;
+    }
+    let eye = scene.orbit.eye(20.0, 5.0);
+    renderer
+        .frame(mode, eye, scene.orbit.view(eye))
+        .expect("frame");
+    let pixels = renderer.pixels().expect("pixels");
+    if mode == FrameMode::Hybrid {
+        let g = renderer.glass.as_ref().expect("glass player");
+        assert!(g.last.triangles > 0 && g.last.rays > 0, "{:?}", g.last);
+    }
+    pixels
+}
+
+/// PSNR over the pixels of `mask`.
+fn masked_psnr(a: &[[f32; 4]], b: &[[f32; 4]], mask: &[bool]) -> f64 {
+    let pick = |x: &[[f32; 4]]| -> Vec<[f32; 4]> {
+        x.iter()
+            .zip(mask)
+            .filter(|(_, m)| **m)
+            .map(|(p, _)| *p)
+            .collect()
+    };
+    engine::compare::psnr(&pick(a), &pick(b))
+}
+
+#[test]
+fn ior_one_glass_vanishes_and_real_glass_shows() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let air = [
+        ("ior = 1.5", "ior = 1.0"),
+        (
+            "absorption = [0.6, 0.15, 0.3]",
+            "absorption = [0.0, 0.0, 0.0]",
+        ),
+    ];
+    let vanished = glass_scene(dir.path(), "air", &air);
+    let glass = glass_scene(dir.path(), "glass", &[]);
+    // The room alone: the teapot object gone.
+    let mut room = glass_scene(dir.path(), "room", &[]);
+    room.objects.retain(|o| o.glass.is_none());
+    assert_eq!(Mode::default_for(&glass), Mode::Hybrid);
+    assert_eq!(Mode::default_for(&room), Mode::LayeredPem);
+
+    let room_px = frame(&room, FrameMode::StaticEm, None);
+    let glass_px = frame(&glass, FrameMode::Hybrid, Some(10.0));
+    // The glass's pixels: where the real glass changed the frame.
+    let mask: Vec<bool> = glass_px
+        .iter()
+        .zip(&room_px)
+        .map(|(g, r)| (0..3).any(|c| (g[c] - r[c]).abs() > 1e-3))
+        .collect();
+    let covered = mask.iter().filter(|m| **m).count();
+    assert!(
+        covered > (W * H / 20) as usize,
+        "the glass covers {covered} pixels"
+    );
+    let shown = masked_psnr(&glass_px, &room_px, &mask);
+    assert!(
+        shown < 25.0,
+        "IOR 1.5 glass should show: {shown:.1} dB against the room"
+    );
+
+    for tau in [3.0, 10.0] {
+        let air_px = frame(&vanished, FrameMode::Hybrid, Some(tau));
+        let psnr = masked_psnr(&air_px, &room_px, &mask);
+        if psnr <= VANISHED_DB {
+            let out = failure_dir();
+            let _ = engine::capture::write_png(&out.join("glass_ior1.actual.png"), W, H, &air_px);
+            let _ = engine::capture::write_png(&out.join("glass_ior1.room.png"), W, H, &room_px);
+            let diff = engine::compare::diff_image(&room_px, &air_px, 8.0);
+            let _ = engine::capture::write_png(&out.join("glass_ior1.diff.png"), W, H, &diff);
+        }
+        assert!(
+            psnr > 35.0,
+            "τ {tau}: IOR 1 glass vs the room, {psnr:.1} dB"
+        );
+    }
+    // The same map read at infinity (the baseline's lookups) does not make
+    // IOR 1 glass vanish: the shell's parallax is what the test measures.
+    let at_infinity = frame(&vanished, FrameMode::StaticEm, None);
+    let parallax = masked_psnr(&at_infinity, &room_px, &mask);
+    assert!(
+        parallax < VANISHED_DB,
+        "lookups at infinity: {parallax:.1} dB"
+    );
+    // The baseline draws it too, through the same pass.
+    let baseline = frame(&glass, FrameMode::StaticEm, None);
+    let drawn = masked_psnr(&baseline, &room_px, &mask);
+    assert!(
+        drawn < VANISHED_DB,
+        "the baseline draws the glass: {drawn:.1} dB"
+    );
+    assert_no_validation_messages();
+}
