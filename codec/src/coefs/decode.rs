@@ -66,7 +66,7 @@ impl BlockSink for AddToPlanes<'_> {
     }
 }
 
-/// Decodes one image coded by [`encode_image`] and *adds* it to `out`
+/// Decodes one image coded by [`encode_image`](super::encode_image) and *adds* it to `out`
 /// (`channels` planes of `w × h`, planar). Bad data gives an error, never a
 /// panic or an out-of-range write.
 #[allow(clippy::too_many_arguments)]
@@ -95,7 +95,7 @@ pub fn decode_image_add(
     )
 }
 
-/// Decodes one image coded by [`encode_image`] (`channels` planes of
+/// Decodes one image coded by [`encode_image`](super::encode_image) (`channels` planes of
 /// `w × h`) block by block into `sink`: the blocks the stream codes, each
 /// a constant or an inverse-transformed 8×8 block, in plane, then raster
 /// block order. Bad data gives an error, never a panic.
