@@ -14,3 +14,9 @@ float fresnel_factor(sampler1D lut, float cos_theta) {
     float u = (clamp(cos_theta, 0.0, 1.0) * (n - 1.0) + 0.5) / n;
     return texture(lut, u).r;
 }
+
+// The local layer (premultiplied RGBA, coverage alpha) over the distant
+// layer. Inferred coverage can stray outside [0, 1]; over needs it inside.
+vec3 local_over_distant(vec4 local, vec3 distant) {
+    return local.rgb + (1.0 - clamp(local.a, 0.0, 1.0)) * distant;
+}

@@ -9,6 +9,7 @@ layout(location = 2) in vec4 in_local;   // xyz = local-layer lookup (ellipsoid)
 layout(push_constant) uniform Push {
     mat4 view_proj;
     vec4 f0_weight; // rgb Schlick F0, a = this pass's blend weight
+    vec4 slot;      // x = array element of this sample's maps
 } pc;
 
 layout(location = 0) out vec3 out_distant;

@@ -7,6 +7,7 @@ layout(location = 2) in vec2 in_uv;
 layout(push_constant) uniform Push {
     mat4 view_proj;
     vec4 f0_weight; // a = this pass's blend weight
+    vec4 slot;      // x = array element of this sample's map
 } pc;
 
 layout(location = 0) out vec2 out_uv;

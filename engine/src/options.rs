@@ -3,6 +3,7 @@
 //! builds them, and drivers build them for each other — never argv.
 
 use crate::backend::{DeviceOptions, Filtering};
+use crate::pem::settings::Compositing;
 use std::path::PathBuf;
 
 /// What each frame draws.
@@ -66,6 +67,8 @@ pub struct PemOptions {
     /// EM resolution to play (a power of two up to the inferred one).
     pub em_size: Option<u32>,
     pub filtering: Filtering,
+    /// How blended samples and layers are composited.
+    pub compositing: Compositing,
 }
 
 impl Default for PemOptions {
@@ -79,6 +82,7 @@ impl Default for PemOptions {
             spacing: 1,
             em_size: None,
             filtering: Filtering::Trilinear,
+            compositing: Compositing::Deferred,
         }
     }
 }
@@ -106,6 +110,9 @@ impl PemOptions {
         }
         if self.filtering != d.filtering {
             f.push(("filtering".into(), Some(self.filtering.name().into())));
+        }
+        if self.compositing != d.compositing {
+            f.push(("compositing".into(), Some("multipass".into())));
         }
         f
     }

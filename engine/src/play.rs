@@ -245,6 +245,7 @@ pub fn pem_settings(mode: Mode, pem: &PemOptions, scene: &Scene) -> Result<PemSe
     settings.local_layer = pem.local_layer;
     settings.spacing = pem.spacing;
     settings.filtering = pem.filtering;
+    settings.compositing = pem.compositing;
     if let Some(size) = pem.em_size {
         let inferred = scene
             .objects

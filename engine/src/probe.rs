@@ -22,7 +22,7 @@ use inference::scene::Mesh;
 use inference::solve::layout::TextureLayout;
 
 const FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
-const DEPTH: vk::Format = vk::Format::D32_SFLOAT;
+const DEPTH: vk::Format = crate::renderer::DEPTH_FORMAT;
 
 struct Targets {
     color: Image,

@@ -6,20 +6,23 @@ use crate::gpu_scene::GpuScene;
 use crate::graph::{Executor, Pass, PassTiming};
 use crate::passes::em_capture::{CubeTarget, EmCapturePass, MipPass};
 use crate::passes::mirror::{MirrorDraw, MirrorRenderer};
+use crate::passes::pem_deferred::GBuffer;
 use crate::passes::readback::ReadbackPass;
 use crate::passes::room::{RoomRenderer, RoomStyle};
 use crate::passes::target::{Target, area_of};
 use crate::pem::player::{PemPlayer, PemSettings};
-use crate::pem::samples::{SampleBlend, sample_blend};
+use crate::pem::samples::SampleBlend;
 use crate::pem::source::MapSource;
 use ash::vk;
 use glam::{Mat4, Vec3};
 use half::f16;
-use inference::scene::{Material, Orbit, Scene};
+use inference::scene::{Material, Scene};
 use std::time::Instant;
 
 pub const COLOR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
-pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+/// Depth and stencil: the reflectors' G-buffer pass marks their pixels in
+/// the stencil, so the compositing pass shades only those.
+pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT_S8_UINT;
 /// EM resolution when an object's `[em]` settings give none.
 pub const DEFAULT_EM_RESOLUTION: u32 = 256;
 
@@ -90,7 +93,10 @@ pub struct Renderer {
     projection: Mat4,
     texgen_scratch: Vec<inference::texgen::TexgenVertex>,
     pem: Option<PemPlayer>,
-    orbit: Orbit,
+    /// Per-pixel lookups of deferred PEM compositing (frame-sized).
+    gbuffer: GBuffer,
+    /// The last frame's view-projection (where its G-buffer was written).
+    last_view_proj: Mat4,
     /// What set-up cost on the GPU (static EM capture, MIP chain).
     pub setup_timings: Vec<PassTiming>,
 }
@@ -183,7 +189,8 @@ impl Renderer {
             projection,
             texgen_scratch: Vec::new(),
             pem: None,
-            orbit: scene.orbit,
+            gbuffer: GBuffer::new(device, width, height)?,
+            last_view_proj: Mat4::IDENTITY,
             setup_timings: Vec::new(),
         };
         renderer.setup_timings = renderer.capture_static_ems(scene.camera.near, far)?;
@@ -207,6 +214,7 @@ impl Renderer {
             scene,
             settings,
             source,
+            &self.gbuffer,
             (COLOR_FORMAT, DEPTH_FORMAT),
         )?);
         Ok(())
@@ -221,8 +229,7 @@ impl Renderer {
 
     /// The samples a PEM frame from `eye` draws (None without PEM set-up).
     pub fn pem_blend(&self, eye: Vec3) -> Option<SampleBlend> {
-        let s = self.pem.as_ref()?.settings;
-        Some(sample_blend(&self.orbit, eye, s.spacing, s.blend))
+        Some(self.pem.as_ref()?.blend(eye))
     }
 
     pub fn size(&self) -> (u32, u32) {
@@ -262,6 +269,7 @@ impl Renderer {
         view: Mat4,
     ) -> Result<FrameStats, RenderError> {
         let view_proj = self.projection * view;
+        self.last_view_proj = view_proj;
         let mut cpu = CpuTimes::default();
         if mode == FrameMode::StaticEm {
             self.texgen(eye, &mut cpu)?;
@@ -280,7 +288,7 @@ impl Renderer {
             let Some(pem) = self.pem.as_mut() else {
                 return Err(GpuError::Invalid("PEM frame without set_pem()".into()).into());
             };
-            let b = sample_blend(&self.orbit, eye, pem.settings.spacing, pem.settings.blend);
+            let b = pem.blend(eye);
             let prepared = pem.prepare(eye, &b)?;
             cpu.texgen_ms += prepared.texgen_ms;
             cpu.decode_ms += prepared.decode_ms;
@@ -306,9 +314,13 @@ impl Renderer {
                     ..target
                 };
                 if let (Some(pem), Some(b)) = (&self.pem, &blend) {
-                    for pass in pem.draw_passes(&self.gpu, b, later, view_proj)? {
-                        passes.push(Box::new(pass));
-                    }
+                    passes.extend(pem.draw_passes(
+                        &self.gpu,
+                        &self.gbuffer,
+                        b,
+                        later,
+                        view_proj,
+                    )?);
                 } else if !self.reflectors.is_empty() {
                     let area = area_of(
                         view_proj,
@@ -387,6 +399,44 @@ impl Renderer {
         self.executor.run(&[&pass])?;
         let texels = rgba16f_to_f32(&buffer.mapped()?[..bytes as usize]);
         Ok((r.cube.color.desc.width, r.cube.origin, texels))
+    }
+
+    /// Reflector pixels the last deferred PEM frame covered (counted on the
+    /// G-buffer read back: the cosine's clear value marks the rest).
+    pub fn covered_pixels(&mut self) -> GpuResult<u64> {
+        let image = &self.gbuffer.images[2];
+        let bytes = crate::backend::upload::image_bytes(image)?;
+        let buffer = Buffer::new(
+            &self.device,
+            "g-buffer read-back",
+            bytes,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            gpu_allocator::MemoryLocation::GpuToCpu,
+        )?;
+        let pass = ReadbackPass {
+            device: &self.device,
+            image,
+            buffer: &buffer,
+        };
+        self.executor.run(&[&pass])?;
+        let cos: &[f32] = bytemuck::cast_slice(&buffer.mapped()?[..bytes as usize]);
+        // Only the last G-buffer pass's area was cleared this frame.
+        let bounds = self.reflectors.iter().map(|r| r.bounds);
+        let full = vk::Rect2D {
+            offset: vk::Offset2D::default(),
+            extent: vk::Extent2D {
+                width: self.width,
+                height: self.height,
+            },
+        };
+        let a = area_of(self.last_view_proj, bounds, self.width, self.height).unwrap_or(full);
+        let (x0, y0) = (a.offset.x.max(0) as usize, a.offset.y.max(0) as usize);
+        let (x1, y1) = (x0 + a.extent.width as usize, y0 + a.extent.height as usize);
+        let w = self.width as usize;
+        Ok((y0..y1.min(self.height as usize))
+            .flat_map(|y| (x0..x1.min(w)).map(move |x| y * w + x))
+            .filter(|&i| cos[i] >= -1.5)
+            .count() as u64)
     }
 
     /// The last frame's pixels as linear RGBA f32, row-major from the top.

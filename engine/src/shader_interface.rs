@@ -123,7 +123,27 @@ pub struct PemPush {
     pub view_proj: Mat4,
     /// rgb Schlick F0; a = the pass's blend weight (1 on the first pass).
     pub f0_weight: Vec4,
+    /// x = the array element holding this sample's maps.
+    pub slot: Vec4,
 }
+
+/// `shaders/pem_composite.frag` push constants: one reflector's part of
+/// the deferred compositing pass.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct CompositePush {
+    /// rgb Schlick F0.
+    pub f0: Vec4,
+    /// Weights of up to [`MAX_BLEND`] samples.
+    pub weight: Vec4,
+    /// Array element of each sample's maps.
+    pub slot: Vec4,
+    /// x = samples blended, y = 1 when the local layer is drawn.
+    pub info: Vec4,
+}
+
+/// Most viewpoint samples one frame blends (a 2D cell's corners).
+pub const MAX_BLEND: usize = 4;
 
 /// Embedded SPIR-V compiled by build.rs from `shaders/`.
 pub mod spirv {
@@ -142,4 +162,7 @@ pub mod spirv {
     pub const PEM_DISTANT_FRAG: &[u8] = shader!("pem_distant.frag");
     pub const PTM_VERT: &[u8] = shader!("ptm.vert");
     pub const PTM_FRAG: &[u8] = shader!("ptm.frag");
+    pub const PEM_GBUFFER_FRAG: &[u8] = shader!("pem_gbuffer.frag");
+    pub const PEM_COMPOSITE_VERT: &[u8] = shader!("pem_composite.vert");
+    pub const PEM_COMPOSITE_FRAG: &[u8] = shader!("pem_composite.frag");
 }

@@ -75,10 +75,21 @@ fn main_job_compiles_what_is_missing_then_plays_every_mode() {
     for i in 0..5 {
         assert!(out.join(format!("frame_{i:04}.png")).is_file());
     }
-    // The path passes between samples: the blend pass runs; maps were
-    // uploaded through the staging ring.
+    // Deferred by default: the reflector rasterized once into lookups, one
+    // composite over the covered pixels; maps uploaded through the staging
+    // ring.
     let names = pass_names(&out);
-    for pass in ["upload", "room", "pem", "pem_blend", "readback"] {
+    for pass in ["upload", "room", "pem_gbuffer", "pem_composite", "readback"] {
+        assert!(names.iter().any(|n| n == pass), "{pass} missing: {names:?}");
+    }
+    assert!(!names.iter().any(|n| n == "pem_blend"), "{names:?}");
+
+    // The papers' multipass mode: the path passes between samples, so the
+    // blend pass runs.
+    let multi = play(&scene, &out, &["--compositing", "multipass"]);
+    assert!(multi.status.success(), "{}", text(&multi));
+    let names = pass_names(&out);
+    for pass in ["pem", "pem_blend"] {
         assert!(names.iter().any(|n| n == pass), "{pass} missing: {names:?}");
     }
 
@@ -135,7 +146,16 @@ fn main_job_compiles_what_is_missing_then_plays_every_mode() {
         serde_json::from_slice(&std::fs::read(out.join("bench.json")).expect("bench.json"))
             .expect("JSON");
     let rows = bench["rows"].as_array().expect("rows");
-    assert_eq!(rows.len(), 6, "{bench}");
+    let names: Vec<&str> = rows.iter().filter_map(|r| r["name"].as_str()).collect();
+    for v in [
+        "bare",
+        "static-em",
+        "default",
+        "multipass",
+        "default, decoding",
+    ] {
+        assert!(names.contains(&v), "{v} missing: {names:?}");
+    }
     assert!(
         rows.iter()
             .all(|r| r["frame_ms_median"].as_f64().is_some_and(|v| v > 0.0))

@@ -7,7 +7,7 @@
 mod common;
 
 use common::*;
-use engine::pem::player::{PemKind, PemSettings};
+use engine::pem::player::{Compositing, PemKind, PemSettings};
 use engine::pem::source::MapSource;
 use engine::renderer::{FrameMode, Renderer};
 use glam::Vec3;
@@ -77,10 +77,19 @@ fn pem_frames_stay_finite_at_the_extremes() {
         ("outside the room box", room_max + Vec3::splat(1.0)),
         ("grazing the floor", Vec3::new(0.0, room_min.y + 1e-4, 2.0)),
     ];
-    for kind in [PemKind::Layered, PemKind::Ptm] {
+    let multipass = PemSettings {
+        compositing: Compositing::Multipass,
+        ..PemSettings::new(PemKind::Layered)
+    };
+    for settings in [
+        PemSettings::new(PemKind::Layered),
+        multipass,
+        PemSettings::new(PemKind::Ptm),
+    ] {
+        let kind = (settings.kind, settings.compositing);
         let source = MapSource::container(&scene, &out.join("teapot.ptxc")).expect("container");
         renderer
-            .set_pem(&scene, PemSettings::new(kind), source)
+            .set_pem(&scene, settings, source)
             .expect("PEM set-up");
         for (what, eye) in eyes {
             let stats = renderer
@@ -94,17 +103,28 @@ fn pem_frames_stay_finite_at_the_extremes() {
             let names: Vec<&str> = stats.passes.iter().map(|p| p.name.as_str()).collect();
             let blend = renderer.pem_blend(eye).expect("PEM set up");
             assert!(
-                blend.samples().all(|s| s < orbit.samples),
+                blend.indices().all(|s| s < orbit.samples),
                 "{what}: {blend:?}"
             );
-            // A blend pass exactly when the eye is between two samples.
-            assert_eq!(
-                names.contains(&"pem_blend"),
-                blend.second.is_some(),
-                "{what}: {names:?}"
-            );
+            let sum: f32 = blend.samples.iter().map(|s| s.1).sum();
+            assert!((sum - 1.0).abs() < 1e-5, "{what}: {blend:?}");
+            if settings.deferred() {
+                // One G-buffer pass and one compositing pass, however many samples.
+                assert!(
+                    names.contains(&"pem_gbuffer") && names.contains(&"pem_composite"),
+                    "{names:?}"
+                );
+                assert!(!names.contains(&"pem_blend"), "{names:?}");
+            } else {
+                // A blend pass exactly when the eye is between two samples.
+                assert_eq!(
+                    names.contains(&"pem_blend"),
+                    blend.samples.len() > 1,
+                    "{what}: {names:?}"
+                );
+            }
             if what.contains("sample") && !what.contains("between") {
-                assert!(blend.second.is_none(), "{what}: {blend:?}");
+                assert_eq!(blend.samples.len(), 1, "{what}: {blend:?}");
             }
         }
     }

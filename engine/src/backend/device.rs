@@ -269,12 +269,17 @@ fn pick_and_create(instance: &ash::Instance, options: &DeviceOptions) -> GpuResu
     if core.pipeline_statistics_query == 0 {
         return Err(missing("pipeline statistics queries"));
     }
+    if core.image_cube_array == 0 {
+        return Err(missing("cube-map arrays (PEM slots)"));
+    }
 
     let priorities = [1.0];
     let queue_infos = [vk::DeviceQueueCreateInfo::default()
         .queue_family_index(queue_family)
         .queue_priorities(&priorities)];
-    let features = vk::PhysicalDeviceFeatures::default().pipeline_statistics_query(true);
+    let features = vk::PhysicalDeviceFeatures::default()
+        .pipeline_statistics_query(true)
+        .image_cube_array(true);
     let mut features13 = vk::PhysicalDeviceVulkan13Features::default()
         .dynamic_rendering(true)
         .synchronization2(true)

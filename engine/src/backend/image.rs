@@ -13,6 +13,10 @@ pub enum ImageKind {
     D1,
     D2,
     Cube,
+    /// `array` 2D images, sampled through one `sampler2DArray`.
+    D2Array,
+    /// `array` cube maps (6 layers each), sampled through one `samplerCubeArray`.
+    CubeArray,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -23,6 +27,8 @@ pub struct ImageDesc {
     pub height: u32,
     pub mip_levels: u32,
     pub usage: vk::ImageUsageFlags,
+    /// Elements of an array kind (1 otherwise).
+    pub array: u32,
 }
 
 impl ImageDesc {
@@ -34,6 +40,7 @@ impl ImageDesc {
             height,
             mip_levels: 1,
             usage: vk::ImageUsageFlags::empty(),
+            array: 1,
         }
     }
     pub fn new_1d(format: vk::Format, width: u32) -> Self {
@@ -48,6 +55,22 @@ impl ImageDesc {
             ..Self::new_2d(format, size, size)
         }
     }
+    /// `count` cube maps of `size`², one array (`samplerCubeArray`).
+    pub fn new_cube_array(format: vk::Format, size: u32, count: u32) -> Self {
+        Self {
+            kind: ImageKind::CubeArray,
+            array: count.max(1),
+            ..Self::new_2d(format, size, size)
+        }
+    }
+    /// `count` 2D images of `width × height`, one array (`sampler2DArray`).
+    pub fn new_2d_array(format: vk::Format, width: u32, height: u32, count: u32) -> Self {
+        Self {
+            kind: ImageKind::D2Array,
+            array: count.max(1),
+            ..Self::new_2d(format, width, height)
+        }
+    }
     pub fn all_mip_levels(mut self) -> Self {
         self.mip_levels = 32 - self.width.max(self.height).max(1).leading_zeros();
         self
@@ -57,11 +80,21 @@ impl ImageDesc {
         self
     }
     pub fn layers(&self) -> u32 {
-        if self.kind == ImageKind::Cube { 6 } else { 1 }
+        self.element_layers() * self.array
+    }
+    /// Layers of one element: 6 for cube kinds, else 1.
+    pub fn element_layers(&self) -> u32 {
+        match self.kind {
+            ImageKind::Cube | ImageKind::CubeArray => 6,
+            _ => 1,
+        }
     }
     pub fn aspect(&self) -> vk::ImageAspectFlags {
         match self.format {
             vk::Format::D32_SFLOAT | vk::Format::D16_UNORM => vk::ImageAspectFlags::DEPTH,
+            vk::Format::D32_SFLOAT_S8_UINT | vk::Format::D24_UNORM_S8_UINT => {
+                vk::ImageAspectFlags::DEPTH | vk::ImageAspectFlags::STENCIL
+            }
             _ => vk::ImageAspectFlags::COLOR,
         }
     }
@@ -94,8 +127,10 @@ impl Image {
     pub fn new(device: &Device, name: &str, desc: ImageDesc) -> GpuResult<Self> {
         let (image_type, flags) = match desc.kind {
             ImageKind::D1 => (vk::ImageType::TYPE_1D, vk::ImageCreateFlags::empty()),
-            ImageKind::D2 => (vk::ImageType::TYPE_2D, vk::ImageCreateFlags::empty()),
-            ImageKind::Cube => (
+            ImageKind::D2 | ImageKind::D2Array => {
+                (vk::ImageType::TYPE_2D, vk::ImageCreateFlags::empty())
+            }
+            ImageKind::Cube | ImageKind::CubeArray => (
                 vk::ImageType::TYPE_2D,
                 vk::ImageCreateFlags::CUBE_COMPATIBLE,
             ),
@@ -167,6 +202,8 @@ impl Image {
             ImageKind::D1 => vk::ImageViewType::TYPE_1D,
             ImageKind::D2 => vk::ImageViewType::TYPE_2D,
             ImageKind::Cube => vk::ImageViewType::CUBE,
+            ImageKind::D2Array => vk::ImageViewType::TYPE_2D_ARRAY,
+            ImageKind::CubeArray => vk::ImageViewType::CUBE_ARRAY,
         };
         self.view = self.create_view(view_type, desc.full_range())?;
         let wants_targets = desc.usage.intersects(

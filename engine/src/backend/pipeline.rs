@@ -12,7 +12,8 @@ pub struct PipelineDesc<'a> {
     pub fragment_spirv: &'a [u8],
     pub vertex_bindings: &'a [vk::VertexInputBindingDescription],
     pub vertex_attributes: &'a [vk::VertexInputAttributeDescription],
-    pub color_format: vk::Format,
+    /// One per colour attachment (several: a G-buffer).
+    pub color_formats: &'a [vk::Format],
     pub depth_format: vk::Format,
     pub cull_mode: vk::CullModeFlags,
     /// Size of the `#[repr(C)]` push-constant struct shared with the shader.
@@ -22,6 +23,30 @@ pub struct PipelineDesc<'a> {
     /// Blend the output over the target by its alpha (`a·src + (1 − a)·dst`)
     /// instead of replacing it: how a second pass mixes in a weighted term.
     pub blend_by_alpha: bool,
+    pub depth: DepthTest,
+    pub stencil: StencilTest,
+}
+
+/// How a pipeline uses the depth attachment.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DepthTest {
+    /// Test (less or equal) and write: opaque geometry.
+    TestWrite,
+    /// Neither: a screen pass that reads what earlier passes left.
+    Off,
+}
+
+/// How a pipeline uses the stencil attachment.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StencilTest {
+    Off,
+    /// Write the reference (set per draw) wherever a fragment passes the
+    /// depth test.
+    Mark,
+    /// Shade only where the stencil equals the reference (set per draw;
+    /// tested before the fragment shader runs, so other pixels cost no
+    /// invocation).
+    Equal,
 }
 
 /// What a descriptor set binds at one binding.
@@ -292,10 +317,7 @@ unsafe fn create_graphics_pipeline(
         .line_width(1.0);
     let multisample = vk::PipelineMultisampleStateCreateInfo::default()
         .rasterization_samples(vk::SampleCountFlags::TYPE_1);
-    let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-        .depth_test_enable(true)
-        .depth_write_enable(true)
-        .depth_compare_op(vk::CompareOp::LESS_OR_EQUAL);
+    let depth = depth_stencil_state(desc);
     let mut attachment = vk::PipelineColorBlendAttachmentState::default()
         .color_write_mask(vk::ColorComponentFlags::RGBA);
     if desc.blend_by_alpha {
@@ -308,19 +330,35 @@ unsafe fn create_graphics_pipeline(
             .dst_alpha_blend_factor(vk::BlendFactor::ONE)
             .alpha_blend_op(vk::BlendOp::ADD);
     }
-    let blend_attachments = [attachment];
+    let plain = vk::PipelineColorBlendAttachmentState::default()
+        .color_write_mask(vk::ColorComponentFlags::RGBA);
+    let blend_attachments: Vec<_> = (0..desc.color_formats.len())
+        .map(|i| if i == 0 { attachment } else { plain })
+        .collect();
     let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
-    // Front face is dynamic: the same pipeline renders mirrored cube faces.
-    let dynamic_states = [
+    // Front face is dynamic: the same pipeline renders mirrored cube faces;
+    // so is the stencil reference: one pipeline marks or tests every value.
+    let mut dynamic_states = vec![
         vk::DynamicState::VIEWPORT,
         vk::DynamicState::SCISSOR,
         vk::DynamicState::FRONT_FACE,
     ];
+    if desc.stencil != StencilTest::Off {
+        dynamic_states.push(vk::DynamicState::STENCIL_REFERENCE);
+    }
     let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-    let color_formats = [desc.color_format];
+    let stencil_format = if matches!(
+        desc.depth_format,
+        vk::Format::D32_SFLOAT_S8_UINT | vk::Format::D24_UNORM_S8_UINT
+    ) {
+        desc.depth_format
+    } else {
+        vk::Format::UNDEFINED
+    };
     let mut rendering = vk::PipelineRenderingCreateInfo::default()
-        .color_attachment_formats(&color_formats)
-        .depth_attachment_format(desc.depth_format);
+        .color_attachment_formats(desc.color_formats)
+        .depth_attachment_format(desc.depth_format)
+        .stencil_attachment_format(stencil_format);
     let info = vk::GraphicsPipelineCreateInfo::default()
         .stages(&stages)
         .vertex_input_state(&vertex_input)
@@ -338,6 +376,32 @@ unsafe fn create_graphics_pipeline(
         .map(|p| p[0])
         .map_err(|(_, e)| e)
         .vk("vkCreateGraphicsPipelines")
+}
+
+/// Depth and stencil state from `desc`.
+fn depth_stencil_state(desc: &PipelineDesc) -> vk::PipelineDepthStencilStateCreateInfo<'static> {
+    let depth = desc.depth == DepthTest::TestWrite;
+    let op = |compare, pass, reference| vk::StencilOpState {
+        fail_op: vk::StencilOp::KEEP,
+        pass_op: pass,
+        depth_fail_op: vk::StencilOp::KEEP,
+        compare_op: compare,
+        compare_mask: 0xff,
+        write_mask: 0xff,
+        reference,
+    };
+    let (stencil, face) = match desc.stencil {
+        StencilTest::Off => (false, op(vk::CompareOp::ALWAYS, vk::StencilOp::KEEP, 0)),
+        StencilTest::Mark => (true, op(vk::CompareOp::ALWAYS, vk::StencilOp::REPLACE, 0)),
+        StencilTest::Equal => (true, op(vk::CompareOp::EQUAL, vk::StencilOp::KEEP, 0)),
+    };
+    vk::PipelineDepthStencilStateCreateInfo::default()
+        .depth_test_enable(depth)
+        .depth_write_enable(depth)
+        .depth_compare_op(vk::CompareOp::LESS_OR_EQUAL)
+        .stencil_test_enable(stencil)
+        .front(face)
+        .back(face)
 }
 
 impl Drop for Pipeline {

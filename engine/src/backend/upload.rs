@@ -53,6 +53,27 @@ pub fn level_regions(desc: &ImageDesc) -> GpuResult<(Vec<vk::BufferImageCopy>, u
     Ok((regions, offset))
 }
 
+/// The regions of one array element (all its levels and layers — one cube
+/// or one 2D image), packed as [`level_regions`] packs a single image, and
+/// its bytes: a decoded map in staging uploads into one slot of an array.
+pub fn element_regions(
+    desc: &ImageDesc,
+    element: u32,
+) -> GpuResult<(Vec<vk::BufferImageCopy>, u64)> {
+    if element >= desc.array {
+        return Err(GpuError::Invalid(format!(
+            "array element {element} of {} elements",
+            desc.array
+        )));
+    }
+    let single = ImageDesc { array: 1, ..*desc };
+    let (mut regions, bytes) = level_regions(&single)?;
+    for r in &mut regions {
+        r.image_subresource.base_array_layer = element * desc.element_layers();
+    }
+    Ok((regions, bytes))
+}
+
 /// Bytes of all levels × layers, level-major, tightly packed.
 pub fn image_bytes(image: &Image) -> GpuResult<u64> {
     Ok(level_regions(&image.desc)?.1)

@@ -4,6 +4,7 @@
 
 use crate::backend::Filtering;
 use crate::options::{Maps, Mode, PemOptions};
+use crate::pem::settings::Compositing;
 use std::collections::BTreeMap;
 
 /// One row: a label, the mode and its knobs.
@@ -79,6 +80,7 @@ pub fn all_rows() -> Vec<Row> {
         Row::new("sphere-pem", Mode::SpherePem),
         Row::new("sphere-pem nearest-sample", Mode::SpherePem).with(|p| p.blend = false),
         layered(),
+        labelled("layered-pem multipass").with(|p| p.compositing = Compositing::Multipass),
         labelled("layered-pem nearest-sample").with(|p| p.blend = false),
         labelled("layered-pem distant-only").with(|p| p.local_layer = false),
         labelled("layered-pem em128").with(|p| p.em_size = Some(128)),

@@ -10,6 +10,8 @@ use std::ops::Range;
 pub enum Usage {
     ColorTarget,
     DepthTarget,
+    /// Depth and stencil tested, not written (a screen pass masked by the stencil).
+    DepthRead,
     Sampled,
     TransferSrc,
     TransferDst,

@@ -29,9 +29,14 @@ fn target_state(usage: Usage) -> LevelState {
             A::COLOR_ATTACHMENT_READ | A::COLOR_ATTACHMENT_WRITE,
         ),
         Usage::DepthTarget => (
-            L::DEPTH_ATTACHMENT_OPTIMAL,
+            L::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
             S::EARLY_FRAGMENT_TESTS | S::LATE_FRAGMENT_TESTS,
             A::DEPTH_STENCIL_ATTACHMENT_READ | A::DEPTH_STENCIL_ATTACHMENT_WRITE,
+        ),
+        Usage::DepthRead => (
+            L::DEPTH_STENCIL_READ_ONLY_OPTIMAL,
+            S::EARLY_FRAGMENT_TESTS | S::LATE_FRAGMENT_TESTS,
+            A::DEPTH_STENCIL_ATTACHMENT_READ,
         ),
         Usage::Sampled => (
             L::SHADER_READ_ONLY_OPTIMAL,

@@ -38,7 +38,7 @@ impl CubeTarget {
         let depth = Image::new(
             device,
             name,
-            ImageDesc::new_cube(vk::Format::D32_SFLOAT, size)
+            ImageDesc::new_cube(crate::renderer::DEPTH_FORMAT, size)
                 .usage(vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT),
         )?;
         Ok(Self {

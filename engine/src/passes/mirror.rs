@@ -37,12 +37,14 @@ pub fn mirror_pipeline(
             fragment_spirv: spirv::MIRROR_FRAG,
             vertex_bindings: &[Vertex::BINDING, TEXGEN_BINDING],
             vertex_attributes: &MIRROR_ATTRIBUTES,
-            color_format,
+            color_formats: &[color_format],
             depth_format,
             cull_mode: vk::CullModeFlags::BACK,
             push_constant_size: size_of::<MirrorPush>() as u32,
             bindings: &[vk::DescriptorType::COMBINED_IMAGE_SAMPLER; 2],
             blend_by_alpha: false,
+            depth: crate::backend::DepthTest::TestWrite,
+            stencil: crate::backend::StencilTest::Off,
         },
     )
 }

@@ -3,6 +3,7 @@
 pub mod em_capture;
 pub mod mirror;
 pub mod pem;
+pub mod pem_deferred;
 pub mod probe;
 pub mod readback;
 pub mod room;

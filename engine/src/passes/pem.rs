@@ -6,7 +6,9 @@
 //! sphere-at-infinity PEMs), or a parameterized texture map.
 
 use super::target::Target;
-use crate::backend::{Buffer, Device, GpuResult, Image, Pipeline, PipelineDesc};
+use crate::backend::{
+    Buffer, DepthTest, Device, GpuResult, Image, Pipeline, PipelineDesc, StencilTest,
+};
 use crate::gpu_scene::GpuMesh;
 use crate::graph::{Access, Pass};
 use crate::shader_interface::{
@@ -64,12 +66,14 @@ impl PemPipelines {
                     fragment_spirv,
                     vertex_bindings,
                     vertex_attributes,
-                    color_format: color,
+                    color_formats: &[color],
                     depth_format: depth,
                     cull_mode: vk::CullModeFlags::BACK,
                     push_constant_size: size_of::<PemPush>() as u32,
                     bindings: &vec![vk::DescriptorType::COMBINED_IMAGE_SAMPLER; shading.bindings()],
                     blend_by_alpha: blend,
+                    depth: DepthTest::TestWrite,
+                    stencil: StencilTest::Off,
                 },
             )
         };
@@ -108,6 +112,8 @@ pub struct PemDraw<'a> {
     /// Distant (lookup + cos) and local texgen streams; None for PTMs.
     pub texgen: Option<(&'a Buffer, &'a Buffer)>,
     pub f0: Vec3,
+    /// The array element holding this sample's maps.
+    pub slot: u32,
 }
 
 /// The reflectors drawn from one viewpoint sample with weight `weight`;
@@ -138,6 +144,7 @@ impl Pass for PemPass<'_> {
                 let push = PemPush {
                     view_proj: self.view_proj,
                     f0_weight: draw.f0.extend(self.weight),
+                    slot: glam::Vec4::new(draw.slot as f32, 0.0, 0.0, 0.0),
                 };
                 self.pipelines
                     .get(draw.shading, self.blend)

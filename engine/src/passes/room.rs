@@ -144,7 +144,7 @@ pub fn room_pipeline(
             fragment_spirv,
             vertex_bindings: &[Vertex::BINDING],
             vertex_attributes: &Vertex::ATTRIBUTES,
-            color_format,
+            color_formats: &[color_format],
             depth_format,
             cull_mode: vk::CullModeFlags::BACK,
             push_constant_size: size_of::<RoomPush>() as u32,
@@ -153,6 +153,8 @@ pub fn room_pipeline(
                 vk::DescriptorType::UNIFORM_BUFFER,
             ],
             blend_by_alpha: false,
+            depth: crate::backend::DepthTest::TestWrite,
+            stencil: crate::backend::StencilTest::Off,
         },
     )
 }

@@ -64,7 +64,7 @@ impl<'a> Target<'a> {
             })];
         let depth = vk::RenderingAttachmentInfo::default()
             .image_view(self.depth.target_view(self.level, self.layer)?)
-            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+            .image_layout(vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL)
             .load_op(load)
             .store_op(vk::AttachmentStoreOp::STORE)
             .clear_value(vk::ClearValue {
@@ -78,11 +78,14 @@ impl<'a> Target<'a> {
             offset: vk::Offset2D::default(),
             extent,
         });
-        let info = vk::RenderingInfo::default()
+        let mut info = vk::RenderingInfo::default()
             .render_area(area)
             .layer_count(1)
             .color_attachments(&color)
             .depth_attachment(&depth);
+        if has_stencil(self.depth) {
+            info = info.stencil_attachment(&depth);
+        }
         let viewport = vk::Viewport {
             x: 0.0,
             y: 0.0,
@@ -104,6 +107,11 @@ impl<'a> Target<'a> {
         unsafe { device.device.cmd_end_rendering(cmd) };
         drawn
     }
+}
+
+/// Whether `image` has a stencil aspect (then it is bound as both).
+pub fn has_stencil(image: &Image) -> bool {
+    image.desc.aspect().contains(vk::ImageAspectFlags::STENCIL)
 }
 
 /// Draws `mesh`, with `per_vertex` (if any) bound as vertex binding 1.

@@ -1,7 +1,7 @@
 //! Copies from staging buffers into sampled images: how decoded maps reach
 //! the device during playback (one pass, so the counters show its cost).
 
-use crate::backend::upload::level_regions;
+use crate::backend::upload::{element_regions, level_regions};
 use crate::backend::{Buffer, Device, GpuResult, Image};
 use crate::graph::{Access, Pass, Usage};
 use ash::vk;
@@ -12,6 +12,8 @@ pub struct Upload<'a> {
     pub buffer: &'a Buffer,
     pub offset: u64,
     pub image: &'a Image,
+    /// One element of an array image (None: the whole image).
+    pub element: Option<u32>,
 }
 
 pub struct UploadPass<'a> {
@@ -31,7 +33,10 @@ impl Pass for UploadPass<'_> {
     }
     fn record(&self, cmd: vk::CommandBuffer) -> GpuResult<()> {
         for upload in &self.uploads {
-            let (mut regions, bytes) = level_regions(&upload.image.desc)?;
+            let (mut regions, bytes) = match upload.element {
+                Some(e) => element_regions(&upload.image.desc, e)?,
+                None => level_regions(&upload.image.desc)?,
+            };
             if upload.offset + bytes > upload.buffer.size {
                 return Err(crate::backend::GpuError::Invalid(format!(
                     "upload of {bytes} bytes at {} overruns a {}-byte staging buffer",

@@ -1,34 +1,40 @@
 //! PEM playback: per frame, texgen for every reflector, the samples the
 //! eye needs made resident (decoded ahead on the worker, or now), and the
-//! passes that draw them — only those the scene and the eye need: no
-//! local layer on convex-hull triangles, no blend pass exactly on a sample.
+//! passes that draw them — deferred (G-buffer, then one compositing pass
+//! shading each covered pixel once) or the papers' multipass — only what
+//! the scene and the eye need: no local layer on convex-hull triangles, one
+//! sample exactly on a grid line.
 
+use super::frame_sets::FrameSets;
 use super::prefetch::{MapKey, Prefetcher, decode_into};
-use super::reflector::{PemReflector, SlotBindings, map_desc};
-use super::samples::SampleBlend;
-pub use super::settings::{PemKind, PemSettings};
+use super::reflector::PemReflector;
+use super::residency::SLOTS;
+use super::samples::{SampleBlend, ViewGrid};
+pub use super::settings::{Compositing, PemKind, PemSettings};
 use super::source::{MapLayer, MapSource};
 use super::staging::StagingPool;
 use crate::backend::upload::level_regions;
-use crate::backend::{Buffer, Device, GpuError, GpuResult, Image, Sampler};
+use crate::backend::{Buffer, Device, GpuError, GpuResult, Image, ImageDesc};
 use crate::gpu_scene::GpuScene;
-use crate::graph::Executor;
-use crate::passes::mirror::fresnel_lut_image;
-use crate::passes::pem::{PemDraw, PemPass, PemPipelines, Shading};
-use crate::passes::target::{Target, area_of};
+use crate::graph::{Executor, Pass};
+use crate::passes::pem::{PemDraw, PemPass, Shading};
+use crate::passes::pem_deferred::{
+    CompositeDraw, CompositePass, GBuffer, GBufferDraw, GBufferPass, vec4_of,
+};
+use crate::passes::target::{Target, area_of, screen_bounds};
 use crate::passes::upload::{Upload, UploadPass};
+use crate::shader_interface::CompositePush;
 use anyhow::{Result, bail};
 use ash::vk;
 use glam::{Mat4, Vec3};
-use inference::scene::{Material, Scene};
+use inference::scene::{Material, Orbit, Scene};
 use inference::texgen::TexgenVertex;
 use std::time::Instant;
 
 /// A map read into staging this frame, waiting for its upload pass.
 struct Pending {
-    reflector: usize,
-    slot: usize,
     layer: usize,
+    element: u32,
     buffer: Buffer,
 }
 
@@ -46,17 +52,15 @@ pub struct PemCpu {
 pub struct PemPlayer {
     device: Device,
     pub settings: PemSettings,
-    pipelines: PemPipelines,
-    lut: Image,
-    /// (cube, 2D): alive as long as the slots' descriptor sets.
-    _samplers: (Sampler, Sampler),
+    sets: FrameSets,
     reflectors: Vec<PemReflector>,
     pool: StagingPool,
     pending: Vec<Pending>,
     source: MapSource,
     prefetch: Option<Prefetcher>,
-    samples: u32,
-    last_position: Option<f32>,
+    grid: ViewGrid,
+    orbit: Orbit,
+    last_angles: Option<(f32, f32)>,
     frame: u64,
     scratch: Vec<TexgenVertex>,
 }
@@ -68,22 +72,9 @@ impl PemPlayer {
         scene: &Scene,
         settings: PemSettings,
         source: MapSource,
+        gbuffer: &GBuffer,
         formats: (vk::Format, vk::Format),
     ) -> Result<Self> {
-        let pipelines = PemPipelines::new(device, formats.0, formats.1)?;
-        let lut = fresnel_lut_image(device, executor)?;
-        let cube = Sampler::new(
-            device,
-            vk::SamplerAddressMode::CLAMP_TO_EDGE,
-            settings.filtering,
-        )?;
-        let flat = Sampler::new(device, vk::SamplerAddressMode::REPEAT, settings.filtering)?;
-        let bindings = SlotBindings {
-            pipelines: &pipelines,
-            lut: &lut,
-            cube: &cube,
-            flat: &flat,
-        };
         let layers = settings.layers();
         let mut reflectors = Vec::new();
         for (index, o) in scene.objects.iter().enumerate() {
@@ -107,34 +98,47 @@ impl PemPlayer {
                     }
                 );
             }
+            let base = (reflectors.len() * SLOTS) as u32;
             reflectors.push(PemReflector::new(
                 device,
                 scene,
                 (index, o),
                 f0,
                 &settings,
-                &bindings,
+                base,
             )?);
         }
-        let leaf_bytes = reflectors
+        let resolution = common_resolution(&reflectors)?;
+        let arrays = layers
             .iter()
-            .flat_map(|r| layers.iter().map(|l| l.layout(r.resolution).len() * 8))
+            .map(|&l| {
+                map_array(
+                    device,
+                    l,
+                    resolution >> settings.drop_levels,
+                    reflectors.len(),
+                )
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let sets = FrameSets::new(device, executor, &settings, arrays, gbuffer, formats)?;
+        let leaf_bytes = layers
+            .iter()
+            .map(|l| l.layout(resolution).len() * 8)
             .max()
             .unwrap_or(0);
         Ok(Self {
             device: device.clone(),
             settings,
-            pipelines,
-            lut,
-            _samplers: (cube, flat),
+            sets,
             reflectors,
             pool: StagingPool::new(device, leaf_bytes as u64),
             pending: Vec::new(),
             // Without a second handle playback still works, decoding in line.
             prefetch: source.reopen().ok().map(Prefetcher::new),
             source,
-            samples: scene.orbit.samples,
-            last_position: None,
+            grid: ViewGrid::from_orbit(&scene.orbit),
+            orbit: scene.orbit,
+            last_angles: None,
             frame: 0,
             scratch: Vec::new(),
         })
@@ -142,12 +146,13 @@ impl PemPlayer {
 
     /// Forgets every image's tracked state before they are destroyed.
     pub fn release(&self, executor: &mut Executor) {
-        executor.states.forget(&self.lut);
-        for r in &self.reflectors {
-            for i in r.slots.iter().flat_map(|s| &s.images) {
-                executor.states.forget(i);
-            }
-        }
+        self.sets.release(executor);
+    }
+
+    /// The samples a frame from `eye` draws.
+    pub fn blend(&self, eye: Vec3) -> SampleBlend {
+        let s = &self.settings;
+        super::samples::sample_blend(&self.grid, &self.orbit, eye, s.spacing, s.blend)
     }
 
     /// CPU work before recording a frame: texgen for `eye`, and the maps of
@@ -166,19 +171,22 @@ impl PemPlayer {
                 .for_each(|b| self.pool.give(b));
         }
         let mut cpu = PemCpu::default();
-        let needed: Vec<u32> = blend.samples().collect();
+        let needed: Vec<u32> = blend.indices().collect();
         for ri in 0..self.reflectors.len() {
             let start = Instant::now();
             self.reflectors[ri].texgen(eye, &self.settings, &mut self.scratch)?;
             cpu.texgen_ms += start.elapsed().as_secs_f64() * 1e3;
             let Some(fills) = self.reflectors[ri].table.assign(&needed, self.frame) else {
-                bail!("internal: {} samples do not fit the slots", needed.len());
+                bail!(
+                    "internal: {} samples do not fit {SLOTS} slots",
+                    needed.len()
+                );
             };
             for (sample, slot) in fills {
                 self.fill_slot(ri, slot, sample, &mut cpu)?;
             }
         }
-        self.prefetch_next(blend);
+        self.prefetch_next(eye);
         Ok(cpu)
     }
 
@@ -207,53 +215,50 @@ impl PemPlayer {
             };
             cpu.decoded_maps += 1;
             self.pending.push(Pending {
-                reflector: ri,
-                slot,
                 layer: layer_index,
+                element: r.base + slot as u32,
                 buffer,
             });
         }
         Ok(())
     }
 
-    /// Asks the worker for the sample beyond `blend` in the direction the
-    /// eye moves, for every reflector that does not hold it yet.
-    fn prefetch_next(&mut self, blend: &SampleBlend) {
-        let position = match blend.second {
-            Some((s, w)) => blend.first as f32 * (1.0 - w) + s as f32 * w,
-            None => blend.first as f32,
-        };
-        let last = self.last_position.replace(position);
-        let (Some(last), Some(prefetch)) = (last, self.prefetch.as_mut()) else {
+    /// Asks the worker for the samples of the next cell in the direction
+    /// the eye moves, for every reflector that does not hold them yet.
+    fn prefetch_next(&mut self, eye: Vec3) {
+        let (az, el) = self.orbit.angles(eye);
+        let last = self.last_angles.replace((az, el));
+        let (Some((last_az, last_el)), Some(prefetch)) = (last, self.prefetch.as_mut()) else {
             return;
         };
-        let step = self.settings.spacing.max(1) as i64;
-        let ahead = match position.partial_cmp(&last) {
-            Some(std::cmp::Ordering::Greater) => blend.samples().max().map(|s| s as i64 + step),
-            Some(std::cmp::Ordering::Less) => blend.samples().min().map(|s| s as i64 - step),
-            _ => None,
-        };
-        let Some(next) = ahead.filter(|&s| s >= 0 && s < i64::from(self.samples)) else {
+        let (da, de) = (az - last_az, el - last_el);
+        if da == 0.0 && de == 0.0 {
             return;
-        };
-        for r in self
-            .reflectors
-            .iter()
-            .filter(|r| !r.table.holds(next as u32))
-        {
-            for layer in self.settings.layers() {
-                let key = MapKey {
-                    object: r.name.clone(),
-                    layer,
-                    resolution: r.resolution,
-                    sample: next as u32,
-                };
-                if prefetch.has(&key) {
-                    continue;
-                }
-                let Ok(buffer) = self.pool.take() else { return };
-                if let Some(unused) = prefetch.request(key, buffer) {
-                    self.pool.give(unused);
+        }
+        let s = &self.settings;
+        let (cell_a, cell_e) = self.grid.cell_size(az, el, s.spacing);
+        let ahead = self.grid.blend(
+            az + da.signum() * cell_a * f32::from(da != 0.0),
+            el + de.signum() * cell_e * f32::from(de != 0.0),
+            s.spacing,
+            s.blend,
+        );
+        for r in &self.reflectors {
+            for sample in ahead.indices().filter(|&k| !r.table.holds(k)) {
+                for layer in s.layers() {
+                    let key = MapKey {
+                        object: r.name.clone(),
+                        layer,
+                        resolution: r.resolution,
+                        sample,
+                    };
+                    if prefetch.has(&key) {
+                        continue;
+                    }
+                    let Ok(buffer) = self.pool.take() else { return };
+                    if let Some(unused) = prefetch.request(key, buffer) {
+                        self.pool.give(unused);
+                    }
                 }
             }
         }
@@ -266,15 +271,16 @@ impl PemPlayer {
         }
         let mut uploads = Vec::new();
         for p in &self.pending {
-            let r = &self.reflectors[p.reflector];
-            let image = &r.slots[p.slot].images[p.layer];
+            let image = &self.sets.arrays[p.layer];
             // Skip the dropped finest levels: they lead the staging layout.
             let layer = self.settings.layers()[p.layer];
-            let offset = dropped_bytes(layer, r.resolution, self.settings.drop_levels)?;
+            let resolution = self.reflectors.first().map_or(1, |r| r.resolution);
+            let offset = dropped_bytes(layer, resolution, self.settings.drop_levels)?;
             uploads.push(Upload {
                 buffer: &p.buffer,
                 offset,
                 image,
+                element: Some(p.element),
             });
         }
         Ok(Some(UploadPass {
@@ -283,15 +289,151 @@ impl PemPlayer {
         }))
     }
 
-    /// The draw passes for `blend`: the first sample replacing what the
-    /// room pass drew, the second (if any) blended over it by its weight.
+    /// The passes that draw `blend`'s samples over what the room pass drew.
     pub fn draw_passes<'a>(
         &'a self,
         gpu: &'a GpuScene,
+        gbuffer: &'a GBuffer,
         blend: &SampleBlend,
         target: Target<'a>,
         view_proj: Mat4,
-    ) -> GpuResult<Vec<PemPass<'a>>> {
+    ) -> GpuResult<Vec<Box<dyn Pass + 'a>>> {
+        let slots = self.slots_of(blend)?;
+        if self.settings.deferred() {
+            self.deferred_passes(gpu, gbuffer, blend, &slots, target, view_proj)
+        } else {
+            self.multipass(gpu, blend, &slots, target, view_proj)
+        }
+    }
+
+    /// Each reflector's array element of every sample of `blend`.
+    fn slots_of(&self, blend: &SampleBlend) -> GpuResult<Vec<Vec<u32>>> {
+        self.reflectors
+            .iter()
+            .map(|r| {
+                blend
+                    .indices()
+                    .map(|k| {
+                        r.element(k).ok_or_else(|| {
+                            GpuError::Invalid(format!(
+                                "{}: sample {k} is not resident (prepare() first)",
+                                r.name
+                            ))
+                        })
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The G-buffer pass and one compositing pass (two stencil-masked
+    /// screen draws per reflector: hull triangles, the rest).
+    fn deferred_passes<'a>(
+        &'a self,
+        gpu: &'a GpuScene,
+        gbuffer: &'a GBuffer,
+        blend: &SampleBlend,
+        slots: &[Vec<u32>],
+        target: Target<'a>,
+        view_proj: Mat4,
+    ) -> GpuResult<Vec<Box<dyn Pass + 'a>>> {
+        let extent = target.extent();
+        let layered = self.settings.kind == PemKind::Layered && self.settings.local_layer;
+        let weights: Vec<f32> = blend.samples.iter().map(|s| s.1).collect();
+        let (mut gdraws, mut cdraws) = (Vec::new(), Vec::new());
+        for (ri, r) in self.reflectors.iter().enumerate() {
+            let Some(mesh) = gpu.meshes.get(r.object) else {
+                return Err(GpuError::Invalid(format!("{}: no GPU mesh", r.name)));
+            };
+            let local = if layered {
+                &r.texgen_local
+            } else {
+                &r.texgen_distant
+            };
+            let (rest, hull) = (2 * ri as u32 + 1, 2 * ri as u32 + 2);
+            let draw = |first_index, index_count, stencil| GBufferDraw {
+                mesh,
+                indices: &r.indices,
+                first_index,
+                index_count,
+                texgen: (&r.texgen_distant, local),
+                stencil,
+            };
+            gdraws.push(draw(0, r.hull_index_count, hull));
+            gdraws.push(draw(
+                r.hull_index_count,
+                r.index_count - r.hull_index_count,
+                rest,
+            ));
+            let Some(area) = screen_bounds(
+                view_proj,
+                r.bounds.0,
+                r.bounds.1,
+                extent.width,
+                extent.height,
+            )
+            .or(Some(full(extent)))
+            .filter(|a| a.extent.width > 0 && a.extent.height > 0) else {
+                continue;
+            };
+            let slot: Vec<f32> = slots[ri].iter().map(|&e| e as f32).collect();
+            let push = |local_layer: bool| CompositePush {
+                f0: r.f0.extend(1.0),
+                weight: vec4_of(&weights),
+                slot: vec4_of(&slot),
+                info: vec4_of(&[weights.len() as f32, f32::from(local_layer)]),
+            };
+            cdraws.push(CompositeDraw {
+                stencil: hull,
+                area,
+                push: push(false),
+            });
+            cdraws.push(CompositeDraw {
+                stencil: rest,
+                area,
+                push: push(layered),
+            });
+        }
+        let area = area_of(
+            view_proj,
+            self.reflectors.iter().map(|r| r.bounds),
+            extent.width,
+            extent.height,
+        );
+        let fill = GBufferPass {
+            device: &self.device,
+            pipeline: &self.sets.deferred.gbuffer,
+            set: self.sets.gbuffer_set,
+            gbuffer,
+            depth: target.depth,
+            draws: gdraws,
+            sampled: self.sets.arrays.iter().collect(),
+            area,
+            view_proj,
+        };
+        let composite = CompositePass {
+            device: &self.device,
+            pipeline: &self.sets.deferred.composite,
+            set: self.sets.composite_set,
+            target,
+            draws: cdraws,
+            sampled: self.sets.composite_sampled(gbuffer),
+            name: "pem_composite",
+        };
+        Ok(vec![Box::new(fill), Box::new(composite)])
+    }
+
+    /// The papers' formulation: the reflectors drawn once per sample, the
+    /// nearest replacing what the room drew, each next one blended over by
+    /// its share of the weight so far (`w_i / Σ_{j≤i} w_j`).
+    fn multipass<'a>(
+        &'a self,
+        gpu: &'a GpuScene,
+        blend: &SampleBlend,
+        slots: &[Vec<u32>],
+        target: Target<'a>,
+        view_proj: Mat4,
+    ) -> GpuResult<Vec<Box<dyn Pass + 'a>>> {
         let extent = target.extent();
         let area = area_of(
             view_proj,
@@ -299,54 +441,40 @@ impl PemPlayer {
             extent.width,
             extent.height,
         );
-        let mut samples = vec![(blend.first, 1.0, false, "pem")];
-        if let Some((s, w)) = blend.second {
-            samples.push((s, w, true, "pem_blend"));
-        }
-        let mut passes = Vec::new();
-        for (sample, weight, is_blend, name) in samples {
+        let mut passes: Vec<Box<dyn Pass + 'a>> = Vec::new();
+        let mut so_far = 0.0;
+        for (i, &(_, w)) in blend.samples.iter().enumerate() {
+            so_far += w;
             let mut draws = Vec::new();
-            let mut sampled = vec![&self.lut];
-            for r in &self.reflectors {
-                let slot = r
-                    .table
-                    .find(sample)
-                    .and_then(|i| r.slots.get(i))
-                    .ok_or_else(|| {
-                        GpuError::Invalid(format!(
-                            "{}: sample {sample} is not resident (prepare() first)",
-                            r.name
-                        ))
-                    })?;
-                sampled.extend(slot.images.iter());
-                draws.extend(self.draws_of(gpu, r, slot)?);
+            for (ri, r) in self.reflectors.iter().enumerate() {
+                draws.extend(self.draws_of(gpu, r, slots[ri][i])?);
             }
-            passes.push(PemPass {
-                name,
+            passes.push(Box::new(PemPass {
+                name: if i == 0 { "pem" } else { "pem_blend" },
                 device: &self.device,
-                pipelines: &self.pipelines,
-                blend: is_blend,
-                weight,
+                pipelines: &self.sets.forward,
+                blend: i > 0,
+                weight: if i == 0 { 1.0 } else { w / so_far },
                 draws,
-                sampled,
+                sampled: self.sets.forward_sampled(),
                 target: Target {
                     clear: false,
                     area,
                     ..target
                 },
                 view_proj,
-            });
+            }));
         }
         Ok(passes)
     }
 
-    /// A reflector's draws of one sample: hull triangles with the distant
-    /// layer alone and the rest with both (layered), or one draw.
+    /// A reflector's multipass draws of one sample: hull triangles with the
+    /// distant layer alone and the rest with both (layered), or one draw.
     fn draws_of<'a>(
         &self,
         gpu: &'a GpuScene,
         r: &'a PemReflector,
-        slot: &super::reflector::Slot,
+        slot: u32,
     ) -> GpuResult<Vec<PemDraw<'a>>> {
         let Some(mesh) = gpu.meshes.get(r.object) else {
             return Err(GpuError::Invalid(format!("{}: no GPU mesh", r.name)));
@@ -362,19 +490,21 @@ impl PemPlayer {
             index_count,
             texgen,
             f0: r.f0,
+            slot,
         };
-        Ok(match (self.settings.kind, slot.hull_set) {
-            (PemKind::Layered, Some(hull_set)) => vec![
-                draw(Shading::SingleEm, hull_set, 0, r.hull_index_count),
+        let s = &self.sets;
+        Ok(match self.settings.kind {
+            PemKind::Layered if self.settings.local_layer => vec![
+                draw(Shading::SingleEm, s.single_set, 0, r.hull_index_count),
                 draw(
                     Shading::Layered,
-                    slot.set,
+                    s.layered_set,
                     r.hull_index_count,
                     r.index_count - r.hull_index_count,
                 ),
             ],
-            (PemKind::Ptm, _) => vec![draw(Shading::Ptm, slot.set, 0, r.index_count)],
-            _ => vec![draw(Shading::SingleEm, slot.set, 0, r.index_count)],
+            PemKind::Ptm => vec![draw(Shading::Ptm, s.ptm_set, 0, r.index_count)],
+            _ => vec![draw(Shading::SingleEm, s.single_set, 0, r.index_count)],
         })
     }
 
@@ -391,11 +521,58 @@ impl PemPlayer {
     }
 }
 
+fn full(extent: vk::Extent2D) -> vk::Rect2D {
+    vk::Rect2D {
+        offset: vk::Offset2D::default(),
+        extent,
+    }
+}
+
+/// The one EM resolution every reflector plays at (they share map arrays).
+fn common_resolution(reflectors: &[PemReflector]) -> Result<u32> {
+    let Some(first) = reflectors.first() else {
+        bail!("no reflector with [objects.em] settings to play");
+    };
+    if let Some(other) = reflectors.iter().find(|r| r.resolution != first.resolution) {
+        bail!(
+            "{} has {}² maps and {} {}²: every reflector of a scene plays at one EM resolution",
+            first.name,
+            first.resolution,
+            other.name,
+            other.resolution
+        );
+    }
+    Ok(first.resolution)
+}
+
+/// The array a `layer`'s maps play from: one element per slot of every
+/// reflector, RGBA16F, full MIP chain.
+fn map_array(device: &Device, layer: MapLayer, size: u32, reflectors: usize) -> Result<Image> {
+    let format = vk::Format::R16G16B16A16_SFLOAT;
+    let count = (reflectors * SLOTS) as u32;
+    let desc = match layer {
+        MapLayer::Ptm => ImageDesc::new_2d_array(format, size, size, count),
+        _ => ImageDesc::new_cube_array(format, size, count),
+    }
+    .all_mip_levels()
+    .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST);
+    Ok(Image::new(
+        device,
+        &format!("{} maps", layer.file_part()),
+        desc,
+    )?)
+}
+
 /// Bytes of the `drop` finest levels in the staging layout.
 fn dropped_bytes(layer: MapLayer, resolution: u32, drop: u32) -> GpuResult<u64> {
     if drop == 0 {
         return Ok(0);
     }
-    let (regions, _) = level_regions(&map_desc(layer, resolution))?;
+    let desc = match layer {
+        MapLayer::Ptm => ImageDesc::new_2d(vk::Format::R16G16B16A16_SFLOAT, resolution, resolution),
+        _ => ImageDesc::new_cube(vk::Format::R16G16B16A16_SFLOAT, resolution),
+    }
+    .all_mip_levels();
+    let (regions, _) = level_regions(&desc)?;
     Ok(regions.get(drop as usize).map_or(0, |r| r.buffer_offset))
 }

@@ -1,12 +1,11 @@
 //! One reflector as PEM playback sees it: its EM geometries and origin,
 //! its indices with convex-hull triangles first, its per-frame texgen
-//! streams, and its resident sample slots (images and descriptor sets).
+//! streams, and which samples its slots hold (the slots themselves are
+//! elements of the player's map arrays, from `base` on).
 
 use super::residency::{SLOTS, SlotTable};
 use super::settings::{PemKind, PemSettings};
-use super::source::MapLayer;
-use crate::backend::{Binding, Buffer, Device, Image, ImageDesc, Sampler};
-use crate::passes::pem::{PemPipelines, Shading};
+use crate::backend::{Buffer, Device};
 use anyhow::{Result, bail};
 use ash::vk;
 use glam::Vec3;
@@ -14,23 +13,6 @@ use gpu_allocator::MemoryLocation;
 use inference::em_geometry::{EmGeometry, bounding_ellipsoid, texgen};
 use inference::scene::{Object, Scene};
 use inference::texgen::TexgenVertex;
-
-/// One resident sample's maps and the descriptor sets that sample them.
-pub struct Slot {
-    pub images: Vec<Image>,
-    /// Binds every layer (+ the LUT for EMs).
-    pub set: vk::DescriptorSet,
-    /// Layered PEMs: the distant layer alone, for hull triangles.
-    pub hull_set: Option<vk::DescriptorSet>,
-}
-
-/// The samplers and LUT every slot's descriptor sets bind.
-pub struct SlotBindings<'a> {
-    pub pipelines: &'a PemPipelines,
-    pub lut: &'a Image,
-    pub cube: &'a Sampler,
-    pub flat: &'a Sampler,
-}
 
 pub struct PemReflector {
     /// Index of the object in the scene (and its GPU mesh).
@@ -51,8 +33,9 @@ pub struct PemReflector {
     pub index_count: u32,
     pub texgen_distant: Buffer,
     pub texgen_local: Buffer,
-    pub slots: Vec<Slot>,
     pub table: SlotTable,
+    /// The array element of this reflector's slot 0.
+    pub base: u32,
 }
 
 impl PemReflector {
@@ -62,7 +45,7 @@ impl PemReflector {
         (object, o): (usize, &Object),
         f0: Vec3,
         settings: &PemSettings,
-        bindings: &SlotBindings,
+        base: u32,
     ) -> Result<Self> {
         let resolution = o.em.as_ref().map_or(1, |em| em.resolution.max(1));
         if settings.drop_levels >= 32 - resolution.leading_zeros() {
@@ -86,7 +69,7 @@ impl PemReflector {
                 MemoryLocation::CpuToGpu,
             )
         };
-        let mut r = PemReflector {
+        Ok(PemReflector {
             object,
             name: o.name.clone(),
             f0,
@@ -113,14 +96,14 @@ impl PemReflector {
             index_count: indices.len() as u32,
             texgen_distant: stream("texgen distant")?,
             texgen_local: stream("texgen local")?,
-            slots: Vec::new(),
             table: SlotTable::new(SLOTS),
-        };
-        for _ in 0..SLOTS {
-            let slot = r.make_slot(device, settings, bindings)?;
-            r.slots.push(slot);
-        }
-        Ok(r)
+            base,
+        })
+    }
+
+    /// The array element holding `sample`, if it is resident.
+    pub fn element(&self, sample: u32) -> Option<u32> {
+        self.table.find(sample).map(|slot| self.base + slot as u32)
     }
 
     /// CPU texgen for `eye` into the streams `settings` draw with (`scratch`
@@ -157,61 +140,6 @@ impl PemReflector {
         }
         Ok(())
     }
-
-    /// The images of one sample slot and its descriptor sets.
-    fn make_slot(&self, device: &Device, settings: &PemSettings, b: &SlotBindings) -> Result<Slot> {
-        let size = self.resolution >> settings.drop_levels;
-        let layers = settings.layers();
-        let mut images = Vec::new();
-        for layer in &layers {
-            let desc = map_desc(*layer, size)
-                .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST);
-            images.push(Image::new(
-                device,
-                &format!("{} {} slot", self.name, layer.file_part()),
-                desc,
-            )?);
-        }
-        let lut = Binding::Image(b.lut.view, b.cube.raw);
-        let cube = |i: usize| Binding::Image(images[i].view, b.cube.raw);
-        let single = |i| {
-            b.pipelines
-                .get(Shading::SingleEm, false)
-                .descriptor_set(&[cube(i), lut])
-        };
-        let (set, hull_set) = match settings.kind {
-            PemKind::Layered if layers.len() == 2 => (
-                b.pipelines.get(Shading::Layered, false).descriptor_set(&[
-                    cube(0),
-                    cube(1),
-                    lut,
-                ])?,
-                Some(single(0)?),
-            ),
-            PemKind::Ptm => (
-                b.pipelines
-                    .get(Shading::Ptm, false)
-                    .descriptor_set(&[Binding::Image(images[0].view, b.flat.raw)])?,
-                None,
-            ),
-            _ => (single(0)?, None),
-        };
-        Ok(Slot {
-            images,
-            set,
-            hull_set,
-        })
-    }
-}
-
-/// The image a `size` map of `layer` plays from: RGBA16F, full MIP chain.
-pub fn map_desc(layer: MapLayer, size: u32) -> ImageDesc {
-    let format = vk::Format::R16G16B16A16_SFLOAT;
-    match layer {
-        MapLayer::Ptm => ImageDesc::new_2d(format, size, size),
-        _ => ImageDesc::new_cube(format, size),
-    }
-    .all_mip_levels()
 }
 
 /// The mesh's indices with hull triangles first, and how many indices

@@ -3,9 +3,9 @@
 //! used slot the frame does not need. Pure bookkeeping (the images live
 //! with the reflector), so it is tested without a device.
 
-/// Samples kept resident per reflector: the two a blend needs plus one,
-/// so moving back and forth across a sample does not re-decode.
-pub const SLOTS: usize = 3;
+/// Samples kept resident per reflector: the four corners a 2D blend needs
+/// plus two, so moving back and forth across a line does not re-decode.
+pub const SLOTS: usize = 6;
 
 /// What each slot holds and when it was last used.
 #[derive(Clone, Debug, Default)]

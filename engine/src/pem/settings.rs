@@ -16,6 +16,20 @@ pub struct PemSettings {
     /// Finest MIP levels dropped: the EM resolution is `res >> drop_levels`.
     pub drop_levels: u32,
     pub filtering: Filtering,
+    /// How blended samples are composited (PTMs always draw multipass).
+    pub compositing: Compositing,
+}
+
+/// How a frame composites its EM layers and blended samples.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Compositing {
+    /// Reflectors rasterized once into per-pixel lookups, then each covered
+    /// pixel shaded once from every layer of every blended sample.
+    Deferred,
+    /// The papers' formulation: the reflector drawn once per blended sample,
+    /// each pass blended over the last by its weight.
+    Multipass,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -38,7 +52,13 @@ impl PemSettings {
             spacing: 1,
             drop_levels: 0,
             filtering: Filtering::Trilinear,
+            compositing: Compositing::Deferred,
         }
+    }
+
+    /// Whether frames composite deferred (PTMs cannot: they are 2D maps).
+    pub fn deferred(&self) -> bool {
+        self.compositing == Compositing::Deferred && self.kind != PemKind::Ptm
     }
 
     /// The maps one sample needs, in slot order.

@@ -56,6 +56,21 @@ impl Orbit {
     }
 
     /// Eye of orbit sample `sample`; an error outside `0..samples`.
+    /// (azimuth, elevation above the orbit plane) of `eye`, degrees: the
+    /// inverse of [`Orbit::eye`] (0, 0 at the centre itself).
+    pub fn angles(&self, eye: Vec3) -> (f32, f32) {
+        let d = eye - self.center;
+        let dy = self.height - self.center.y;
+        let base = dy.atan2(self.radius).to_degrees();
+        let azimuth = d.x.atan2(d.z).to_degrees();
+        let elevation = d.y.atan2(d.x.hypot(d.z)).to_degrees() - base;
+        if azimuth.is_finite() && elevation.is_finite() && d.length_squared() > 0.0 {
+            (azimuth, elevation)
+        } else {
+            (0.0, 0.0)
+        }
+    }
+
     pub fn sample_eye(&self, sample: u32) -> Result<Vec3, SceneError> {
         if sample >= self.samples {
             return Err(SceneError::OrbitSampleOutOfRange {
@@ -106,6 +121,19 @@ mod tests {
         assert_eq!(o.angle_deg(5), 15.0);
         assert!(o.eye(0.0, 0.0).abs_diff_eq(Vec3::new(0.0, 1.0, 2.0), 1e-5));
         assert!(o.eye(90.0, 0.0).abs_diff_eq(Vec3::new(2.0, 1.0, 0.0), 1e-5));
+    }
+
+    #[test]
+    fn angles_invert_eye() {
+        let o = orbit();
+        for (az, el) in [(0.0, 0.0), (37.5, 0.0), (80.0, 20.0), (-10.0, 30.0)] {
+            let (a, e) = o.angles(o.eye(az, el));
+            assert!(
+                (a - az).abs() < 1e-3 && (e - el).abs() < 1e-3,
+                "{az} {el}: {a} {e}"
+            );
+        }
+        assert_eq!(o.angles(o.center), (0.0, 0.0));
     }
 
     #[test]

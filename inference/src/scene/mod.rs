@@ -4,6 +4,7 @@
 pub mod camera;
 pub mod error;
 mod file;
+pub mod grid;
 pub mod light;
 mod load;
 pub mod material;
@@ -23,6 +24,7 @@ use glam::Vec3;
 pub use crate::fresnel::schlick_fresnel;
 pub use camera::{Camera, Orbit};
 pub use error::SceneError;
+pub use grid::{SampleBlend, ViewGrid};
 pub use light::AreaLight;
 pub use material::{EM_RESOLUTIONS, EmLayer, EmSettings, Material};
 pub use mesh::Mesh;

@@ -4,6 +4,7 @@
 use clap::{Args, Parser, Subcommand};
 use engine::backend::{DeviceOptions, Filtering};
 use engine::options::{Maps, Mode, PemOptions, PlayOptions, RunPlace};
+use engine::pem::settings::Compositing;
 use std::path::PathBuf;
 
 #[derive(Parser, Debug)]
@@ -310,6 +311,11 @@ pub struct PemArgs {
     /// Texture filtering of the maps.
     #[arg(long, value_enum, default_value_t = Filtering::Trilinear)]
     pub filtering: Filtering,
+    /// How blended samples and layers are composited: `deferred` shades
+    /// each covered pixel once; `multipass` is the papers' one pass per
+    /// sample, blended.
+    #[arg(long, value_enum, default_value_t = Compositing::Deferred)]
+    pub compositing: Compositing,
 }
 
 /// Parses `WIDTHxHEIGHT`, each 1..=8192.
@@ -370,6 +376,7 @@ impl PemArgs {
             spacing: self.spacing,
             em_size: self.em_size,
             filtering: self.filtering,
+            compositing: self.compositing,
         }
     }
 }

@@ -1,0 +1,390 @@
+//! Deferred PEM compositing (the default): the reflectors are rasterized
+//! once into a G-buffer of per-pixel lookups (each layer's cube lookup with
+//! its level of detail, and the Fresnel cosine) while the stencil marks
+//! their pixels; then one screen pass per reflector part shades only those
+//! pixels, once each, reading every layer of every blended sample. The
+//! frame's cost no longer grows with the 2×2-quad overdraw of small
+//! triangles times the number of samples blended.
+
+use super::target::{Target, has_stencil};
+use crate::backend::{
+    Buffer, DepthTest, Device, GpuResult, Image, ImageDesc, Pipeline, PipelineDesc, StencilTest,
+};
+use crate::gpu_scene::GpuMesh;
+use crate::graph::{Access, Pass, Usage};
+use crate::shader_interface::{
+    CompositePush, LOCAL_TEXGEN_BINDING, PEM_ATTRIBUTES, PemPush, TEXGEN_BINDING, Vertex, spirv,
+};
+use ash::vk;
+use glam::{Mat4, Vec4};
+
+/// What the G-buffer holds where no reflector was drawn: the cosine's
+/// sentinel (below any cosine) lets a read-back count covered pixels.
+pub const GBUFFER_CLEAR: [[f32; 4]; 3] = [[0.0; 4], [0.0; 4], [-2.0, 0.0, 0.0, 0.0]];
+
+/// G-buffer formats: distant lookup + LOD, local lookup + LOD, cos θ.
+pub const GBUFFER_FORMATS: [vk::Format; 3] = [
+    vk::Format::R32G32B32A32_SFLOAT,
+    vk::Format::R32G32B32A32_SFLOAT,
+    vk::Format::R32_SFLOAT,
+];
+
+/// The per-pixel lookup data of one frame, at the frame's size.
+pub struct GBuffer {
+    pub images: [Image; 3],
+}
+
+impl GBuffer {
+    pub fn new(device: &Device, width: u32, height: u32) -> GpuResult<Self> {
+        let make = |name: &str, format| {
+            Image::new(
+                device,
+                name,
+                ImageDesc::new_2d(format, width, height)
+                    // TRANSFER_SRC: the bench reads the coverage back.
+                    .usage(
+                        vk::ImageUsageFlags::COLOR_ATTACHMENT
+                            | vk::ImageUsageFlags::SAMPLED
+                            | vk::ImageUsageFlags::TRANSFER_SRC,
+                    ),
+            )
+        };
+        Ok(Self {
+            images: [
+                make("g-buffer distant", GBUFFER_FORMATS[0])?,
+                make("g-buffer local", GBUFFER_FORMATS[1])?,
+                make("g-buffer cos", GBUFFER_FORMATS[2])?,
+            ],
+        })
+    }
+}
+
+/// The two pipelines of deferred compositing.
+pub struct DeferredPipelines {
+    pub gbuffer: Pipeline,
+    pub composite: Pipeline,
+}
+
+impl DeferredPipelines {
+    pub fn new(device: &Device, color: vk::Format, depth: vk::Format) -> GpuResult<Self> {
+        let sampler = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
+        let gbuffer = Pipeline::new(
+            device,
+            &PipelineDesc {
+                name: "pem g-buffer",
+                vertex_spirv: spirv::PEM_VERT,
+                fragment_spirv: spirv::PEM_GBUFFER_FRAG,
+                vertex_bindings: &[Vertex::BINDING, TEXGEN_BINDING, LOCAL_TEXGEN_BINDING],
+                vertex_attributes: &PEM_ATTRIBUTES,
+                color_formats: &GBUFFER_FORMATS,
+                depth_format: depth,
+                cull_mode: vk::CullModeFlags::BACK,
+                push_constant_size: size_of::<PemPush>() as u32,
+                bindings: &[sampler; 2],
+                blend_by_alpha: false,
+                depth: DepthTest::TestWrite,
+                stencil: StencilTest::Mark,
+            },
+        )?;
+        let composite = Pipeline::new(
+            device,
+            &PipelineDesc {
+                name: "pem composite",
+                vertex_spirv: spirv::PEM_COMPOSITE_VERT,
+                fragment_spirv: spirv::PEM_COMPOSITE_FRAG,
+                vertex_bindings: &[],
+                vertex_attributes: &[],
+                color_formats: &[color],
+                depth_format: depth,
+                cull_mode: vk::CullModeFlags::NONE,
+                push_constant_size: size_of::<CompositePush>() as u32,
+                bindings: &[sampler; 6],
+                blend_by_alpha: false,
+                depth: DepthTest::Off,
+                stencil: StencilTest::Equal,
+            },
+        )?;
+        Ok(Self { gbuffer, composite })
+    }
+}
+
+/// A range of a reflector's triangles written into the G-buffer with
+/// stencil `stencil` (its part: convex-hull triangles or the rest).
+pub struct GBufferDraw<'a> {
+    pub mesh: &'a GpuMesh,
+    pub indices: &'a Buffer,
+    pub first_index: u32,
+    pub index_count: u32,
+    pub texgen: (&'a Buffer, &'a Buffer),
+    pub stencil: u32,
+}
+
+/// Pass 1: the reflectors into the G-buffer, depth-tested against the
+/// room, their parts marked in the stencil.
+pub struct GBufferPass<'a> {
+    pub device: &'a Device,
+    pub pipeline: &'a Pipeline,
+    /// Binds the distant and local map arrays (for the LOD queries).
+    pub set: vk::DescriptorSet,
+    pub gbuffer: &'a GBuffer,
+    /// The frame's depth/stencil (the room's depth already in it).
+    pub depth: &'a Image,
+    pub draws: Vec<GBufferDraw<'a>>,
+    pub sampled: Vec<&'a Image>,
+    pub area: Option<vk::Rect2D>,
+    pub view_proj: Mat4,
+}
+
+impl Pass for GBufferPass<'_> {
+    fn name(&self) -> &str {
+        "pem_gbuffer"
+    }
+    fn accesses(&self) -> Vec<Access<'_>> {
+        let mut a: Vec<Access> = self
+            .gbuffer
+            .images
+            .iter()
+            .map(|i| Access::whole(i, Usage::ColorTarget))
+            .collect();
+        a.push(Access::whole(self.depth, Usage::DepthTarget));
+        a.extend(
+            self.sampled
+                .iter()
+                .map(|i| Access::whole(i, Usage::Sampled)),
+        );
+        a
+    }
+    fn record(&self, cmd: vk::CommandBuffer) -> GpuResult<()> {
+        let colors: Vec<&Image> = self.gbuffer.images.iter().collect();
+        let attachments = Attachments {
+            colors: &colors,
+            load: ColorLoad::Clear(&GBUFFER_CLEAR),
+            depth: self.depth,
+            depth_usage: Usage::DepthTarget,
+            area: self.area,
+        };
+        attachments.render(self.device, cmd, || {
+            let push = PemPush {
+                view_proj: self.view_proj,
+                ..PemPush::default()
+            };
+            self.pipeline.bind(cmd, Some(self.set), &push)?;
+            let d = &self.device.device;
+            for draw in self.draws.iter().filter(|d| d.index_count > 0) {
+                // SAFETY: the G-buffer pipeline (position + two texgen
+                // streams) is bound inside dynamic rendering; the index range
+                // lies within `indices`, whose entries index the mesh and both
+                // streams (one entry per vertex).
+                unsafe {
+                    d.cmd_set_stencil_reference(
+                        cmd,
+                        vk::StencilFaceFlags::FRONT_AND_BACK,
+                        draw.stencil,
+                    );
+                    d.cmd_bind_vertex_buffers(cmd, 0, &[draw.mesh.vertices.raw], &[0]);
+                    d.cmd_bind_vertex_buffers(
+                        cmd,
+                        1,
+                        &[draw.texgen.0.raw, draw.texgen.1.raw],
+                        &[0, 0],
+                    );
+                    d.cmd_bind_index_buffer(cmd, draw.indices.raw, 0, vk::IndexType::UINT32);
+                    d.cmd_draw_indexed(cmd, draw.index_count, 1, draw.first_index, 0, 0);
+                }
+            }
+            Ok(())
+        })
+    }
+}
+
+/// One reflector part's shading: the pixels marked `stencil`, inside `area`.
+pub struct CompositeDraw {
+    pub stencil: u32,
+    pub area: vk::Rect2D,
+    pub push: CompositePush,
+}
+
+/// Pass 2: every marked pixel shaded once from the G-buffer.
+pub struct CompositePass<'a> {
+    pub device: &'a Device,
+    pub pipeline: &'a Pipeline,
+    /// Binds the G-buffer, the map arrays and the Fresnel LUT.
+    pub set: vk::DescriptorSet,
+    /// The frame's colour and depth/stencil (read only).
+    pub target: Target<'a>,
+    pub draws: Vec<CompositeDraw>,
+    pub sampled: Vec<&'a Image>,
+    pub name: &'static str,
+}
+
+impl Pass for CompositePass<'_> {
+    fn name(&self) -> &str {
+        self.name
+    }
+    fn accesses(&self) -> Vec<Access<'_>> {
+        let mut a = vec![
+            Access::level(self.target.color, self.target.level, Usage::ColorTarget),
+            Access::whole(self.target.depth, Usage::DepthRead),
+        ];
+        a.extend(
+            self.sampled
+                .iter()
+                .map(|i| Access::whole(i, Usage::Sampled)),
+        );
+        a
+    }
+    fn record(&self, cmd: vk::CommandBuffer) -> GpuResult<()> {
+        let union = self.draws.iter().map(|d| d.area).reduce(union_of);
+        let attachments = Attachments {
+            colors: &[self.target.color],
+            load: ColorLoad::Keep,
+            depth: self.target.depth,
+            depth_usage: Usage::DepthRead,
+            area: union,
+        };
+        attachments.render(self.device, cmd, || {
+            let d = &self.device.device;
+            for draw in &self.draws {
+                self.pipeline.bind(cmd, Some(self.set), &draw.push)?;
+                // SAFETY: the composite pipeline (no vertex input) is bound
+                // inside dynamic rendering; the scissor lies in the render area.
+                unsafe {
+                    d.cmd_set_scissor(cmd, 0, &[draw.area]);
+                    d.cmd_set_stencil_reference(
+                        cmd,
+                        vk::StencilFaceFlags::FRONT_AND_BACK,
+                        draw.stencil,
+                    );
+                    d.cmd_draw(cmd, 3, 1, 0, 0);
+                }
+            }
+            Ok(())
+        })
+    }
+}
+
+/// The smallest rectangle holding both.
+fn union_of(a: vk::Rect2D, b: vk::Rect2D) -> vk::Rect2D {
+    let x0 = a.offset.x.min(b.offset.x);
+    let y0 = a.offset.y.min(b.offset.y);
+    let x1 = (a.offset.x + a.extent.width as i32).max(b.offset.x + b.extent.width as i32);
+    let y1 = (a.offset.y + a.extent.height as i32).max(b.offset.y + b.extent.height as i32);
+    vk::Rect2D {
+        offset: vk::Offset2D { x: x0, y: y0 },
+        extent: vk::Extent2D {
+            width: (x1 - x0) as u32,
+            height: (y1 - y0) as u32,
+        },
+    }
+}
+
+/// What colour attachments start with.
+#[derive(Clone, Copy)]
+pub enum ColorLoad<'a> {
+    /// What earlier passes left.
+    Keep,
+    /// These values, one per attachment.
+    Clear(&'a [[f32; 4]]),
+}
+
+/// Colour attachments (level 0, layer 0) and a depth/stencil image, for
+/// the multi-attachment passes.
+pub struct Attachments<'a> {
+    pub colors: &'a [&'a Image],
+    pub load: ColorLoad<'a>,
+    pub depth: &'a Image,
+    /// `DepthTarget` (read and write) or `DepthRead` (tested only).
+    pub depth_usage: Usage,
+    pub area: Option<vk::Rect2D>,
+}
+
+impl Attachments<'_> {
+    /// Begins rendering (depth and stencil loaded), runs `draw`, ends.
+    pub fn render(
+        &self,
+        device: &Device,
+        cmd: vk::CommandBuffer,
+        draw: impl FnOnce() -> GpuResult<()>,
+    ) -> GpuResult<()> {
+        let colors = self
+            .colors
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let info = vk::RenderingAttachmentInfo::default()
+                    .image_view(c.target_view(0, 0)?)
+                    .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                    .store_op(vk::AttachmentStoreOp::STORE);
+                Ok(match self.load {
+                    ColorLoad::Keep => info.load_op(vk::AttachmentLoadOp::LOAD),
+                    ColorLoad::Clear(values) => info
+                        .load_op(vk::AttachmentLoadOp::CLEAR)
+                        .clear_value(vk::ClearValue {
+                            color: vk::ClearColorValue {
+                                float32: values.get(i).copied().unwrap_or([0.0; 4]),
+                            },
+                        }),
+                })
+            })
+            .collect::<GpuResult<Vec<_>>>()?;
+        let (layout, store) = match self.depth_usage {
+            Usage::DepthRead => (
+                vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL,
+                vk::AttachmentStoreOp::NONE,
+            ),
+            _ => (
+                vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
+                vk::AttachmentStoreOp::STORE,
+            ),
+        };
+        let depth = vk::RenderingAttachmentInfo::default()
+            .image_view(self.depth.target_view(0, 0)?)
+            .image_layout(layout)
+            .load_op(vk::AttachmentLoadOp::LOAD)
+            .store_op(store);
+        let (width, height) = self.depth.desc.mip_extent(0);
+        let full = vk::Rect2D {
+            offset: vk::Offset2D::default(),
+            extent: vk::Extent2D { width, height },
+        };
+        let area = self.area.unwrap_or(full);
+        let mut info = vk::RenderingInfo::default()
+            .render_area(area)
+            .layer_count(1)
+            .color_attachments(&colors)
+            .depth_attachment(&depth);
+        if has_stencil(self.depth) {
+            info = info.stencil_attachment(&depth);
+        }
+        let viewport = vk::Viewport {
+            x: 0.0,
+            y: 0.0,
+            width: width as f32,
+            height: height as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        // SAFETY: the executor moved every attachment to the layout named
+        // here (the pass declares them); the views are alive.
+        unsafe {
+            let d = &device.device;
+            d.cmd_begin_rendering(cmd, &info);
+            d.cmd_set_viewport(cmd, 0, &[viewport]);
+            d.cmd_set_scissor(cmd, 0, &[area]);
+            d.cmd_set_front_face(cmd, vk::FrontFace::COUNTER_CLOCKWISE);
+        }
+        let drawn = draw();
+        // SAFETY: matches cmd_begin_rendering above.
+        unsafe { device.device.cmd_end_rendering(cmd) };
+        drawn
+    }
+}
+
+/// A `Vec4` of four `f32` values from up to four numbers (the rest 0).
+pub fn vec4_of(values: &[f32]) -> Vec4 {
+    let mut v = [0.0; 4];
+    for (d, s) in v.iter_mut().zip(values) {
+        *d = *s;
+    }
+    Vec4::from_array(v)
+}

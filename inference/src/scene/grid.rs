@@ -1,0 +1,262 @@
+//! The viewpoint space a scene's maps are sampled over: a grid of orbit
+//! azimuths × elevations above the orbit plane (a 1D orbit is one row at
+//! elevation 0). Lines need not be evenly spaced — the compile step places
+//! them where the scene needs them — and sample `k` is `(i_az, i_el)` with
+//! `k = i_az + n_az · i_el`. A view between lines blends the corners of
+//! its cell bilinearly.
+
+use super::camera::Orbit;
+use glam::Vec3;
+
+/// Weights below this count as "exactly on a sample": no blend.
+pub const ON_SAMPLE: f32 = 1e-4;
+
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ViewGrid {
+    /// Orbit azimuths of the grid's lines, degrees, increasing.
+    pub azimuths_deg: Vec<f32>,
+    /// Elevations above the orbit plane, degrees, increasing.
+    pub elevations_deg: Vec<f32>,
+}
+
+/// The samples one view draws from, nearest first, weights summing to 1.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SampleBlend {
+    pub samples: Vec<(u32, f32)>,
+}
+
+impl SampleBlend {
+    pub fn one(sample: u32) -> Self {
+        Self {
+            samples: vec![(sample, 1.0)],
+        }
+    }
+    /// The nearest sample (the largest weight).
+    pub fn first(&self) -> u32 {
+        self.samples.first().map_or(0, |s| s.0)
+    }
+    pub fn indices(&self) -> impl Iterator<Item = u32> + '_ {
+        self.samples.iter().map(|s| s.0)
+    }
+}
+
+impl ViewGrid {
+    /// The orbit's own samples: `samples` azimuths `step_deg` apart, one row.
+    pub fn from_orbit(orbit: &Orbit) -> Self {
+        Self {
+            azimuths_deg: (0..orbit.samples.max(1))
+                .map(|k| orbit.angle_deg(k))
+                .collect(),
+            elevations_deg: vec![0.0],
+        }
+    }
+
+    pub fn len(&self) -> u32 {
+        (self.azimuths_deg.len() * self.elevations_deg.len()) as u32
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// `(i_az, i_el)` of sample `k`.
+    pub fn coords(&self, k: u32) -> (u32, u32) {
+        let n = self.azimuths_deg.len().max(1) as u32;
+        (k % n, k / n)
+    }
+
+    pub fn index(&self, i_az: u32, i_el: u32) -> u32 {
+        i_az + self.azimuths_deg.len() as u32 * i_el
+    }
+
+    /// (azimuth, elevation) of sample `k`, degrees.
+    pub fn angles(&self, k: u32) -> (f32, f32) {
+        let (a, e) = self.coords(k);
+        (
+            self.azimuths_deg.get(a as usize).copied().unwrap_or(0.0),
+            self.elevations_deg.get(e as usize).copied().unwrap_or(0.0),
+        )
+    }
+
+    /// Where sample `k`'s eye is on `orbit`.
+    pub fn eye(&self, orbit: &Orbit, k: u32) -> Vec3 {
+        let (az, el) = self.angles(k);
+        orbit.eye(az, el)
+    }
+
+    /// The samples a view at (`azimuth`, `elevation`) draws: the corners of
+    /// its cell with bilinear weights (views beyond the grid clamp to its
+    /// edge), using every `spacing`-th line of each dimension only; with
+    /// `blend` false, the nearest alone. Finite for every input.
+    pub fn blend(&self, azimuth: f32, elevation: f32, spacing: u32, blend: bool) -> SampleBlend {
+        let azimuth = unwrap_around(&self.azimuths_deg, azimuth);
+        let (a0, a1, ta) = bracket(&self.azimuths_deg, azimuth, spacing);
+        let (e0, e1, te) = bracket(&self.elevations_deg, elevation, spacing);
+        let mut samples: Vec<(u32, f32)> = Vec::with_capacity(4);
+        for (i_el, we) in [(e0, 1.0 - te), (e1, te)] {
+            for (i_az, wa) in [(a0, 1.0 - ta), (a1, ta)] {
+                let w = wa * we;
+                let k = self.index(i_az, i_el);
+                match samples.iter_mut().find(|s| s.0 == k) {
+                    Some(s) => s.1 += w,
+                    None => samples.push((k, w)),
+                }
+            }
+        }
+        samples.retain(|s| s.1 >= ON_SAMPLE);
+        samples.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+        if !blend {
+            samples.truncate(1);
+        }
+        let total: f32 = samples.iter().map(|s| s.1).sum();
+        if samples.is_empty() || !total.is_finite() || total <= 0.0 {
+            return SampleBlend::one(self.index(a0, e0));
+        }
+        samples.iter_mut().for_each(|s| s.1 /= total);
+        SampleBlend { samples }
+    }
+}
+
+impl ViewGrid {
+    /// The size (degrees) of the cell around (`azimuth`, `elevation`) in
+    /// each dimension, every `spacing`-th line (the edge cell's beyond the
+    /// grid; 0 for a dimension with one line).
+    pub fn cell_size(&self, azimuth: f32, elevation: f32, spacing: u32) -> (f32, f32) {
+        let azimuth = unwrap_around(&self.azimuths_deg, azimuth);
+        (
+            span(&self.azimuths_deg, azimuth, spacing),
+            span(&self.elevations_deg, elevation, spacing),
+        )
+    }
+}
+
+/// The spacing of the used lines around `x`.
+fn span(lines: &[f32], x: f32, spacing: u32) -> f32 {
+    let used: Vec<f32> = lines
+        .iter()
+        .step_by(spacing.max(1) as usize)
+        .copied()
+        .collect();
+    if used.len() < 2 {
+        return 0.0;
+    }
+    let j = used.partition_point(|&l| l <= x).clamp(1, used.len() - 1);
+    used[j] - used[j - 1]
+}
+
+/// `azimuth` moved by whole turns to lie nearest the middle of `lines`, so
+/// an eye "before" the first line clamps to it rather than to the last.
+fn unwrap_around(lines: &[f32], azimuth: f32) -> f32 {
+    let (Some(first), Some(last)) = (lines.first(), lines.last()) else {
+        return azimuth;
+    };
+    let middle = 0.5 * (first + last);
+    middle + (azimuth - middle + 180.0).rem_euclid(360.0) - 180.0
+}
+
+/// The used lines around `x` (every `spacing`-th, the grid's own ends
+/// kept at multiples of `spacing`) and the fraction of the way from the
+/// lower to the upper one; clamped at the ends; NaN counts as the start.
+fn bracket(lines: &[f32], x: f32, spacing: u32) -> (u32, u32, f32) {
+    let s = spacing.max(1) as usize;
+    let used: Vec<usize> = (0..lines.len()).step_by(s).collect();
+    let Some(&last) = used.last() else {
+        return (0, 0, 0.0);
+    };
+    if !x.is_finite() || x <= lines[0] || used.len() == 1 {
+        return (0, 0, 0.0);
+    }
+    if x >= lines[last] {
+        return (last as u32, last as u32, 0.0);
+    }
+    let j = used.partition_point(|&i| lines[i] <= x).saturating_sub(1);
+    let (lo, hi) = (used[j], used[(j + 1).min(used.len() - 1)]);
+    let span = lines[hi] - lines[lo];
+    let t = if span > 0.0 {
+        (x - lines[lo]) / span
+    } else {
+        0.0
+    };
+    (lo as u32, hi as u32, t.clamp(0.0, 1.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn orbit_grid() -> ViewGrid {
+        ViewGrid {
+            azimuths_deg: (0..100).map(|k| k as f32).collect(),
+            elevations_deg: vec![0.0],
+        }
+    }
+
+    #[test]
+    fn on_a_sample_draws_it_alone_between_two_blends_by_distance() {
+        let g = orbit_grid();
+        for k in [0, 1, 37, 99] {
+            assert_eq!(g.blend(k as f32, 0.0, 1, true), SampleBlend::one(k));
+        }
+        let b = g.blend(10.25, 0.0, 1, true);
+        assert_eq!(b.indices().collect::<Vec<_>>(), [10, 11]);
+        assert!((b.samples[1].1 - 0.25).abs() < 1e-4, "{b:?}");
+        let b = g.blend(10.75, 0.0, 1, true);
+        assert_eq!(b.first(), 11);
+        assert_eq!(g.blend(10.75, 0.0, 1, false), SampleBlend::one(11));
+        // Elevation off a one-row grid keeps the azimuth's blend.
+        assert_eq!(g.blend(42.5, 30.0, 1, true).samples.len(), 2);
+    }
+
+    #[test]
+    fn a_2d_cell_blends_its_four_corners_bilinearly() {
+        let g = ViewGrid {
+            azimuths_deg: vec![0.0, 4.0, 10.0],
+            elevations_deg: vec![0.0, 15.0, 30.0],
+        };
+        assert_eq!(g.len(), 9);
+        assert_eq!(g.coords(5), (2, 1));
+        assert_eq!(g.angles(5), (10.0, 15.0));
+        let b = g.blend(7.0, 22.5, 1, true);
+        assert_eq!(b.samples.len(), 4);
+        let w = |k| b.samples.iter().find(|s| s.0 == k).map_or(0.0, |s| s.1);
+        // Half way in both: 0.25 each corner of cell (1..2) × (1..2).
+        for k in [g.index(1, 1), g.index(2, 1), g.index(1, 2), g.index(2, 2)] {
+            assert!((w(k) - 0.25).abs() < 1e-5, "{b:?}");
+        }
+        let sum: f32 = b.samples.iter().map(|s| s.1).sum();
+        assert!((sum - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn views_beyond_the_grid_clamp_and_bad_input_stays_in_range() {
+        let g = orbit_grid();
+        for (az, k) in [(-5.0, 0), (-100.0, 0), (140.0, 99), (200.0, 99)] {
+            assert_eq!(g.blend(az, 0.0, 1, true), SampleBlend::one(k), "{az}");
+        }
+        for (az, el) in [
+            (f32::NAN, 0.0),
+            (0.0, f32::NAN),
+            (f32::INFINITY, f32::NEG_INFINITY),
+        ] {
+            let b = g.blend(az, el, 1, true);
+            assert!(b.indices().all(|k| k < g.len()), "{b:?}");
+        }
+        let single = ViewGrid {
+            azimuths_deg: vec![5.0],
+            elevations_deg: vec![0.0],
+        };
+        assert_eq!(single.blend(50.0, 3.0, 1, true), SampleBlend::one(0));
+    }
+
+    #[test]
+    fn spacing_uses_every_nth_line() {
+        let g = orbit_grid();
+        let b = g.blend(13.0, 0.0, 4, true);
+        assert_eq!(b.indices().collect::<Vec<_>>(), [12, 16]);
+        assert!((b.samples[1].1 - 0.25).abs() < 1e-4);
+        // The last used line is 96: 99 clamps to it.
+        assert_eq!(g.blend(99.0, 0.0, 4, true), SampleBlend::one(96));
+        assert_eq!(g.cell_size(13.0, 0.0, 4), (4.0, 0.0));
+        assert_eq!(g.cell_size(-20.0, 0.0, 1), (1.0, 0.0));
+    }
+}

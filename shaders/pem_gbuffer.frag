@@ -1,0 +1,29 @@
+#version 460
+// Deferred PEM compositing, pass 1: the reflector rasterized once into
+// per-pixel lookup data — each layer's cube lookup with the level of detail
+// a forward `texture()` would use there (queried here, where the triangle's
+// derivatives are), and the Fresnel cosine. The stencil marks the pixels
+// (set by the pipeline), so the compositing pass shades only those.
+
+layout(location = 0) in vec3 in_distant;
+layout(location = 1) in float in_cos;
+layout(location = 2) in vec3 in_local;
+
+layout(push_constant) uniform Push {
+    mat4 view_proj;
+    vec4 f0_weight;
+    vec4 slot;
+} pc;
+
+layout(set = 0, binding = 0) uniform samplerCubeArray distant_em;
+layout(set = 0, binding = 1) uniform samplerCubeArray local_em;
+
+layout(location = 0) out vec4 out_distant; // lookup, LOD
+layout(location = 1) out vec4 out_local;   // lookup, LOD
+layout(location = 2) out float out_cos;
+
+void main() {
+    out_distant = vec4(in_distant, textureQueryLod(distant_em, in_distant).x);
+    out_local = vec4(in_local, textureQueryLod(local_em, in_local).x);
+    out_cos = in_cos;
+}
