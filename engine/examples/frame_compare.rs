@@ -9,7 +9,7 @@
 //! (`--exr`, its RGBA).
 
 use anyhow::{Context, Result, bail};
-use engine::eval::metrics::frame_scores;
+use engine::eval::metrics::{display_psnr_masked, frame_scores};
 use inference::trace::output::read_exr;
 use std::path::Path;
 
@@ -56,6 +56,21 @@ fn main() -> Result<()> {
         s.flip,
         mean(&b) / mean(&a)
     );
+    // Per object of a traced reference (its `<object>.mask` layers).
+    let layers = read_exr(Path::new(reference)).unwrap_or_default();
+    for (name, channels) in layers.iter().filter(|(n, _)| n.ends_with(".mask")) {
+        let Some((_, mask)) = channels.first() else {
+            continue;
+        };
+        let mask: Vec<bool> = mask.iter().map(|&m| m >= 0.5).collect();
+        if let Some((db, share)) = display_psnr_masked(&a, &b, &mask)? {
+            println!(
+                "  {:<14} {db:6.2} dB ({:5.1}% of the frame's squared error)",
+                name.trim_end_matches(".mask"),
+                100.0 * share
+            );
+        }
+    }
     if let Some(out) = rest.first() {
         let diff = engine::compare::diff_image(&a, &b, 4.0);
         let mut mosaic = vec![[0.0f32; 4]; (3 * w * h) as usize];

@@ -187,6 +187,36 @@ pub fn display_psnr(reference: &[[f32; 4]], test: &[[f32; 4]]) -> Result<f64> {
     })
 }
 
+/// [`display_psnr`] over the pixels where `mask` is set, and their share
+/// of the whole frame's squared error (0 to 1); None when the mask is empty.
+/// Splits a frame's error by object (the traced `<object>.mask` layers).
+pub fn display_psnr_masked(
+    reference: &[[f32; 4]],
+    test: &[[f32; 4]],
+    mask: &[bool],
+) -> Result<Option<(f64, f64)>> {
+    check_lengths(reference.len(), test.len(), mask.len())?;
+    let (a, b) = (display_bytes(reference), display_bytes(test));
+    let sq = |p: usize| -> f64 {
+        (0..3)
+            .map(|c| (f64::from(a[3 * p + c]) - f64::from(b[3 * p + c])).powi(2))
+            .sum()
+    };
+    let total: f64 = (0..reference.len()).map(sq).sum();
+    let pixels: Vec<usize> = (0..mask.len()).filter(|&p| mask[p]).collect();
+    if pixels.is_empty() {
+        return Ok(None);
+    }
+    let sum: f64 = pixels.iter().map(|&p| sq(p)).sum();
+    let mse = sum / (3 * pixels.len()) as f64;
+    let psnr = if mse == 0.0 {
+        PSNR_CAP_DB
+    } else {
+        (10.0 * (255.0f64 * 255.0 / mse).log10()).min(PSNR_CAP_DB)
+    };
+    Ok(Some((psnr, if total > 0.0 { sum / total } else { 0.0 })))
+}
+
 /// Whole-frame scores of one frame: [`display_psnr`] and the mean FLIP
 /// ([`flip_error_map`]) over every pixel.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -414,6 +444,19 @@ mod tests {
         let s = frame_scores(&dim, &dim_bright, W, H)?;
         assert!(s.psnr_db < 32.0 && s.flip > 0.01, "{s:?}");
         assert!(display_psnr(&reference, &reference[1..]).is_err());
+        // Split by a mask: the masked half holds all of the error.
+        let mut half = reference.clone();
+        let mask: Vec<bool> = (0..half.len()).map(|p| p % 2 == 0).collect();
+        for (p, v) in half.iter_mut().enumerate() {
+            if mask[p] {
+                *v = v.map(|c| 0.5 * c);
+            }
+        }
+        let (db, share) = display_psnr_masked(&reference, &half, &mask)?.expect("pixels");
+        assert_eq!(share, 1.0);
+        assert!(db < display_psnr(&reference, &half)?);
+        let none = vec![false; half.len()];
+        assert_eq!(display_psnr_masked(&reference, &half, &none)?, None);
         Ok(())
     }
 

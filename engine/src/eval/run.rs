@@ -39,6 +39,8 @@ struct ViewResult {
     category: Category,
     psnr_db: f64,
     flip: f64,
+    /// Every pixel, as the PNG shows it.
+    frame: metrics::FrameScores,
     frame_ms: f64,
 }
 
@@ -268,6 +270,7 @@ fn measure(
         category: view.category,
         psnr_db,
         flip,
+        frame: metrics::frame_scores(&reference.beauty, &pixels, width, height)?,
         frame_ms: median(&times),
     };
     Ok((result, pixels))
@@ -299,6 +302,12 @@ fn table_row(row: &Row, results: &[ViewResult], views: u32) -> EvalRow {
         flip_on: kind(Category::On, |r| r.flip),
         flip_between: kind(Category::Between, |r| r.flip),
         flip_above: kind(Category::Above, |r| r.flip),
+        psnr_frame_on_db: Some(kind(Category::On, |r| r.frame.psnr_db)),
+        psnr_frame_between_db: Some(kind(Category::Between, |r| r.frame.psnr_db)),
+        psnr_frame_above_db: Some(kind(Category::Above, |r| r.frame.psnr_db)),
+        flip_frame_on: Some(kind(Category::On, |r| r.frame.flip)),
+        flip_frame_between: Some(kind(Category::Between, |r| r.frame.flip)),
+        flip_frame_above: Some(kind(Category::Above, |r| r.frame.flip)),
         frame_ms: median(&times),
         frame_ms_p95: Some(percentile(&times, 0.95)),
         views: Some(ViewCounts {
