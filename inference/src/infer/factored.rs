@@ -297,9 +297,9 @@ mod tests {
                 }
                 let i = r.layout.index(0, 0, x, y);
                 let want = light(x, y);
-                for c in 0..3 {
+                for (c, want) in want.iter().enumerate() {
                     assert!(
-                        (r.map[c][i] - want[c]).abs() < 1e-3,
+                        (r.map[c][i] - want).abs() < 1e-3,
                         "texel ({x}, {y}) channel {c}"
                     );
                 }
