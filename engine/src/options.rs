@@ -38,6 +38,18 @@ impl Mode {
     }
 }
 
+/// How the diffuse room is lit in PEM playback.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RoomShading {
+    /// Each diffuse object's albedo × its inferred light map (the traced
+    /// light, compiled with the maps: `compile::room`).
+    Inferred,
+    /// The area light as a point emitter plus a constant ambient (no
+    /// shadows): the real-time approximation, kept for comparison.
+    Analytic,
+}
+
 /// Where PEM playback reads its maps.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
@@ -69,6 +81,8 @@ pub struct PemOptions {
     pub filtering: Filtering,
     /// How blended samples and layers are composited.
     pub compositing: Compositing,
+    /// How the room is lit.
+    pub room: RoomShading,
 }
 
 impl Default for PemOptions {
@@ -83,6 +97,7 @@ impl Default for PemOptions {
             em_size: None,
             filtering: Filtering::Trilinear,
             compositing: Compositing::Deferred,
+            room: RoomShading::Inferred,
         }
     }
 }
@@ -113,6 +128,9 @@ impl PemOptions {
         }
         if self.compositing != d.compositing {
             f.push(("compositing".into(), Some("multipass".into())));
+        }
+        if self.room != d.room {
+            f.push(("room".into(), Some("analytic".into())));
         }
         f
     }

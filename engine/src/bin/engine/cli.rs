@@ -3,7 +3,7 @@
 
 use clap::{Args, Parser, Subcommand};
 use engine::backend::{DeviceOptions, Filtering};
-use engine::options::{Maps, Mode, PemOptions, PlayOptions, RunPlace};
+use engine::options::{Maps, Mode, PemOptions, PlayOptions, RoomShading, RunPlace};
 use engine::pem::settings::Compositing;
 use std::path::PathBuf;
 
@@ -316,6 +316,11 @@ pub struct PemArgs {
     /// sample, blended.
     #[arg(long, value_enum, default_value_t = Compositing::Deferred)]
     pub compositing: Compositing,
+    /// How the room is lit: `inferred` light maps of the traced light
+    /// (compiled with the maps, cached under `<out>/room/`) or the
+    /// `analytic` point light plus ambient.
+    #[arg(long, value_enum, default_value_t = RoomShading::Inferred)]
+    pub room: RoomShading,
 }
 
 /// Parses `WIDTHxHEIGHT`, each 1..=8192.
@@ -377,6 +382,7 @@ impl PemArgs {
             em_size: self.em_size,
             filtering: self.filtering,
             compositing: self.compositing,
+            room: self.room,
         }
     }
 }
