@@ -9,7 +9,7 @@ layout(push_constant) uniform Push {
     vec4 f0;     // rgb Schlick F0
     vec4 weight; // weights of up to 4 samples (sum 1)
     vec4 slot;   // array element of each sample's maps
-    vec4 info;   // x = samples, y = 1 when the local layer is drawn here
+    vec4 info;   // x = samples, y = 1 when the reflector has a local layer
 } pc;
 
 layout(set = 0, binding = 0) uniform sampler2D g_distant;
@@ -27,7 +27,8 @@ void main() {
     vec4 l = texelFetch(g_local, p, 0);
     float cos_theta = texelFetch(g_cos, p, 0).r;
     int samples = int(pc.info.x);
-    bool local_layer = pc.info.y > 0.5;
+    // The G-buffer marks parts without a local layer by a huge negative LOD.
+    bool local_layer = pc.info.y > 0.5 && l.w > -1.0e3;
     vec3 sum = vec3(0.0);
     for (int s = 0; s < 4; s++) {
         if (s >= samples) {

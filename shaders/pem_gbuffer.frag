@@ -3,7 +3,9 @@
 // per-pixel lookup data — each layer's cube lookup with the level of detail
 // a forward `texture()` would use there (queried here, where the triangle's
 // derivatives are), and the Fresnel cosine. The stencil marks the pixels
-// (set by the pipeline), so the compositing pass shades only those.
+// (set by the pipeline), so the compositing pass shades only those. Parts
+// that see only the distant layer (convex-hull triangles) record no local
+// lookup (LOD NO_LOCAL), so one compositing draw serves the whole reflector.
 
 layout(location = 0) in vec3 in_distant;
 layout(location = 1) in float in_cos;
@@ -12,8 +14,10 @@ layout(location = 2) in vec3 in_local;
 layout(push_constant) uniform Push {
     mat4 view_proj;
     vec4 f0_weight;
-    vec4 slot;
+    vec4 slot; // y = 1 when this part has a local layer
 } pc;
+
+const float NO_LOCAL = -1.0e4;
 
 layout(set = 0, binding = 0) uniform samplerCubeArray distant_em;
 layout(set = 0, binding = 1) uniform samplerCubeArray local_em;
@@ -24,6 +28,7 @@ layout(location = 2) out float out_cos;
 
 void main() {
     out_distant = vec4(in_distant, textureQueryLod(distant_em, in_distant).x);
-    out_local = vec4(in_local, textureQueryLod(local_em, in_local).x);
+    out_local = pc.slot.y > 0.5 ? vec4(in_local, textureQueryLod(local_em, in_local).x)
+                                : vec4(in_local, NO_LOCAL);
     out_cos = in_cos;
 }

@@ -178,11 +178,17 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
     let mut logs: Vec<PerfLog> = variants.iter().map(|_| PerfLog::default()).collect();
     let mut covered = Vec::new();
     let o = &scene.orbit;
+    // With elevation rings, views sit between rings too: four samples blend.
+    let between_rings = if o.rings > 1 {
+        0.5 * o.ring_step_deg
+    } else {
+        0.0
+    };
     let progress = indicatif::ProgressBar::new(u64::from(2 * views * per_view));
     // Resident variants, interleaved view by view.
     for v in 0..views {
         let k = ((v as f32 + 0.5) / views as f32 * o.samples.saturating_sub(1) as f32) as u32;
-        let eye = o.eye(o.angle_deg(k) + 0.5 * o.step_deg, 0.0);
+        let eye = o.eye(o.angle_deg(k) + 0.5 * o.step_deg, between_rings);
         for i in 0..opts.warmup + per_view {
             if i == opts.warmup {
                 // Decoding ahead, started by the new view, must not run
@@ -210,7 +216,7 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
     // maps decoded ahead while the previous frame draws.
     let last = o.samples.saturating_sub(1).max(1);
     for i in 0..opts.warmup + views * per_view {
-        let eye = o.eye(o.angle_deg(i % last) + 0.5 * o.step_deg, 0.0);
+        let eye = o.eye(o.angle_deg(i % last) + 0.5 * o.step_deg, between_rings);
         let start = Instant::now();
         let stats = renderers[which[moving]].frame(FrameMode::Pem, eye, o.view(eye))?;
         if i >= opts.warmup {

@@ -50,6 +50,25 @@ fn eval_ranks_the_methods_against_the_tracer() {
     let rows = table["rows"].as_array().expect("rows");
     assert_eq!(rows.len(), 5, "{table}");
     let num = |r: &serde_json::Value, f: &str| r[f].as_f64().unwrap_or_else(|| panic!("{f}: {r}"));
+    // Views above the plane at each default elevation, each scored.
+    for r in rows {
+        let above = r["above"].as_array().expect("above");
+        let elevations: Vec<f64> = above
+            .iter()
+            .filter_map(|a| a["elevation_deg"].as_f64())
+            .collect();
+        assert_eq!(elevations, [10.0, 20.0, 30.0], "{r}");
+        assert!(
+            above
+                .iter()
+                .all(|a| a["psnr_db"].as_f64().is_some_and(f64::is_finite)),
+            "{r}"
+        );
+        assert_eq!(
+            num(r, "psnr_above_db"),
+            above[0]["psnr_db"].as_f64().unwrap_or(f64::NAN)
+        );
+    }
     let stat = row(rows, "static-em");
     // Measured here: +1.0 to +2.0 dB between samples, FLIP 0.17-0.18 against 0.29.
     for label in ["sphere-pem", "layered-pem", "ptm"] {

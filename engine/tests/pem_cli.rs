@@ -226,3 +226,30 @@ fn bad_pem_knobs_fail_cleanly() {
     );
     assert!(!no_maps.exists(), "an input folder is never written");
 }
+
+/// A 2D viewpoint space (azimuth lines × elevation rings) compiles every
+/// sample of every ring and plays the default path, which climbs through
+/// the rings, validation-clean.
+#[test]
+fn a_2d_viewpoint_space_compiles_every_ring_and_plays() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = tiny_scene(dir.path());
+    let text_of_scene = std::fs::read_to_string(&scene).expect("scene");
+    let rings = text_of_scene.replacen(
+        "samples = 3",
+        "samples = 3\nrings = 2\nring_step_deg = 15.0",
+        1,
+    );
+    assert_ne!(rings, text_of_scene, "the tiny scene sets samples");
+    std::fs::write(&scene, rings).expect("write scene");
+    let out = dir.path().join("out");
+    let o = play(&scene, &out, &[]);
+    let log = text(&o);
+    assert!(o.status.success(), "{log}");
+    assert!(log.contains("validation messages: 0"), "{log}");
+    for k in 0..6 {
+        let map = out.join(format!("infer/sample_{k:04}/teapot.specular_local.exr"));
+        assert!(map.is_file(), "{} missing", map.display());
+    }
+    assert!(!out.join("infer/sample_0006").exists());
+}

@@ -65,7 +65,7 @@ impl FrameBench {
             };
             let layout = spec.layout();
             let origin = object.mesh.area_weighted_centroid();
-            for k in (0..scene.orbit.samples).step_by(req.frames_every as usize) {
+            for k in (0..scene.orbit.sample_count()).step_by(req.frames_every as usize) {
                 let traced = output::with_suffix(&traced_stem(&req.trace_dir, k), ".exr");
                 if !traced.is_file() {
                     continue;

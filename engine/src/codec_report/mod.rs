@@ -88,7 +88,7 @@ pub fn codec_report(scene: &Scene, req: &CodecReportRequest) -> Result<String> {
             let measured: Vec<u32> = b.items.iter().map(|i| i.k).collect();
             match ViewFrames::load(
                 &req.trace_dir,
-                scene.orbit.samples,
+                scene.orbit.sample_count(),
                 req.size,
                 &measured,
                 &say,

@@ -43,7 +43,7 @@ pub fn load_input(scene: &Scene, infer_dir: &Path) -> Result<EncodeInput> {
             scene.source.display()
         );
     }
-    let samples = scene.orbit.samples;
+    let samples = scene.orbit.sample_count();
     let mut textures = Vec::new();
     for (index, spec) in specs.iter().enumerate() {
         let layout = spec.layout();

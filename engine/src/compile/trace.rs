@@ -39,7 +39,7 @@ pub fn trace(
     settings.validate()?;
     let tracer = Tracer::new(scene)?;
     let jobs: Vec<(PathBuf, Vec3)> = match views {
-        TraceViews::All => (0..scene.orbit.samples)
+        TraceViews::All => (0..scene.orbit.sample_count())
             .map(|k| Ok((traced_stem(out, k), tracer.sample_eye(k)?)))
             .collect::<Result<_>>()?,
         TraceViews::Sample(k) => vec![(traced_stem(out, k), tracer.sample_eye(k)?)],

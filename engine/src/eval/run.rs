@@ -7,7 +7,7 @@ use super::metrics;
 use super::pictures::side_by_side;
 use super::reference::{ReferenceImage, References, View as RefView};
 use super::rows::{Row, all_rows};
-use super::table::{EvalRow, EvalTable, ViewCounts};
+use super::table::{AboveScore, EvalRow, EvalTable, ViewCounts};
 use super::views::{Category, View, views};
 use crate::options::RunPlace;
 use crate::play::{FrameSource, Session, compile_context, setup_mode};
@@ -25,7 +25,9 @@ pub struct EvalOptions {
     /// Views per category, spread evenly along the orbit.
     pub views: u32,
     /// Elevation of the "above" views over the orbit plane, degrees.
-    pub elevation: f32,
+    /// Elevations of the views above the plane (the first is the
+    /// `*_above` fields'; each has its own `above[]` entry).
+    pub elevations: Vec<f32>,
     /// Samples per pixel of the traced references.
     pub spp: u32,
     /// Timed frames per view and row (after one untimed frame).
@@ -37,6 +39,7 @@ pub struct EvalOptions {
 /// What one row measured on one view.
 struct ViewResult {
     category: Category,
+    elevation_deg: f32,
     psnr_db: f64,
     flip: f64,
     /// Every pixel, as the PNG shows it.
@@ -64,7 +67,7 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
         .with_context(|| format!("{}: no reflector with [objects.em]", scene.source.display()))?
         .name
         .clone();
-    let views = views(&scene, opts.views, opts.elevation);
+    let views = views(&scene, opts.views, &opts.elevations);
     let references = references(&scene, &views, place.size, opts.spp, &out, &reflector)?;
     let run = RowRun {
         views: &views,
@@ -103,10 +106,11 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
     );
     let written = write_outputs(&out, &table, &title, &run, pictures, place.size)?;
     let mut text = format!(
-        "{} | {} {}x{} | {} views per category, above = +{}°, reference {} spp\n",
-        device.name, scene.name, place.size.0, place.size.1, opts.views, opts.elevation, opts.spp
+        "{} | {} {}x{} | {} views per category, above = +{:?}°, reference {} spp\n",
+        device.name, scene.name, place.size.0, place.size.1, opts.views, opts.elevations, opts.spp
     );
     text += &table.to_markdown();
+    text += &table.above_markdown();
     for s in &skipped {
         text += &format!("skipped {s}\n");
     }
@@ -268,6 +272,7 @@ fn measure(
     };
     let result = ViewResult {
         category: view.category,
+        elevation_deg: view.elevation_deg,
         psnr_db,
         flip,
         frame: metrics::frame_scores(&reference.beauty, &pixels, width, height)?,
@@ -288,6 +293,32 @@ fn table_row(row: &Row, results: &[ViewResult], views: u32) -> EvalRow {
         )
     };
     let times: Vec<f64> = results.iter().map(|r| r.frame_ms).collect();
+    let mut elevations: Vec<f32> = results
+        .iter()
+        .filter(|r| r.category == Category::Above)
+        .map(|r| r.elevation_deg)
+        .collect();
+    elevations.dedup();
+    let at = |e: f32, f: fn(&ViewResult) -> f64| {
+        mean(
+            &results
+                .iter()
+                .filter(|r| r.category == Category::Above && r.elevation_deg == e)
+                .map(f)
+                .collect::<Vec<_>>(),
+        )
+    };
+    let above: Vec<AboveScore> = elevations
+        .iter()
+        .map(|&e| AboveScore {
+            elevation_deg: e,
+            psnr_db: at(e, |r| r.psnr_db),
+            flip: at(e, |r| r.flip),
+        })
+        .collect();
+    let first = |f: fn(&AboveScore) -> f64| above.first().map_or(f64::NAN, f);
+    // Whole-frame scores above the plane: the first elevation, as *_above.
+    let frame_above = |f: fn(&ViewResult) -> f64| elevations.first().map(|&e| at(e, f));
     EvalRow {
         mode: row
             .label
@@ -298,16 +329,16 @@ fn table_row(row: &Row, results: &[ViewResult], views: u32) -> EvalRow {
         settings: row.settings(),
         psnr_on_db: kind(Category::On, |r| r.psnr_db),
         psnr_between_db: kind(Category::Between, |r| r.psnr_db),
-        psnr_above_db: kind(Category::Above, |r| r.psnr_db),
+        psnr_above_db: first(|a| a.psnr_db),
         flip_on: kind(Category::On, |r| r.flip),
         flip_between: kind(Category::Between, |r| r.flip),
-        flip_above: kind(Category::Above, |r| r.flip),
+        flip_above: first(|a| a.flip),
         psnr_frame_on_db: Some(kind(Category::On, |r| r.frame.psnr_db)),
         psnr_frame_between_db: Some(kind(Category::Between, |r| r.frame.psnr_db)),
-        psnr_frame_above_db: Some(kind(Category::Above, |r| r.frame.psnr_db)),
+        psnr_frame_above_db: frame_above(|r| r.frame.psnr_db),
         flip_frame_on: Some(kind(Category::On, |r| r.frame.flip)),
         flip_frame_between: Some(kind(Category::Between, |r| r.frame.flip)),
-        flip_frame_above: Some(kind(Category::Above, |r| r.frame.flip)),
+        flip_frame_above: frame_above(|r| r.frame.flip),
         frame_ms: median(&times),
         frame_ms_p95: Some(percentile(&times, 0.95)),
         views: Some(ViewCounts {
@@ -316,5 +347,6 @@ fn table_row(row: &Row, results: &[ViewResult], views: u32) -> EvalRow {
             above: views,
         }),
         map_bytes: None,
+        above,
     }
 }

@@ -67,6 +67,18 @@ pub struct EvalRow {
     /// Bytes of maps this mode reads (on disk or uploaded), when known.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub map_bytes: Option<u64>,
+    /// Scores at each elevation above the plane (the `*_above` fields are
+    /// the first's).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub above: Vec<AboveScore>,
+}
+
+/// One elevation's views above the plane: mean PSNR and FLIP.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AboveScore {
+    pub elevation_deg: f32,
+    pub psnr_db: f64,
+    pub flip: f64,
 }
 
 /// Views behind each kind of score.
@@ -156,6 +168,40 @@ impl EvalTable {
         Ok(table)
     }
 
+    /// PSNR and FLIP of every row at each elevation above the plane (empty
+    /// when no row has more than one elevation).
+    pub fn above_markdown(&self) -> String {
+        let Some(first) = self.rows.iter().find(|r| r.above.len() > 1) else {
+            return String::new();
+        };
+        let elevations: Vec<f32> = first.above.iter().map(|a| a.elevation_deg).collect();
+        let mut out = String::from("\n| label |");
+        for e in &elevations {
+            let _ = write!(out, " PSNR +{e}° (dB) | FLIP +{e}° |");
+        }
+        out += "\n|---|";
+        out += &"--:|--:|".repeat(elevations.len());
+        out += "\n";
+        for row in &self.rows {
+            let label = row
+                .settings
+                .get("label")
+                .and_then(|v| v.as_str())
+                .unwrap_or(&row.mode);
+            let _ = write!(out, "| {} |", cell(label));
+            for e in &elevations {
+                match row.above.iter().find(|a| a.elevation_deg == *e) {
+                    Some(a) => {
+                        let _ = write!(out, " {} | {:.4} |", psnr_cell(a.psnr_db), a.flip);
+                    }
+                    None => out += " — | — |",
+                }
+            }
+            out += "\n";
+        }
+        out
+    }
+
     /// A GitHub Markdown table, one line per row in order: mode, settings as
     /// `name=value` pairs, PSNR (dB, 2 decimals; `≥ 100` at the cap), FLIP
     /// (4 decimals), ms/frame (2 decimals). Ends with a newline.
@@ -238,6 +284,7 @@ mod tests {
             frame_ms_p95: None,
             views: None,
             map_bytes: None,
+            above: Vec::new(),
         }
     }
 

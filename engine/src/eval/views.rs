@@ -19,20 +19,19 @@ pub struct View {
 }
 
 /// `n` views per category, spread evenly along the orbit: on a sample,
-/// half-way to the next, and on a sample's azimuth `elevation` above.
-pub fn views(scene: &Scene, n: u32, elevation: f32) -> Vec<View> {
+/// half-way to the next, and on a sample's azimuth at each of `elevations`
+/// above the plane.
+pub fn views(scene: &Scene, n: u32, elevations: &[f32]) -> Vec<View> {
     let o = &scene.orbit;
     let last = o.samples.saturating_sub(1);
     let samples: Vec<u32> = (0..n)
         .map(|i| (((i as f32 + 0.5) / n as f32) * last as f32).round() as u32)
         .map(|k| k.min(last.saturating_sub(1)))
         .collect();
+    let mut kinds = vec![(Category::On, 0.0, 0.0), (Category::Between, 0.5, 0.0)];
+    kinds.extend(elevations.iter().map(|&e| (Category::Above, 0.0, e)));
     let mut out = Vec::new();
-    for (category, offset, up) in [
-        (Category::On, 0.0, 0.0),
-        (Category::Between, 0.5, 0.0),
-        (Category::Above, 0.0, elevation),
-    ] {
+    for (category, offset, up) in kinds {
         for &k in &samples {
             out.push(View {
                 category,

@@ -109,7 +109,8 @@ impl DeferredPipelines {
 }
 
 /// A range of a reflector's triangles written into the G-buffer with
-/// stencil `stencil` (its part: convex-hull triangles or the rest).
+/// stencil `stencil` (the reflector's mark); `local` is false on its
+/// convex-hull triangles, which see only the distant layer.
 pub struct GBufferDraw<'a> {
     pub mesh: &'a GpuMesh,
     pub indices: &'a Buffer,
@@ -117,6 +118,7 @@ pub struct GBufferDraw<'a> {
     pub index_count: u32,
     pub texgen: (&'a Buffer, &'a Buffer),
     pub stencil: u32,
+    pub local: bool,
 }
 
 /// Pass 1: the reflectors into the G-buffer, depth-tested against the
@@ -164,13 +166,15 @@ impl Pass for GBufferPass<'_> {
             area: self.area,
         };
         attachments.render(self.device, cmd, || {
-            let push = PemPush {
-                view_proj: self.view_proj,
-                ..PemPush::default()
-            };
-            self.pipeline.bind(cmd, Some(self.set), &push)?;
             let d = &self.device.device;
             for draw in self.draws.iter().filter(|d| d.index_count > 0) {
+                // slot.y: whether this part records a local-layer lookup.
+                let push = PemPush {
+                    view_proj: self.view_proj,
+                    slot: Vec4::new(0.0, f32::from(draw.local), 0.0, 0.0),
+                    ..PemPush::default()
+                };
+                self.pipeline.bind(cmd, Some(self.set), &push)?;
                 // SAFETY: the G-buffer pipeline (position + two texgen
                 // streams) is bound inside dynamic rendering; the index range
                 // lies within `indices`, whose entries index the mesh and both
@@ -197,7 +201,7 @@ impl Pass for GBufferPass<'_> {
     }
 }
 
-/// One reflector part's shading: the pixels marked `stencil`, inside `area`.
+/// One reflector's shading: the pixels marked `stencil`, inside `area`.
 pub struct CompositeDraw {
     pub stencil: u32,
     pub area: vk::Rect2D,

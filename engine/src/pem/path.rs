@@ -47,6 +47,8 @@ mod tests {
             start_deg: 0.0,
             step_deg: 1.0,
             samples: 100,
+            rings: 1,
+            ring_step_deg: 10.0,
         };
         let frames = default_frames(&o);
         assert_eq!(frames, 150);

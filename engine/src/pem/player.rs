@@ -345,25 +345,28 @@ impl PemPlayer {
             let Some(mesh) = gpu.meshes.get(r.object) else {
                 return Err(GpuError::Invalid(format!("{}: no GPU mesh", r.name)));
             };
-            let local = if layered {
+            let local_stream = if layered {
                 &r.texgen_local
             } else {
                 &r.texgen_distant
             };
-            let (rest, hull) = (2 * ri as u32 + 1, 2 * ri as u32 + 2);
-            let draw = |first_index, index_count, stencil| GBufferDraw {
+            // One stencil mark per reflector: its composite draw shades every
+            // pixel it covers once, whichever part the pixel belongs to.
+            let stencil = ri as u32 + 1;
+            let draw = |first_index, index_count, local| GBufferDraw {
                 mesh,
                 indices: &r.indices,
                 first_index,
                 index_count,
-                texgen: (&r.texgen_distant, local),
+                texgen: (&r.texgen_distant, local_stream),
                 stencil,
+                local,
             };
-            gdraws.push(draw(0, r.hull_index_count, hull));
+            gdraws.push(draw(0, r.hull_index_count, false));
             gdraws.push(draw(
                 r.hull_index_count,
                 r.index_count - r.hull_index_count,
-                rest,
+                layered,
             ));
             let Some(area) = screen_bounds(
                 view_proj,
@@ -377,21 +380,15 @@ impl PemPlayer {
                 continue;
             };
             let slot: Vec<f32> = slots[ri].iter().map(|&e| e as f32).collect();
-            let push = |local_layer: bool| CompositePush {
-                f0: r.f0.extend(1.0),
-                weight: vec4_of(&weights),
-                slot: vec4_of(&slot),
-                info: vec4_of(&[weights.len() as f32, f32::from(local_layer)]),
-            };
             cdraws.push(CompositeDraw {
-                stencil: hull,
+                stencil,
                 area,
-                push: push(false),
-            });
-            cdraws.push(CompositeDraw {
-                stencil: rest,
-                area,
-                push: push(layered),
+                push: CompositePush {
+                    f0: r.f0.extend(1.0),
+                    weight: vec4_of(&weights),
+                    slot: vec4_of(&slot),
+                    info: vec4_of(&[weights.len() as f32, f32::from(layered)]),
+                },
             });
         }
         let area = area_of(

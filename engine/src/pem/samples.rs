@@ -36,6 +36,8 @@ mod tests {
             start_deg: 0.0,
             step_deg: 1.0,
             samples: 100,
+            rings: 1,
+            ring_step_deg: 10.0,
         };
         let grid = ViewGrid::from_orbit(&orbit);
         for k in [0, 37, 99] {
@@ -52,5 +54,36 @@ mod tests {
             let b = sample_blend(&grid, &orbit, eye, 1, true);
             assert!(b.indices().all(|k| k < grid.len()), "{eye}: {b:?}");
         }
+    }
+
+    #[test]
+    fn a_view_between_rings_blends_the_four_corners_of_its_cell() {
+        let orbit = Orbit {
+            center: Vec3::new(0.0, 0.25, 0.0),
+            radius: 1.5,
+            height: 0.7,
+            start_deg: 0.0,
+            step_deg: 4.0,
+            samples: 10,
+            rings: 3,
+            ring_step_deg: 10.0,
+        };
+        let grid = ViewGrid::from_orbit(&orbit);
+        assert_eq!(grid.len(), orbit.sample_count());
+        // Every sample's own eye plays that sample alone, on every ring.
+        for k in [0, 9, 10, 23, 29] {
+            let eye = orbit.sample_eye(k).expect("in range");
+            let b = sample_blend(&grid, &orbit, eye, 1, true);
+            assert_eq!(b.indices().collect::<Vec<_>>(), [k], "{k}: {b:?}");
+        }
+        // Half-way in azimuth and elevation: four equal corners.
+        let b = sample_blend(&grid, &orbit, orbit.eye(14.0, 15.0), 1, true);
+        let mut corners: Vec<u32> = b.indices().collect();
+        corners.sort();
+        assert_eq!(corners, [13, 14, 23, 24], "{b:?}");
+        assert!(b.samples.iter().all(|s| (s.1 - 0.25).abs() < 1e-3), "{b:?}");
+        // Above the top ring clamps to it.
+        let b = sample_blend(&grid, &orbit, orbit.eye(8.0, 40.0), 1, true);
+        assert_eq!(b.indices().collect::<Vec<_>>(), [22], "{b:?}");
     }
 }

@@ -71,7 +71,7 @@ impl MapSource {
                 tex.layout.channels,
             );
             let want = (w, h, layout.faces(), spec.layer.channels() as u32);
-            if got != want || tex.grid.n0 < scene.orbit.samples {
+            if got != want || tex.grid.n0 < scene.orbit.sample_count() {
                 bail!(
                     "{}: texture {i} ({}) is {}x{}x{} faces, {} channels, {} samples; expected {}x{}x{}, {} channels, {} samples (re-run `engine encode`)",
                     path.display(),
@@ -85,7 +85,7 @@ impl MapSource {
                     want.1,
                     want.2,
                     want.3,
-                    scene.orbit.samples
+                    scene.orbit.sample_count()
                 );
             }
             index.push((spec.object.clone(), spec.layer.file_part(), i as u32));

@@ -93,6 +93,28 @@ pub fn texels(map: &[Vec<f32>], len: usize) -> Vec<[f32; 4]> {
         .collect()
 }
 
+/// The device's render of `map`. The renderer writes coverage into the
+/// alpha channel, not the map's alpha, so a 4-channel map's alpha is
+/// rendered on its own (as grey, `[a, a, a, 1]`) and put in place: the
+/// scores then see the alpha the layer will composite with.
+fn render_with_alpha(
+    renderer: &mut dyn ProbeRenderer,
+    geometry: &ProbeGeometry,
+    layout: &TextureLayout,
+    map: &[Vec<f32>],
+) -> Result<Vec<[f32; 4]>, ProbeError> {
+    let n = layout.len();
+    let mut image = renderer.render(geometry, layout, &texels(map, n))?;
+    if let Some(alpha) = map.get(3) {
+        let grey: Vec<[f32; 4]> = alpha.iter().map(|&a| [a, a, a, 1.0]).collect();
+        let rendered = renderer.render(geometry, layout, &grey)?;
+        for (pixel, a) in image.iter_mut().zip(&rendered) {
+            pixel[3] = a[0];
+        }
+    }
+    Ok(image)
+}
+
 /// PSNR over the rows' pixels and the target's channels; peak = the
 /// target's largest value there (HDR-safe), ∞ when identical.
 pub fn psnr_over_rows(image: &[[f32; 4]], target: &Target, pixels: &[u32]) -> f64 {
@@ -194,8 +216,8 @@ pub fn infer_layer(
         })
         .collect();
     let map: Vec<Vec<f32>> = solutions.iter().map(|s| s.x.clone()).collect();
-    let rendered_ls = timed.render(geometry, &layout, &texels(&map, layout.len()))?;
-    let rendered_fm = timed.render(geometry, &layout, &texels(&forward, layout.len()))?;
+    let rendered_ls = render_with_alpha(&mut timed, geometry, &layout, &map)?;
+    let rendered_fm = render_with_alpha(&mut timed, geometry, &layout, &forward)?;
     let psnr_least_squares_db = psnr_over_rows(&rendered_ls, target, &matrix.pixels);
     let psnr_forward_db = psnr_over_rows(&rendered_fm, target, &matrix.pixels);
     Ok(LayerResult {

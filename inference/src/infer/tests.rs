@@ -152,3 +152,47 @@ fn an_object_covering_no_pixel_stays_finite() {
     assert_eq!(r.rows, 0);
     assert!(r.map.iter().flatten().all(|v| v.is_finite()));
 }
+
+#[test]
+fn a_four_channel_layer_is_scored_on_the_alpha_it_will_composite_with() {
+    // The device writes coverage (1) into alpha; the layer's own alpha is
+    // 0.3 here. Scored on the rendered alpha, an exact fit scores high; the
+    // coverage alpha would have cost it the whole alpha channel.
+    let pixels: Vec<[f32; 4]> = gradient(1.0)
+        .into_iter()
+        .map(|[r, g, b, _]| [0.3 * r, 0.3 * g, 0.3 * b, 0.3])
+        .collect();
+    let target = Target {
+        name: "test.local",
+        pixels: &pixels,
+        channels: 4,
+    };
+    let exact = SolveOptions {
+        eps_f: 0.0,
+        ..SolveOptions::default()
+    };
+    let r = infer_layer(
+        &mut Device { covered: true },
+        &geometry(),
+        SHAPE,
+        &target,
+        None,
+        &exact,
+        &mut |_, _| {},
+    )
+    .expect("infer");
+    assert!(
+        r.psnr_least_squares_db > 60.0,
+        "{}",
+        r.psnr_least_squares_db
+    );
+    let alpha = r
+        .pixels
+        .iter()
+        .map(|&p| r.rendered_least_squares[p as usize][3]);
+    assert!(
+        alpha.clone().all(|a| (a - 0.3).abs() < 1e-3),
+        "{:?}",
+        alpha.collect::<Vec<_>>()
+    );
+}

@@ -12,7 +12,10 @@ pub struct Camera {
 }
 
 /// Viewpoints on a horizontal circle of `radius` around `center`, at height `height`;
-/// sample `i` sits at azimuth `start_deg + i · step_deg`.
+/// azimuth line `i` sits at `start_deg + i · step_deg`. With `rings` > 1 the
+/// viewpoint space is 2D: the circle repeated at elevations `j · ring_step_deg`
+/// above the orbit plane (seen from `center`), sample `k` at azimuth line
+/// `k % samples` of ring `k / samples`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Orbit {
     pub center: Vec3,
@@ -20,7 +23,11 @@ pub struct Orbit {
     pub height: f32,
     pub start_deg: f32,
     pub step_deg: f32,
+    /// Azimuth lines per ring.
     pub samples: u32,
+    /// Elevation rings (1: today's 1D orbit).
+    pub rings: u32,
+    pub ring_step_deg: f32,
 }
 
 /// Keeps the eye off the poles, where a y-up look-at is undefined.
@@ -72,13 +79,35 @@ impl Orbit {
     }
 
     pub fn sample_eye(&self, sample: u32) -> Result<Vec3, SceneError> {
-        if sample >= self.samples {
+        if sample >= self.sample_count() {
             return Err(SceneError::OrbitSampleOutOfRange {
                 sample,
-                samples: self.samples,
+                samples: self.sample_count(),
             });
         }
-        Ok(self.eye(self.angle_deg(sample), 0.0))
+        let (azimuth, elevation) = self.sample_angles(sample);
+        Ok(self.eye(azimuth, elevation))
+    }
+
+    /// Every viewpoint sample: azimuth lines × rings.
+    pub fn sample_count(&self) -> u32 {
+        self.samples * self.rings.max(1)
+    }
+
+    /// (azimuth, elevation) of sample `sample`, degrees.
+    pub fn sample_angles(&self, sample: u32) -> (f32, f32) {
+        let n = self.samples.max(1);
+        (
+            self.angle_deg(sample % n),
+            (sample / n) as f32 * self.ring_step_deg,
+        )
+    }
+
+    /// The elevations of the rings, degrees (`[0]` for a 1D orbit).
+    pub fn ring_elevations(&self) -> Vec<f32> {
+        (0..self.rings.max(1))
+            .map(|j| j as f32 * self.ring_step_deg)
+            .collect()
     }
 
     /// Right-handed world-to-view matrix looking from `eye` at `center`, y up (view space
@@ -107,6 +136,8 @@ mod tests {
             start_deg: 10.0,
             step_deg: 1.0,
             samples: 100,
+            rings: 1,
+            ring_step_deg: 10.0,
         }
     }
 

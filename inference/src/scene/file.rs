@@ -47,6 +47,12 @@ pub struct OrbitFile {
     pub step_deg: f32,
     #[serde(default = "hundred")]
     pub samples: u32,
+    /// Elevation rings of the 2D viewpoint space (1: the 1D orbit).
+    #[serde(default = "one_ring")]
+    pub rings: u32,
+    /// Degrees between rings, above the orbit plane.
+    #[serde(default = "ten")]
+    pub ring_step_deg: f32,
 }
 
 #[derive(Debug, Deserialize)]
@@ -165,6 +171,12 @@ fn one() -> f32 {
 }
 fn hundred() -> u32 {
     100
+}
+fn one_ring() -> u32 {
+    1
+}
+fn ten() -> f32 {
+    10.0
 }
 fn default_line_width() -> f32 {
     0.04

@@ -47,7 +47,7 @@ impl ViewGrid {
             azimuths_deg: (0..orbit.samples.max(1))
                 .map(|k| orbit.angle_deg(k))
                 .collect(),
-            elevations_deg: vec![0.0],
+            elevations_deg: orbit.ring_elevations(),
         }
     }
 

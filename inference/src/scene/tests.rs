@@ -206,6 +206,18 @@ fn bad_numbers_name_their_field() {
         ("far = 30.0", "far = 0.01", "camera.far"),
         ("radius = 1.8", "radius = 0.0", "orbit.radius"),
         ("radius = 1.8", "radius = 1.8\nsamples = 0", "orbit.samples"),
+        ("radius = 1.8", "radius = 1.8\nrings = 0", "orbit.rings"),
+        ("radius = 1.8", "radius = 1.8\nrings = 17", "orbit.rings"),
+        (
+            "radius = 1.8",
+            "radius = 1.8\nrings = 3\nring_step_deg = 50.0",
+            "orbit.ring_step_deg",
+        ),
+        (
+            "radius = 1.8",
+            "radius = 1.8\nrings = 2\nring_step_deg = -5.0",
+            "orbit.ring_step_deg",
+        ),
         (
             "radius = 1.8",
             "radius = 1.8\nstep_deg = inf",

@@ -41,6 +41,8 @@ pub(crate) struct Operator<'a> {
     data: Data<'a>,
     reg: Option<Pyramid>,
     seams: Option<Seams>,
+    /// λ of the prior toward zero (adds λ I).
+    prior: f64,
     /// diag(M), the Jacobi preconditioner's base.
     pub diag: Vec<f64>,
 }
@@ -53,9 +55,16 @@ pub(crate) struct Scratch {
 }
 
 impl<'a> Operator<'a> {
-    pub fn new(a: &'a CsrMatrix, reg: Option<Pyramid>, seams: Option<Seams>, form: Form) -> Self {
+    pub fn new(
+        a: &'a CsrMatrix,
+        reg: Option<Pyramid>,
+        seams: Option<Seams>,
+        prior: f64,
+        form: Form,
+    ) -> Self {
         let at = a.transpose();
         let mut diag = a.column_sq_norms();
+        diag.iter_mut().for_each(|d| *d += prior);
         if let Some(r) = &reg {
             for (d, pd) in diag.iter_mut().zip(r.p.column_sq_norms()) {
                 *d += r.lambda * pd;
@@ -76,6 +85,7 @@ impl<'a> Operator<'a> {
             data,
             reg,
             seams,
+            prior,
             diag,
         }
     }
@@ -116,6 +126,10 @@ impl<'a> Operator<'a> {
         if let Some(sm) = &self.seams {
             sm.s.mul(v, &mut s.seam);
             sm.s.mul_transpose_acc(&s.seam, sm.lambda, out);
+        }
+        if self.prior > 0.0 {
+            let l = self.prior;
+            for_each_mut(out, |i, o| *o += l * v[i]);
         }
         if let Some(e) = extra {
             for_each_mut(out, |i, o| *o += e[i] * v[i]);

@@ -13,6 +13,11 @@ pub struct SolveOptions {
     /// thesis; 0 (default) leaves faces independent. > 0 fills unseen faces
     /// from their neighbours and makes the system SPD once any texel is seen.
     pub eps_seam: f32,
+    /// Weight of a prior toward zero, Σ x_i² (absolute, not scaled by
+    /// n_s/n_t): for a premultiplied RGBA layer, zero is "transparent", so
+    /// texels no view constrains stay see-through instead of taking what
+    /// the pyramid term spreads into them. 0 (default) = off.
+    pub eps_prior: f32,
     /// Range regularization weight ε_b (0 = off; thesis figures used 1/32).
     pub eps_b: f32,
     /// Texel range for the range term: [0, range_max]; the barrier is
@@ -36,6 +41,7 @@ impl Default for SolveOptions {
         Self {
             eps_f: 0.1,
             eps_seam: 0.0,
+            eps_prior: 0.0,
             eps_b: 0.0,
             range_max: None,
             k_switch: 4.0,
@@ -69,6 +75,12 @@ impl SolveOptions {
             "eps_b",
             self.eps_b,
             self.eps_b >= 0.0,
+            "must be finite and >= 0",
+        )?;
+        check(
+            "eps_prior",
+            self.eps_prior,
+            self.eps_prior >= 0.0,
             "must be finite and >= 0",
         )?;
         check(

@@ -88,13 +88,14 @@ impl<'a> Solver<'a> {
             lambda: lambda_seam,
             s: seam_matrix(layout),
         });
-        let unseen = if seams.is_some() {
+        let prior = f64::from(options.eps_prior);
+        let unseen = if seams.is_some() || prior > 0.0 {
             Vec::new()
         } else {
             unseen_faces(a, layout)
         };
         Ok(Self {
-            op: Operator::new(a, reg, seams, form),
+            op: Operator::new(a, reg, seams, prior, form),
             a,
             options: options.clone(),
             lambda_b: options.eps_b as f64 * ratio * calibration(),

@@ -43,6 +43,13 @@ pub fn scene_key(scene: &Scene) -> Key {
                 [o.radius, o.height, o.start_deg, o.step_deg]
                     .into_iter()
                     .for_each(|x| h.f32(x));
+                // With rings, sample k's eye depends on the ring layout
+                // (1D orbits keep their keys).
+                if o.rings > 1 {
+                    h.write_u32(o.samples);
+                    h.write_u32(o.rings);
+                    h.f32(o.ring_step_deg);
+                }
             }),
         )
         .with(

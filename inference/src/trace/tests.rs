@@ -70,6 +70,8 @@ pub(super) fn scene(objects: Vec<(&str, Mesh, Material)>) -> Scene {
             start_deg: 0.0,
             step_deg: 1.0,
             samples: 4,
+            rings: 1,
+            ring_step_deg: 10.0,
         },
         lights: vec![],
         materials: vec![],

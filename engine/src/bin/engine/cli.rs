@@ -155,9 +155,10 @@ pub struct EvalArgs {
     /// spread evenly along the orbit.
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=50))]
     pub views: u32,
-    /// Elevation of the "above" views over the orbit plane, in degrees.
-    #[arg(long, default_value_t = 10.0)]
-    pub elevation: f32,
+    /// Elevations of the "above" views over the orbit plane, in degrees,
+    /// comma-separated (the `*_above` fields report the first).
+    #[arg(long, value_delimiter = ',', default_values_t = [10.0, 20.0, 30.0])]
+    pub elevation: Vec<f32>,
     /// Samples per pixel of the traced references.
     #[arg(long, default_value_t = 16)]
     pub spp: u32,

@@ -88,10 +88,10 @@ pub fn infer_diffuse(scene: &Scene, req: &DiffuseRequest) -> Result<String> {
     if size == 0 || !size.is_power_of_two() || size > 4096 {
         bail!("--texture-size {size}: expected a power of two up to 4096");
     }
-    if let Some(&k) = req.views.iter().find(|&&k| k >= scene.orbit.samples) {
+    if let Some(&k) = req.views.iter().find(|&&k| k >= scene.orbit.sample_count()) {
         bail!(
-            "--views: sample {k} out of range 0..{} (the scene's orbit.samples)",
-            scene.orbit.samples
+            "--views: sample {k} out of range 0..{} (orbit.samples × orbit.rings)",
+            scene.orbit.sample_count()
         );
     }
     let tracer = Tracer::new(scene)?;

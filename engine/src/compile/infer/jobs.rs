@@ -99,6 +99,10 @@ pub fn map_key(trace: &Key, job: &Job, options: &SolveOptions, size: (u32, u32))
     h.write_u32(size.0);
     h.write_u32(size.1);
     h.str(&format!("{:?} {:?}", options.eps_f, options.eps_b));
+    // Added with the local layer's prior: maps without one keep their keys.
+    if options.eps_prior > 0.0 {
+        h.f32(options.eps_prior);
+    }
     for p in &job.object.mesh.positions {
         h.v3(*p);
     }

@@ -21,7 +21,7 @@ pub use diffuse::{DiffuseRequest, infer_diffuse};
 pub use jobs::{INFERENCE_VERSION, Job, jobs_for, map_key};
 
 use crate::backend::{DeviceOptions, create_device};
-use crate::maps::map_path;
+use crate::maps::{MapLayer, map_path};
 use crate::util::files::claim_dir;
 use anyhow::{Result, bail};
 use inference::key::{Freshness, Key};
@@ -58,7 +58,7 @@ impl InferRequest {
     /// Every sample of `scene`, skipping fresh maps, with the defaults.
     pub fn all(scene: &Scene, trace_dir: PathBuf, infer_dir: PathBuf) -> Self {
         Self {
-            samples: (0..scene.orbit.samples).collect(),
+            samples: (0..scene.orbit.sample_count()).collect(),
             skip_fresh: true,
             sphere: false,
             em_size: None,
@@ -91,6 +91,9 @@ impl InferRequest {
     }
 }
 
+/// Weight of the local layer's prior toward transparent.
+pub const LOCAL_PRIOR: f32 = 0.01;
+
 /// What is known before any work: the scene's maps and the key each map
 /// of each sample must carry.
 pub struct Plan<'a> {
@@ -103,10 +106,14 @@ pub struct Plan<'a> {
 
 impl<'a> Plan<'a> {
     pub fn new(scene: &'a Scene, req: &InferRequest) -> Result<Self> {
-        if let Some(&k) = req.samples.iter().find(|&&k| k >= scene.orbit.samples) {
+        if let Some(&k) = req
+            .samples
+            .iter()
+            .find(|&&k| k >= scene.orbit.sample_count())
+        {
             bail!(
-                "--sample {k}: out of range 0..{} (the scene's orbit.samples)",
-                scene.orbit.samples
+                "--sample {k}: out of range 0..{} (orbit.samples × orbit.rings)",
+                scene.orbit.sample_count()
             );
         }
         let jobs = jobs_for(scene, req.em_size, req.sphere)?;
@@ -134,7 +141,22 @@ impl<'a> Plan<'a> {
     /// The key sample `k`'s map of `job` must carry.
     pub fn key(&self, trace_key: &Key, job: &Job) -> Key {
         let size = (self.settings.width, self.settings.height);
-        map_key(trace_key, job, &self.options, size)
+        map_key(trace_key, job, &self.options_for(job), size)
+    }
+
+    /// The solve options of `job`: local layers add a prior toward
+    /// transparent, so texels only off-sample views reach stay see-through
+    /// rather than smearing what the sample's view saw (measured in the
+    /// README, "Off the orbit").
+    pub fn options_for(&self, job: &Job) -> SolveOptions {
+        SolveOptions {
+            eps_prior: if job.layer == MapLayer::Local {
+                LOCAL_PRIOR
+            } else {
+                0.0
+            },
+            ..self.options.clone()
+        }
     }
 
     /// Every (sample, job index) of `samples` whose map is not fresh, with

@@ -139,7 +139,7 @@ impl<'a> SampleRun<'a> {
             job.shape(),
             &target,
             previous.as_deref(),
-            &self.plan.options,
+            &self.plan.options_for(job),
             &mut |_, _| {},
         )
         .with_context(|| {

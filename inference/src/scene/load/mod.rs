@@ -24,6 +24,10 @@ pub struct Loader<'a> {
 
 /// Most viewpoint samples a scene may ask for (a 64 × 64 grid).
 pub const MAX_SAMPLES: u32 = 4096;
+/// Elevation rings of a 2D viewpoint space.
+pub const MAX_RINGS: u32 = 16;
+/// The top ring's elevation above the orbit (the eye stays off the pole).
+pub const MAX_RING_DEG: f32 = 80.0;
 
 /// What the room, the lights and the file's objects add up to, in order.
 struct SceneParts {
@@ -166,6 +170,25 @@ impl Loader<'_> {
                 format!("{} (expected 1 to {MAX_SAMPLES})", o.samples),
             ));
         }
+        if !(1..=MAX_RINGS).contains(&o.rings) || o.samples * o.rings > MAX_SAMPLES {
+            return Err(self.err(
+                "orbit.rings",
+                format!(
+                    "{} (expected 1 to {MAX_RINGS}, and samples × rings at most {MAX_SAMPLES})",
+                    o.rings
+                ),
+            ));
+        }
+        let top = (o.rings - 1) as f32 * o.ring_step_deg;
+        if o.rings > 1 && !(o.ring_step_deg > 0.0 && top <= MAX_RING_DEG) {
+            return Err(self.err(
+                "orbit.ring_step_deg",
+                format!(
+                    "{} (expected above 0, the top ring at most {MAX_RING_DEG}° above the orbit)",
+                    o.ring_step_deg
+                ),
+            ));
+        }
         Ok(Orbit {
             center: self.vec3("orbit.center", o.center)?,
             radius: self.positive("orbit.radius", o.radius)?,
@@ -173,6 +196,8 @@ impl Loader<'_> {
             start_deg: self.finite("orbit.start_deg", o.start_deg)?,
             step_deg: self.finite("orbit.step_deg", o.step_deg)?,
             samples: o.samples,
+            rings: o.rings,
+            ring_step_deg: o.ring_step_deg,
         })
     }
 

@@ -116,3 +116,40 @@ fn seam_term_fills_unseen_faces_from_their_neighbours() {
     let s = solve(&a, &flat, &layout, None, &o).unwrap();
     assert!(max_abs_diff(&s.x, &vec![0.5; layout.len()]) < 1e-4);
 }
+
+#[test]
+fn the_prior_keeps_unseen_texels_near_zero_and_seen_ones_fitted() {
+    let layout = tex(16, 16);
+    let (a, b) = left_half(&layout, |_, _| 0.6);
+    let far_right = |x: &[f32]| x[layout.index(0, 0, 15, 8)];
+    let without = solve(&a, &b, &layout, None, &opts(0.1, None, 1e-6)).unwrap();
+    let with = solve(
+        &a,
+        &b,
+        &layout,
+        None,
+        &SolveOptions {
+            eps_prior: 0.01,
+            ..opts(0.1, None, 1e-6)
+        },
+    )
+    .unwrap();
+    assert!(with.converged, "{:?}", with.diagnostic);
+    // Without the prior the pyramid spreads the seen value into the unseen
+    // half; with it, texels far from any row fall toward zero (transparent).
+    assert!(far_right(&without.x) > 0.5, "{}", far_right(&without.x));
+    assert!(
+        far_right(&with.x) < 0.5 * far_right(&without.x),
+        "{}",
+        far_right(&with.x)
+    );
+    // Seen texels still fit their rows to within a few percent.
+    let seen = with.x[layout.index(0, 0, 3, 8)];
+    assert!((seen - 0.6).abs() < 0.03, "{seen}");
+    // A negative weight is refused by name.
+    let bad = SolveOptions {
+        eps_prior: -1.0,
+        ..SolveOptions::default()
+    };
+    assert!(solve(&a, &b, &layout, None, &bad).is_err());
+}

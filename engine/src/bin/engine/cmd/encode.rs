@@ -20,7 +20,7 @@ pub fn run(args: &EncodeArgs) -> Result<String> {
     let dir = default_dir(&args.infer_dir, &scene, "infer");
     // The container's key is made of the keys its maps were inferred with.
     let mut keys = Vec::new();
-    for k in 0..scene.orbit.samples {
+    for k in 0..scene.orbit.sample_count() {
         for spec in map_specs(&scene) {
             let path = map_path(&dir, k, &spec.object, spec.layer);
             let record = inference::key::read_record(&path).with_context(|| {
@@ -45,7 +45,7 @@ pub fn run(args: &EncodeArgs) -> Result<String> {
         "{}: {} textures x {} samples, {} bytes from {} raw (ratio {:.1}:1, worst texture {:.1} dB) in {:.1} s{}\n",
         args.out.display(),
         input.textures.len(),
-        scene.orbit.samples,
+        scene.orbit.sample_count(),
         e.bytes,
         e.raw_bytes,
         e.ratio,

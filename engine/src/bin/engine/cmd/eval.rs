@@ -15,7 +15,7 @@ pub fn run(args: &EvalArgs) -> Result<String> {
     let opts = EvalOptions {
         out: args.out.clone(),
         views: args.views,
-        elevation: args.elevation,
+        elevations: args.elevation.clone(),
         spp: args.spp,
         repeats: args.repeats,
         rows: args.rows.clone(),

@@ -11,7 +11,7 @@ pub fn run(args: &InferArgs) -> Result<String> {
     let scene = Scene::load(&args.scene)?;
     let samples = match args.sample {
         Some(k) => vec![k],
-        None => (0..scene.orbit.samples).collect(),
+        None => (0..scene.orbit.sample_count()).collect(),
     };
     let req = InferRequest {
         samples,
