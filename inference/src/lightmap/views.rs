@@ -7,8 +7,17 @@
 use crate::scene::Orbit;
 use glam::Vec3;
 
-/// The highest elevation above the orbit plane the light maps serve.
+/// The highest elevation above the orbit plane the light maps serve at
+/// least (playback's default path and eval's views reach 30°); an orbit
+/// whose rings reach higher raises it (see [`max_elevation_deg`]).
 pub const MAX_ELEVATION_DEG: f32 = 30.0;
+
+/// The highest elevation the light maps of `orbit` serve: 30°, or its top
+/// ring's elevation when that is higher.
+pub fn max_elevation_deg(orbit: &Orbit) -> f32 {
+    let top = orbit.rings.saturating_sub(1) as f32 * orbit.ring_step_deg;
+    MAX_ELEVATION_DEG.max(top)
+}
 /// Surveyed grid: azimuths × elevations.
 const SURVEY_AZIMUTHS: u32 = 12;
 const SURVEY_ELEVATIONS: u32 = 4;
@@ -43,7 +52,7 @@ fn grid(orbit: &Orbit, azimuths: u32, elevations: u32) -> Vec<Viewpoint> {
     let first = orbit.angle_deg(0);
     let last = orbit.angle_deg(orbit.samples.saturating_sub(1));
     let mut out = Vec::new();
-    for elevation_deg in spread(0.0, MAX_ELEVATION_DEG, elevations) {
+    for elevation_deg in spread(0.0, max_elevation_deg(orbit), elevations) {
         for azimuth_deg in spread(first, last, azimuths) {
             out.push(Viewpoint {
                 azimuth_deg: azimuth_deg + 0.0,
@@ -92,5 +101,12 @@ mod tests {
             ..orbit
         };
         assert!(solve_views(&one).iter().all(|p| p.azimuth_deg == 0.0));
+        // Rings above 30° raise the highest views to the top ring.
+        let rings = crate::scene::Orbit {
+            rings: 6,
+            ring_step_deg: 10.0,
+            ..orbit
+        };
+        assert_eq!(solve_views(&rings)[5].elevation_deg, 50.0);
     }
 }
