@@ -74,19 +74,7 @@ fn main() -> Result<()> {
             "{room:?} room: whole frame {:.2} dB, FLIP {:.4}",
             s.psnr_db, s.flip
         );
-        for (name, chs) in layers.iter().filter(|(n, _)| n.ends_with(".mask")) {
-            let Some((_, mask)) = chs.first() else {
-                continue;
-            };
-            let mask: Vec<bool> = mask.iter().map(|&m| m >= 0.5).collect();
-            if let Some((db, share)) = display_psnr_masked(&traced, &pixels, &mask)? {
-                println!(
-                    "  {:<10} {db:6.2} dB ({:5.1}% of the squared error)",
-                    name.trim_end_matches(".mask"),
-                    100.0 * share
-                );
-            }
-        }
+        print_split(&layers, &traced, &pixels)?;
         frames.push(pixels);
     }
     if let Some(out) = rest.first() {
@@ -152,4 +140,26 @@ fn display_diff(a: &Frame, b: &Frame, gain: f32) -> Frame {
             [v, v, v, 1.0]
         })
         .collect()
+}
+
+/// Display PSNR of `pixels` per object of the reference (its `.mask` layers).
+fn print_split(
+    layers: &[inference::trace::output::ExrLayer],
+    traced: &Frame,
+    pixels: &Frame,
+) -> Result<()> {
+    for (name, chs) in layers.iter().filter(|(n, _)| n.ends_with(".mask")) {
+        let Some((_, mask)) = chs.first() else {
+            continue;
+        };
+        let mask: Vec<bool> = mask.iter().map(|&m| m >= 0.5).collect();
+        if let Some((db, share)) = display_psnr_masked(traced, pixels, &mask)? {
+            println!(
+                "  {:<10} {db:6.2} dB ({:5.1}% of the squared error)",
+                name.trim_end_matches(".mask"),
+                100.0 * share
+            );
+        }
+    }
+    Ok(())
 }

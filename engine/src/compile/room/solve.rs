@@ -11,6 +11,7 @@ use crate::compile::trace::traced_layers;
 use crate::gpu_scene::mip_chain;
 use crate::probe::VulkanProbe;
 use anyhow::{Context, Result, bail};
+use glam::Vec2;
 use inference::infer::factored::{FactoredResult, FactoredView, infer_factored};
 use inference::key::Key;
 use inference::lightmap::{ObjectLightmap, ObjectSight, Viewpoint};
@@ -90,6 +91,62 @@ impl<'a> Solver<'a> {
         Ok(&self.traced[i].1)
     }
 
+    /// One stacked view of `object`: its traced target and rows, the albedo
+    /// the device samples at each pixel, and the light-map geometry.
+    fn view_data(
+        &mut self,
+        object: usize,
+        light_uvs: &[Vec2],
+        view: Viewpoint,
+    ) -> Result<ViewData> {
+        let scene = self.scene;
+        let o = &scene.objects[object];
+        let Some(Material::Diffuse { albedo, texture }) = scene.materials.get(o.material) else {
+            bail!("{}: a light map needs a diffuse material", o.name);
+        };
+        let (albedo_layout, albedo_texels) = albedo_texture(scene, *texture);
+        let (width, height) = (self.settings.width, self.settings.height);
+        let n = width as usize * height as usize;
+        let view_proj =
+            camera::projection(scene, width, height) * scene.orbit.view(view.eye(&scene.orbit));
+        // One key per mesh and lookup (the probe keeps the uploaded mesh).
+        let key = 2 * object as u64 + 1;
+        let geometry = |key: u64, uvs: &[Vec2]| ProbeGeometry {
+            key,
+            positions: o.mesh.positions.clone(),
+            indices: o.mesh.indices.clone(),
+            lookup: Lookup::Uv(uvs.to_vec()),
+            view_proj,
+            width,
+            height,
+        };
+        let sampled =
+            self.probe
+                .render(&geometry(key, &o.mesh.uvs), &albedo_layout, &albedo_texels)?;
+        let factor = sampled
+            .iter()
+            .map(|s| [s[0] * albedo.x, s[1] * albedo.y, s[2] * albedo.z, 1.0])
+            .collect();
+        let name = format!(
+            "{}.diffuse at az {:+} el {:+}",
+            o.name, view.azimuth_deg, view.elevation_deg
+        );
+        let layers = self.layers(view)?;
+        let target = target_pixels(layers, &format!("{}.diffuse", o.name), false, n)
+            .with_context(|| name.clone())?;
+        let usable = coverage(layers, &o.name, n)?
+            .iter()
+            .map(|&c| c >= WHOLE)
+            .collect();
+        Ok(ViewData {
+            name,
+            geometry: geometry(key + 1, light_uvs),
+            target,
+            factor,
+            usable,
+        })
+    }
+
     /// `sight`'s object's light map laid out as `plan`, from `views`.
     pub fn solve(
         &mut self,
@@ -97,57 +154,12 @@ impl<'a> Solver<'a> {
         plan: &ObjectLightmap,
         views: &[Viewpoint],
     ) -> Result<Solved> {
-        let scene = self.scene;
-        let object = &scene.objects[sight.object];
-        let Some(Material::Diffuse { albedo, texture }) = scene.materials.get(object.material)
-        else {
-            bail!("{}: a light map needs a diffuse material", object.name);
-        };
-        let (albedo_layout, albedo_texels) = albedo_texture(scene, *texture);
+        let object = &self.scene.objects[sight.object];
         let light_uvs = plan.uvs(&sight.charts);
-        let (width, height) = (self.settings.width, self.settings.height);
-        let n = width as usize * height as usize;
-        let projection = camera::projection(scene, width, height);
-        let key = 2 * sight.object as u64 + 1;
-        let mut data = Vec::with_capacity(views.len());
-        for &view in views {
-            let geometry = |key: u64, uvs: &[glam::Vec2]| ProbeGeometry {
-                key,
-                positions: object.mesh.positions.clone(),
-                indices: object.mesh.indices.clone(),
-                lookup: Lookup::Uv(uvs.to_vec()),
-                view_proj: projection * scene.orbit.view(view.eye(&scene.orbit)),
-                width,
-                height,
-            };
-            let sampled = self.probe.render(
-                &geometry(key, &object.mesh.uvs),
-                &albedo_layout,
-                &albedo_texels,
-            )?;
-            let factor = sampled
-                .iter()
-                .map(|s| [s[0] * albedo.x, s[1] * albedo.y, s[2] * albedo.z, 1.0])
-                .collect();
-            let name = format!(
-                "{}.diffuse at az {:+} el {:+}",
-                object.name, view.azimuth_deg, view.elevation_deg
-            );
-            let layers = self.layers(view)?;
-            let target = target_pixels(layers, &format!("{}.diffuse", object.name), false, n)
-                .with_context(|| name.clone())?;
-            let usable = coverage(layers, &object.name, n)?
-                .iter()
-                .map(|&c| c >= WHOLE)
-                .collect();
-            data.push(ViewData {
-                name,
-                geometry: geometry(key + 1, &light_uvs),
-                target,
-                factor,
-                usable,
-            });
-        }
+        let data = views
+            .iter()
+            .map(|&view| self.view_data(sight.object, &light_uvs, view))
+            .collect::<Result<Vec<_>>>()?;
         let stacked: Vec<FactoredView> = data
             .iter()
             .map(|d| FactoredView {
