@@ -59,56 +59,17 @@ pub fn codec_report(scene: &Scene, req: &CodecReportRequest) -> Result<String> {
             .with_context(|| format!("measuring {}", req.file.display()))?;
     say("rendered frames".into());
     let mut bench = FrameBench::new(req, scene)?;
-    match bench.as_mut() {
-        Some(b) => {
-            let (decoded, vs_raw) = b.decoded_db(&container)?;
-            let raw = b.raw_db();
-            let n = b.items.len();
-            report.frames_psnr_db = Some(decoded);
-            report.frames_vs_uncompressed_psnr_db = Some(vs_raw);
-            report.notes.push(format!(
-                "rendered frames: distant layer at {n} samples, decoded {decoded:.2} dB vs uncompressed {raw:.2} dB (medians, against the traced layer); decoded against uncompressed rendered the same way: {vs_raw:.2} dB (compression alone); pixels: {FRAME_PIXELS}"
-            ));
-        }
-        None => report
-            .notes
-            .push("rendered frames: no traced targets found (see --trace-dir, --size)".into()),
-    }
+    add_rendered_frames(&mut report, bench.as_mut(), &container)?;
     let ffmpeg = codec::report::ffmpeg_available();
-    let mut views = None;
-    match (&bench, ffmpeg) {
-        (_, false) => {
-            say("ffmpeg not on PATH: mpeg-view baseline skipped".into());
-        }
-        (None, true) => report.notes.push(
-            "mpeg-view skipped: it measures the rendered frames' pixels, and there are none".into(),
-        ),
-        (Some(b), true) => {
-            say("mpeg-view: reading the traced images".into());
-            let measured: Vec<u32> = b.items.iter().map(|i| i.k).collect();
-            match ViewFrames::load(
-                &req.trace_dir,
-                scene.orbit.sample_count(),
-                req.size,
-                &measured,
-                &say,
-            ) {
-                Ok(mut v) => {
-                    // The thesis compared at the same ratio, each against its
-                    // own raw data; the images are about 4x smaller raw.
-                    let own_raw = v.frames.len() as f64 * f64::from(v.width * v.height) * 12.0;
-                    let targets = [
-                        ("mpeg-view", report.bytes),
-                        ("mpeg-view-same-ratio", (own_raw / report.ratio) as u64),
-                    ];
-                    let mut bs = mpeg_view_baselines(&mut v, b, input.raw_bytes(), &targets, &say)?;
-                    report.baselines.append(&mut bs);
-                    views = Some(v);
-                }
-                Err(e) => report.notes.push(format!("mpeg-view skipped: {e:#}")),
-            }
-        }
-    }
+    let mut views = add_view_baselines(
+        scene,
+        req,
+        &mut report,
+        bench.as_ref(),
+        ffmpeg,
+        input.raw_bytes(),
+        &say,
+    )?;
     if req.curve {
         let mut notes = Vec::new();
         report.curves = curves(
@@ -128,6 +89,84 @@ pub fn codec_report(scene: &Scene, req: &CodecReportRequest) -> Result<String> {
     if !report.curves.is_empty() {
         plot_curves(&req.json.with_extension("png"), &report.curves)?;
     }
+    Ok(summary(req, &report))
+}
+
+/// The rendered-frame PSNR of the container's distant layer against the
+/// traced layer, when traced targets exist.
+fn add_rendered_frames(
+    report: &mut codec::report::CodecReport,
+    bench: Option<&mut FrameBench>,
+    container: &codec::Container,
+) -> Result<()> {
+    match bench {
+        Some(b) => {
+            let (decoded, vs_raw) = b.decoded_db(container)?;
+            let raw = b.raw_db();
+            let n = b.items.len();
+            report.frames_psnr_db = Some(decoded);
+            report.frames_vs_uncompressed_psnr_db = Some(vs_raw);
+            report.notes.push(format!(
+                "rendered frames: distant layer at {n} samples, decoded {decoded:.2} dB vs uncompressed {raw:.2} dB (medians, against the traced layer); decoded against uncompressed rendered the same way: {vs_raw:.2} dB (compression alone); pixels: {FRAME_PIXELS}"
+            ));
+        }
+        None => report
+            .notes
+            .push("rendered frames: no traced targets found (see --trace-dir, --size)".into()),
+    }
+    Ok(())
+}
+
+/// The MPEG-view baselines (ffmpeg on the traced images), when ffmpeg and
+/// rendered frames exist; the traced images are kept for the curves.
+fn add_view_baselines(
+    scene: &Scene,
+    req: &CodecReportRequest,
+    report: &mut codec::report::CodecReport,
+    bench: Option<&FrameBench>,
+    ffmpeg: bool,
+    raw_bytes: u64,
+    say: &dyn Fn(String),
+) -> Result<Option<ViewFrames>> {
+    let mut views = None;
+    match (bench, ffmpeg) {
+        (_, false) => {
+            say("ffmpeg not on PATH: mpeg-view baseline skipped".into());
+        }
+        (None, true) => report.notes.push(
+            "mpeg-view skipped: it measures the rendered frames' pixels, and there are none".into(),
+        ),
+        (Some(b), true) => {
+            say("mpeg-view: reading the traced images".into());
+            let measured: Vec<u32> = b.items.iter().map(|i| i.k).collect();
+            match ViewFrames::load(
+                &req.trace_dir,
+                scene.orbit.sample_count(),
+                req.size,
+                &measured,
+                say,
+            ) {
+                Ok(mut v) => {
+                    // The thesis compared at the same ratio, each against its
+                    // own raw data; the images are about 4x smaller raw.
+                    let own_raw = v.frames.len() as f64 * f64::from(v.width * v.height) * 12.0;
+                    let targets = [
+                        ("mpeg-view", report.bytes),
+                        ("mpeg-view-same-ratio", (own_raw / report.ratio) as u64),
+                    ];
+                    let mut bs = mpeg_view_baselines(&mut v, b, raw_bytes, &targets, say)?;
+                    report.baselines.append(&mut bs);
+                    views = Some(v);
+                }
+                Err(e) => report.notes.push(format!("mpeg-view skipped: {e:#}")),
+            }
+        }
+    }
+    Ok(views)
+}
+
+/// The report's lines for stdout.
+fn summary(req: &CodecReportRequest, report: &codec::report::CodecReport) -> String {
     let mut text = format!(
         "{}: ratio {:.1}:1 ({:.1}:1 against 8-bit), texture PSNR {:.2} dB, decode {:.2} ms per leaf (median)\n",
         req.file.display(),
@@ -156,5 +195,5 @@ pub fn codec_report(scene: &Scene, req: &CodecReportRequest) -> Result<String> {
         }
         text += "\n";
     }
-    Ok(text)
+    text
 }

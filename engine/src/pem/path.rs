@@ -28,9 +28,11 @@ pub fn path_view(orbit: &Orbit, i: u32, frames: u32) -> (f32, f32) {
     }
 }
 
-/// Frames of the default run: half again the sample count (at least 2).
+/// Frames of the default run: half again the sample count, every ring's
+/// samples counted (at least 2).
 pub fn default_frames(orbit: &Orbit) -> u32 {
-    (orbit.samples + orbit.samples / 2).max(2)
+    let n = orbit.sample_count();
+    (n + n / 2).max(2)
 }
 
 #[cfg(test)]

@@ -2,8 +2,13 @@
 //! or installed `engine` finds them wherever it runs (no build-folder paths).
 
 /// `(name, scene file text)`, as in `assets/scenes/<name>.toml`.
-pub const SHIPPED: &[(&str, &str)] =
-    &[("teapot", include_str!("../../../assets/scenes/teapot.toml"))];
+pub const SHIPPED: &[(&str, &str)] = &[
+    ("teapot", include_str!("../../../assets/scenes/teapot.toml")),
+    (
+        "teapot_rings",
+        include_str!("../../../assets/scenes/teapot_rings.toml"),
+    ),
+];
 
 /// The text of the shipped scene `name`, if there is one.
 pub fn shipped(name: &str) -> Option<&'static str> {

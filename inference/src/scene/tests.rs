@@ -388,3 +388,15 @@ fn missing_scene_file_is_named() {
     assert!(e.contains("no_such_scene_name: no such scene"), "{e}");
     assert!(e.contains("built-in scenes: teapot"), "{e}");
 }
+
+#[test]
+fn every_shipped_scene_loads_and_the_rings_scene_is_2d() {
+    for (name, _) in crate::scene::SHIPPED {
+        let s = Scene::load(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(&s.name, name, "a shipped scene's name is its file's");
+    }
+    let s = Scene::load("teapot_rings").expect("teapot_rings");
+    assert_eq!((s.orbit.samples, s.orbit.rings), (4, 4));
+    assert_eq!(s.orbit.sample_count(), 16);
+    assert_eq!(s.orbit.ring_elevations(), [0.0, 10.0, 20.0, 30.0]);
+}

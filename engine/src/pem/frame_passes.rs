@@ -1,0 +1,206 @@
+//! The passes that draw a PEM frame: deferred (the reflectors into the
+//! G-buffer, then one compositing pass over their pixels) or the papers'
+//! multipass (one pass per blended sample, each blended over the last).
+
+use super::player::{PemKind, PemPlayer};
+use super::reflector::PemReflector;
+use super::samples::SampleBlend;
+use crate::backend::{GpuError, GpuResult};
+use crate::gpu_scene::GpuScene;
+use crate::graph::Pass;
+use crate::passes::pem::{PemDraw, PemPass, Shading};
+use crate::passes::pem_deferred::{
+    CompositeDraw, CompositePass, GBuffer, GBufferDraw, GBufferPass, vec4_of,
+};
+use crate::passes::target::{Target, area_of, screen_bounds};
+use crate::shader_interface::CompositePush;
+use ash::vk;
+use glam::Mat4;
+
+impl PemPlayer {
+    /// The G-buffer pass and one compositing pass (one stencil-masked
+    /// screen draw per reflector).
+    pub(super) fn deferred_passes<'a>(
+        &'a self,
+        gpu: &'a GpuScene,
+        gbuffer: &'a GBuffer,
+        blend: &SampleBlend,
+        slots: &[Vec<u32>],
+        target: Target<'a>,
+        view_proj: Mat4,
+    ) -> GpuResult<Vec<Box<dyn Pass + 'a>>> {
+        let extent = target.extent();
+        let layered = self.settings.kind == PemKind::Layered && self.settings.local_layer;
+        let weights: Vec<f32> = blend.samples.iter().map(|s| s.1).collect();
+        let (mut gdraws, mut cdraws) = (Vec::new(), Vec::new());
+        for (ri, r) in self.reflectors.iter().enumerate() {
+            let Some(mesh) = gpu.meshes.get(r.object) else {
+                return Err(GpuError::Invalid(format!("{}: no GPU mesh", r.name)));
+            };
+            let local_stream = if layered {
+                &r.texgen_local
+            } else {
+                &r.texgen_distant
+            };
+            // One stencil mark per reflector: its composite draw shades every
+            // pixel it covers once, whichever part the pixel belongs to.
+            let stencil = ri as u32 + 1;
+            let draw = |first_index, index_count, local| GBufferDraw {
+                mesh,
+                indices: &r.indices,
+                first_index,
+                index_count,
+                texgen: (&r.texgen_distant, local_stream),
+                stencil,
+                local,
+            };
+            gdraws.push(draw(0, r.hull_index_count, false));
+            gdraws.push(draw(
+                r.hull_index_count,
+                r.index_count - r.hull_index_count,
+                layered,
+            ));
+            let Some(area) = screen_bounds(
+                view_proj,
+                r.bounds.0,
+                r.bounds.1,
+                extent.width,
+                extent.height,
+            )
+            .or(Some(full(extent)))
+            .filter(|a| a.extent.width > 0 && a.extent.height > 0) else {
+                continue;
+            };
+            let slot: Vec<f32> = slots[ri].iter().map(|&e| e as f32).collect();
+            cdraws.push(CompositeDraw {
+                stencil,
+                area,
+                push: CompositePush {
+                    f0: r.f0.extend(1.0),
+                    weight: vec4_of(&weights),
+                    slot: vec4_of(&slot),
+                    info: vec4_of(&[weights.len() as f32, f32::from(layered)]),
+                },
+            });
+        }
+        let area = area_of(
+            view_proj,
+            self.reflectors.iter().map(|r| r.bounds),
+            extent.width,
+            extent.height,
+        );
+        let fill = GBufferPass {
+            device: &self.device,
+            pipeline: &self.sets.deferred.gbuffer,
+            set: self.sets.gbuffer_set,
+            gbuffer,
+            depth: target.depth,
+            draws: gdraws,
+            sampled: self.sets.arrays.iter().collect(),
+            area,
+            view_proj,
+        };
+        let composite = CompositePass {
+            device: &self.device,
+            pipeline: &self.sets.deferred.composite,
+            set: self.sets.composite_set,
+            target,
+            draws: cdraws,
+            sampled: self.sets.composite_sampled(gbuffer),
+            name: "pem_composite",
+        };
+        Ok(vec![Box::new(fill), Box::new(composite)])
+    }
+
+    /// The papers' formulation: the reflectors drawn once per sample, the
+    /// nearest replacing what the room drew, each next one blended over by
+    /// its share of the weight so far (`w_i / Σ_{j≤i} w_j`).
+    pub(super) fn multipass<'a>(
+        &'a self,
+        gpu: &'a GpuScene,
+        blend: &SampleBlend,
+        slots: &[Vec<u32>],
+        target: Target<'a>,
+        view_proj: Mat4,
+    ) -> GpuResult<Vec<Box<dyn Pass + 'a>>> {
+        let extent = target.extent();
+        let area = area_of(
+            view_proj,
+            self.reflectors.iter().map(|r| r.bounds),
+            extent.width,
+            extent.height,
+        );
+        let mut passes: Vec<Box<dyn Pass + 'a>> = Vec::new();
+        let mut so_far = 0.0;
+        for (i, &(_, w)) in blend.samples.iter().enumerate() {
+            so_far += w;
+            let mut draws = Vec::new();
+            for (ri, r) in self.reflectors.iter().enumerate() {
+                draws.extend(self.draws_of(gpu, r, slots[ri][i])?);
+            }
+            passes.push(Box::new(PemPass {
+                name: if i == 0 { "pem" } else { "pem_blend" },
+                device: &self.device,
+                pipelines: &self.sets.forward,
+                blend: i > 0,
+                weight: if i == 0 { 1.0 } else { w / so_far },
+                draws,
+                sampled: self.sets.forward_sampled(),
+                target: Target {
+                    clear: false,
+                    area,
+                    ..target
+                },
+                view_proj,
+            }));
+        }
+        Ok(passes)
+    }
+
+    /// A reflector's multipass draws of one sample: hull triangles with the
+    /// distant layer alone and the rest with both (layered), or one draw.
+    fn draws_of<'a>(
+        &self,
+        gpu: &'a GpuScene,
+        r: &'a PemReflector,
+        slot: u32,
+    ) -> GpuResult<Vec<PemDraw<'a>>> {
+        let Some(mesh) = gpu.meshes.get(r.object) else {
+            return Err(GpuError::Invalid(format!("{}: no GPU mesh", r.name)));
+        };
+        let texgen =
+            (self.settings.kind != PemKind::Ptm).then_some((&r.texgen_distant, &r.texgen_local));
+        let draw = |shading, set, first_index, index_count| PemDraw {
+            shading,
+            set,
+            mesh,
+            indices: &r.indices,
+            first_index,
+            index_count,
+            texgen,
+            f0: r.f0,
+            slot,
+        };
+        let s = &self.sets;
+        Ok(match self.settings.kind {
+            PemKind::Layered if self.settings.local_layer => vec![
+                draw(Shading::SingleEm, s.single_set, 0, r.hull_index_count),
+                draw(
+                    Shading::Layered,
+                    s.layered_set,
+                    r.hull_index_count,
+                    r.index_count - r.hull_index_count,
+                ),
+            ],
+            PemKind::Ptm => vec![draw(Shading::Ptm, s.ptm_set, 0, r.index_count)],
+            _ => vec![draw(Shading::SingleEm, s.single_set, 0, r.index_count)],
+        })
+    }
+}
+
+fn full(extent: vk::Extent2D) -> vk::Rect2D {
+    vk::Rect2D {
+        offset: vk::Offset2D::default(),
+        extent,
+    }
+}
