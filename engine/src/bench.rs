@@ -8,7 +8,9 @@
 //! worker) and uploaded: decoding on against resident maps, in one run.
 //! Each row also reports the compositing passes' fragment-shader
 //! invocations per covered reflector pixel (the overdraw the deferred
-//! design removes).
+//! design removes). PEM variants light the room as `--room` says (inferred
+//! light maps by default); "default, analytic room" is the default frame
+//! with the analytic room, so the two room passes are timed side by side.
 
 use crate::options::{PemOptions, RunPlace};
 use crate::pem::player::{Compositing, PemKind, PemSettings};
@@ -53,6 +55,7 @@ fn variants() -> Vec<(&'static str, Draws)> {
                 ..default
             }),
         ),
+        ("default, analytic room", Draws::Pem(default)),
         ("multipass", Draws::Pem(multipass)),
         ("default, decoding", Draws::Pem(default)),
     ]
@@ -145,13 +148,20 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
     // One renderer per PEM variant: switching settings re-creates slots.
     let mut renderers = vec![renderer];
     let mut which = Vec::new();
-    for (_, draws) in &variants {
+    let room = match opts.pem.room {
+        crate::options::RoomShading::Inferred => Some(crate::compile::room::room_maps(&ctx)?),
+        crate::options::RoomShading::Analytic => None,
+    };
+    for (name, draws) in &variants {
         match draws {
             Draws::Bare | Draws::StaticEm => which.push(0),
             Draws::Pem(settings) => {
                 let mut r = Renderer::new(&device, &scene, width, height)?;
                 let source = crate::compile::map_source(&ctx, &opts.pem, &settings.layers())?;
                 r.set_pem(&scene, *settings, source)?;
+                if *name != "default, analytic room" {
+                    r.set_room(&scene, room.as_ref())?;
+                }
                 which.push(renderers.len());
                 renderers.push(r);
             }

@@ -52,6 +52,18 @@ impl Mode {
     }
 }
 
+/// How the diffuse room is lit in PEM playback.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RoomShading {
+    /// Each diffuse object's albedo × its inferred light map (the traced
+    /// light, compiled with the maps: `compile::room`).
+    Inferred,
+    /// The area light as a point emitter plus a constant ambient (no
+    /// shadows): the real-time approximation, kept for comparison.
+    Analytic,
+}
+
 /// Where PEM playback reads its maps.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
@@ -86,6 +98,8 @@ pub struct PemOptions {
     /// Hybrid glass: tessellation threshold in subpixels [default: the
     /// scene's `[objects.glass] tau`].
     pub tau: Option<f32>,
+    /// How the room is lit.
+    pub room: RoomShading,
 }
 
 impl Default for PemOptions {
@@ -101,6 +115,7 @@ impl Default for PemOptions {
             filtering: Filtering::Trilinear,
             compositing: Compositing::Deferred,
             tau: None,
+            room: RoomShading::Inferred,
         }
     }
 }
@@ -134,6 +149,9 @@ impl PemOptions {
         }
         if let Some(tau) = self.tau {
             f.push(("tau".into(), Some(tau.to_string())));
+        }
+        if self.room != d.room {
+            f.push(("room".into(), Some("analytic".into())));
         }
         f
     }

@@ -4,7 +4,7 @@
 use crate::backend::create_device;
 use crate::capture;
 use crate::compile::CompileContext;
-use crate::options::{Mode, PemOptions, PlayOptions, RunPlace};
+use crate::options::{Mode, PemOptions, PlayOptions, RoomShading, RunPlace};
 use crate::pem::path::{default_frames, path_view};
 use crate::pem::player::{PemKind, PemSettings};
 use crate::perf::{PerfLog, PerfReport};
@@ -74,6 +74,21 @@ pub fn setup_mode<'s>(
     pem: &PemOptions,
     trace_spp: u32,
 ) -> Result<FrameSource<'s>> {
+    let inferred_room = matches!(mode, Mode::LayeredPem | Mode::SpherePem | Mode::Ptm)
+        && pem.room == RoomShading::Inferred;
+    let room = if inferred_room {
+        let maps = crate::compile::room::room_maps(ctx)?;
+        if maps.compile_s > 0.0 {
+            eprintln!(
+                "{}: room light maps compiled in {:.1} s",
+                ctx.scene.name, maps.compile_s
+            );
+        }
+        Some(maps)
+    } else {
+        None
+    };
+    renderer.set_room(ctx.scene, room.as_ref())?;
     Ok(match mode {
         Mode::StaticEm => {
             crate::glass::load_shell(renderer, ctx.scene, ctx.out)?;

@@ -2,6 +2,7 @@
 //! explicit list of passes — only the passes the scene requires.
 
 use crate::backend::{Buffer, Device, GpuError, GpuResult, Image, ImageDesc};
+use crate::compile::room::RoomMaps;
 use crate::gpu_scene::GpuScene;
 use crate::graph::{Executor, Pass, PassTiming};
 use crate::passes::em_capture::{CubeTarget, EmCapturePass, MipPass};
@@ -9,6 +10,7 @@ use crate::passes::mirror::{MirrorDraw, MirrorRenderer};
 use crate::passes::pem_deferred::GBuffer;
 use crate::passes::readback::ReadbackPass;
 use crate::passes::room::{RoomRenderer, RoomStyle};
+use crate::passes::room_maps::upload_room_maps;
 use crate::passes::target::{Target, area_of};
 use crate::pem::player::{PemPlayer, PemSettings};
 use crate::pem::samples::SampleBlend;
@@ -202,6 +204,27 @@ impl Renderer {
         };
         renderer.setup_timings = renderer.capture_static_ems(scene.camera.near, far)?;
         Ok(renderer)
+    }
+
+    /// Lights the room from `maps` (inferred light maps) from the next
+    /// frame on, or analytically when None.
+    pub fn set_room(&mut self, scene: &Scene, maps: Option<&RoomMaps>) -> GpuResult<()> {
+        self.room = match maps {
+            Some(maps) => {
+                let uploaded = upload_room_maps(&self.device, &mut self.executor, maps)?;
+                let (c, d) = (COLOR_FORMAT, DEPTH_FORMAT);
+                RoomRenderer::inferred(&self.device, scene, &self.gpu, uploaded, c, d)?
+            }
+            None => RoomRenderer::new(
+                &self.device,
+                scene,
+                &self.gpu,
+                RoomStyle::Lit,
+                COLOR_FORMAT,
+                DEPTH_FORMAT,
+            )?,
+        };
+        Ok(())
     }
 
     /// Sets up PEM playback (`FrameMode::Pem`) with `settings`, reading

@@ -68,6 +68,18 @@ pub const PEM_ATTRIBUTES: [vk::VertexInputAttributeDescription; 3] = [
     MIRROR_ATTRIBUTES[1],
     attribute(2, 2, vk::Format::R32G32B32A32_SFLOAT, 0),
 ];
+/// `shaders/room_inferred.vert`: position and albedo UVs of binding 0, the
+/// light-map UVs of binding 1.
+pub const LIGHT_UV_BINDING: vk::VertexInputBindingDescription = vk::VertexInputBindingDescription {
+    binding: 1,
+    stride: 8,
+    input_rate: vk::VertexInputRate::VERTEX,
+};
+pub const ROOM_INFERRED_ATTRIBUTES: [vk::VertexInputAttributeDescription; 3] = [
+    Vertex::ATTRIBUTES[0],
+    Vertex::ATTRIBUTES[2],
+    attribute(3, 1, vk::Format::R32G32_SFLOAT, 0),
+];
 /// `shaders/ptm.vert`: position and texture coordinates of binding 0.
 pub const PTM_ATTRIBUTES: [vk::VertexInputAttributeDescription; 2] =
     [Vertex::ATTRIBUTES[0], Vertex::ATTRIBUTES[2]];
@@ -178,6 +190,8 @@ pub mod spirv {
     pub const ROOM_VERT: &[u8] = shader!("room.vert");
     pub const ROOM_FRAG: &[u8] = shader!("room.frag");
     pub const BARE_FRAG: &[u8] = shader!("bare.frag");
+    pub const ROOM_INFERRED_VERT: &[u8] = shader!("room_inferred.vert");
+    pub const ROOM_INFERRED_FRAG: &[u8] = shader!("room_inferred.frag");
     pub const MIRROR_VERT: &[u8] = shader!("mirror.vert");
     pub const MIRROR_FRAG: &[u8] = shader!("mirror.frag");
     pub const PEM_VERT: &[u8] = shader!("pem.vert");

@@ -1,7 +1,7 @@
 //! Offline side and the math shared with the runtime: scene, teapot,
 //! Fresnel, CPU texgen and EM geometry, convex-hull triangles, the
-//! gold-standard tracer, probe renders, the least-squares solver and
-//! texture/EM inference.
+//! gold-standard tracer, probe renders, the least-squares solver,
+//! texture/EM inference and the diffuse objects' light maps.
 //! Pure CPU, no Vulkan.
 
 pub mod em_geometry;
@@ -11,6 +11,7 @@ pub mod glass;
 pub mod hull;
 pub mod infer;
 pub mod key;
+pub mod lightmap;
 pub mod probe;
 pub mod scene;
 pub mod solve;

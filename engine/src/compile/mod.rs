@@ -6,6 +6,7 @@
 
 pub mod encode;
 pub mod infer;
+pub mod room;
 pub mod trace;
 
 use crate::backend::DeviceOptions;

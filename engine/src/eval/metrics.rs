@@ -1,5 +1,6 @@
-//! How far a rendered frame is from the traced reference over a pixel mask
-//! (the reflector's pixels): PSNR on linear RGB and NVIDIA's FLIP.
+//! How far a rendered frame is from the traced reference: over a pixel mask
+//! (the reflector's pixels), PSNR on linear RGB and NVIDIA's FLIP; over the
+//! whole frame, both on what a person sees (the 8-bit sRGB PNG).
 //!
 //! Both take full frames, row-major from the top, linear RGBA f32 (the
 //! order of `Renderer::pixels()` and of the traced layers); alpha is ignored.
@@ -127,12 +128,7 @@ pub fn flip_error_map(
         }
     }
     let flip_image = |image: &[[f32; 4]]| {
-        let bytes: Vec<u8> = image
-            .iter()
-            .flat_map(|p| [p[0], p[1], p[2]])
-            .map(|c| (crate::capture::linear_to_srgb(c) * 255.0 + 0.5) as u8)
-            .collect();
-        nv_flip::FlipImageRgb8::with_data(width, height, &bytes)
+        nv_flip::FlipImageRgb8::with_data(width, height, &display_bytes(image))
     };
     let map = nv_flip::flip(
         flip_image(reference),
@@ -150,6 +146,98 @@ pub fn flip_error_map(
             }
         })
         .collect())
+}
+
+/// The frame as the engine writes it to PNG: each linear value clamped to
+/// [0, 1], sRGB-encoded and rounded to 8 bits (`capture::write_png`), RGB.
+pub fn display_bytes(image: &[[f32; 4]]) -> Vec<u8> {
+    image
+        .iter()
+        .flat_map(|p| [p[0], p[1], p[2]])
+        .map(|c| (crate::capture::linear_to_srgb(c) * 255.0 + 0.5) as u8)
+        .collect()
+}
+
+/// Display-referred PSNR in dB over every pixel: both frames through
+/// [`display_bytes`] (what a person sees in the PNG), peak 255, MSE over
+/// R, G and B of all pixels; bounded to `PSNR_CAP_DB` for identical frames.
+/// Unlike [`masked_psnr`] (linear, peak = the reference's maximum, which the
+/// light sets at ~12 and so hides the room's errors) this weighs an error as
+/// visibly as the screen shows it.
+pub fn display_psnr(reference: &[[f32; 4]], test: &[[f32; 4]]) -> Result<f64> {
+    check_lengths(reference.len(), test.len(), test.len())?;
+    if reference.is_empty() {
+        bail!("display PSNR: expected a frame of at least one pixel");
+    }
+    for p in 0..reference.len() {
+        check_finite("reference", reference, p)?;
+        check_finite("test", test, p)?;
+    }
+    let (a, b) = (display_bytes(reference), display_bytes(test));
+    let sum: f64 = a
+        .iter()
+        .zip(&b)
+        .map(|(&x, &y)| (f64::from(x) - f64::from(y)).powi(2))
+        .sum();
+    let mse = sum / a.len() as f64;
+    Ok(if mse == 0.0 {
+        PSNR_CAP_DB
+    } else {
+        (10.0 * (255.0f64 * 255.0 / mse).log10()).min(PSNR_CAP_DB)
+    })
+}
+
+/// [`display_psnr`] over the pixels where `mask` is set, and their share
+/// of the whole frame's squared error (0 to 1); None when the mask is empty.
+/// Splits a frame's error by object (the traced `<object>.mask` layers).
+pub fn display_psnr_masked(
+    reference: &[[f32; 4]],
+    test: &[[f32; 4]],
+    mask: &[bool],
+) -> Result<Option<(f64, f64)>> {
+    check_lengths(reference.len(), test.len(), mask.len())?;
+    let (a, b) = (display_bytes(reference), display_bytes(test));
+    let sq = |p: usize| -> f64 {
+        (0..3)
+            .map(|c| (f64::from(a[3 * p + c]) - f64::from(b[3 * p + c])).powi(2))
+            .sum()
+    };
+    let total: f64 = (0..reference.len()).map(sq).sum();
+    let pixels: Vec<usize> = (0..mask.len()).filter(|&p| mask[p]).collect();
+    if pixels.is_empty() {
+        return Ok(None);
+    }
+    let sum: f64 = pixels.iter().map(|&p| sq(p)).sum();
+    let mse = sum / (3 * pixels.len()) as f64;
+    let psnr = if mse == 0.0 {
+        PSNR_CAP_DB
+    } else {
+        (10.0 * (255.0f64 * 255.0 / mse).log10()).min(PSNR_CAP_DB)
+    };
+    Ok(Some((psnr, if total > 0.0 { sum / total } else { 0.0 })))
+}
+
+/// Whole-frame scores of one frame: [`display_psnr`] and the mean FLIP
+/// ([`flip_error_map`]) over every pixel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameScores {
+    pub psnr_db: f64,
+    pub flip: f64,
+}
+
+/// [`FrameScores`] of `test` against `reference` (`width × height` each).
+pub fn frame_scores(
+    reference: &[[f32; 4]],
+    test: &[[f32; 4]],
+    width: u32,
+    height: u32,
+) -> Result<FrameScores> {
+    let map = flip_error_map(reference, test, width, height)?;
+    let flip = map.iter().map(|&e| f64::from(e)).sum::<f64>() / map.len() as f64;
+    Ok(FrameScores {
+        psnr_db: display_psnr(reference, test)?,
+        flip,
+    })
 }
 
 /// [`masked_psnr`] and [`masked_flip`] of one frame.
@@ -318,6 +406,57 @@ mod tests {
         let a = gradient();
         let s = scores(&a, &a, W, H, &all(false))?;
         assert_eq!((s.psnr_db, s.flip, s.pixels), (None, None, 0));
+        Ok(())
+    }
+
+    #[test]
+    fn whole_frame_scores_are_display_referred() -> Result<()> {
+        let reference = gradient();
+        let same = frame_scores(&reference, &reference, W, H)?;
+        assert_eq!(
+            same,
+            FrameScores {
+                psnr_db: PSNR_CAP_DB,
+                flip: 0.0
+            }
+        );
+        // One 8-bit step on red of every pixel: MSE = 1/3, so the closed
+        // form 10·log10(255² · 3) whatever the pixel's brightness.
+        let step: Vec<[f32; 4]> = display_bytes(&reference)
+            .chunks_exact(3)
+            .map(|c| {
+                let v = |k: usize| crate::capture::srgb_to_linear(f32::from(c[k]) / 255.0);
+                let r = crate::capture::srgb_to_linear((f32::from(c[0]) + 1.0) / 255.0);
+                [r, v(1), v(2), 1.0]
+            })
+            .collect();
+        let got = display_psnr(&reference, &step)?;
+        let expected = 10.0 * (255.0f64 * 255.0 * 3.0).log10();
+        assert!((got - expected).abs() < 1e-9, "{got} vs {expected}");
+        // Values above 1 (the light) clip as on screen: no error there.
+        let bright: Vec<[f32; 4]> = vec![[12.0, 11.0, 10.0, 1.0]; reference.len()];
+        let brighter: Vec<[f32; 4]> = vec![[20.0, 20.0, 20.0, 1.0]; reference.len()];
+        assert_eq!(display_psnr(&bright, &brighter)?, PSNR_CAP_DB);
+        // Dark pixels 1.5× too bright: 7 to 14 sRGB levels, visible, and
+        // scored so although their linear error is under 0.05.
+        let dim: Vec<[f32; 4]> = reference.iter().map(|p| p.map(|c| 0.1 * c)).collect();
+        let dim_bright: Vec<[f32; 4]> = dim.iter().map(|p| p.map(|c| 1.5 * c)).collect();
+        let s = frame_scores(&dim, &dim_bright, W, H)?;
+        assert!(s.psnr_db < 32.0 && s.flip > 0.01, "{s:?}");
+        assert!(display_psnr(&reference, &reference[1..]).is_err());
+        // Split by a mask: the masked half holds all of the error.
+        let mut half = reference.clone();
+        let mask: Vec<bool> = (0..half.len()).map(|p| p % 2 == 0).collect();
+        for (p, v) in half.iter_mut().enumerate() {
+            if mask[p] {
+                *v = v.map(|c| 0.5 * c);
+            }
+        }
+        let (db, share) = display_psnr_masked(&reference, &half, &mask)?.expect("pixels");
+        assert_eq!(share, 1.0);
+        assert!(db < display_psnr(&reference, &half)?);
+        let none = vec![false; half.len()];
+        assert_eq!(display_psnr_masked(&reference, &half, &none)?, None);
         Ok(())
     }
 

@@ -3,7 +3,7 @@
 //! command's flags, so `engine <flags>` replays what a row measured.
 
 use crate::backend::Filtering;
-use crate::options::{Maps, Mode, PemOptions};
+use crate::options::{Maps, Mode, PemOptions, RoomShading};
 use crate::pem::settings::Compositing;
 use std::collections::BTreeMap;
 
@@ -81,6 +81,7 @@ pub fn all_rows() -> Vec<Row> {
         Row::new("sphere-pem nearest-sample", Mode::SpherePem).with(|p| p.blend = false),
         layered(),
         labelled("layered-pem multipass").with(|p| p.compositing = Compositing::Multipass),
+        labelled("layered-pem analytic-room").with(|p| p.room = RoomShading::Analytic),
         labelled("layered-pem nearest-sample").with(|p| p.blend = false),
         labelled("layered-pem distant-only").with(|p| p.local_layer = false),
         labelled("layered-pem em128").with(|p| p.em_size = Some(128)),

@@ -42,6 +42,8 @@ struct ViewResult {
     elevation_deg: f32,
     psnr_db: f64,
     flip: f64,
+    /// Every pixel, as the PNG shows it.
+    frame: metrics::FrameScores,
     frame_ms: f64,
 }
 
@@ -276,6 +278,7 @@ fn measure(
         elevation_deg: view.elevation_deg,
         psnr_db,
         flip,
+        frame: metrics::frame_scores(&reference.beauty, &pixels, width, height)?,
         frame_ms: median(&times),
     };
     Ok((result, pixels))
@@ -317,6 +320,8 @@ fn table_row(row: &Row, results: &[ViewResult], views: u32) -> EvalRow {
         })
         .collect();
     let first = |f: fn(&AboveScore) -> f64| above.first().map_or(f64::NAN, f);
+    // Whole-frame scores above the plane: the first elevation, as *_above.
+    let frame_above = |f: fn(&ViewResult) -> f64| elevations.first().map(|&e| at(e, f));
     EvalRow {
         mode: row
             .label
@@ -331,6 +336,12 @@ fn table_row(row: &Row, results: &[ViewResult], views: u32) -> EvalRow {
         flip_on: kind(Category::On, |r| r.flip),
         flip_between: kind(Category::Between, |r| r.flip),
         flip_above: first(|a| a.flip),
+        psnr_frame_on_db: Some(kind(Category::On, |r| r.frame.psnr_db)),
+        psnr_frame_between_db: Some(kind(Category::Between, |r| r.frame.psnr_db)),
+        psnr_frame_above_db: frame_above(|r| r.frame.psnr_db),
+        flip_frame_on: Some(kind(Category::On, |r| r.frame.flip)),
+        flip_frame_between: Some(kind(Category::Between, |r| r.frame.flip)),
+        flip_frame_above: frame_above(|r| r.frame.flip),
         frame_ms: median(&times),
         frame_ms_p95: Some(percentile(&times, 0.95)),
         views: Some(ViewCounts {

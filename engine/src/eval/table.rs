@@ -41,6 +41,21 @@ pub struct EvalRow {
     pub flip_on: f64,
     pub flip_between: f64,
     pub flip_above: f64,
+    /// Whole-frame scores, every pixel, display-referred (the 8-bit sRGB
+    /// PNG: [`super::metrics::display_psnr`], FLIP over the whole frame),
+    /// when measured.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub psnr_frame_on_db: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub psnr_frame_between_db: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub psnr_frame_above_db: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flip_frame_on: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flip_frame_between: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flip_frame_above: Option<f64>,
     /// Milliseconds per frame (the driver says whether median or mean).
     pub frame_ms: f64,
     /// 95th percentile of the frame times, when measured.
@@ -77,7 +92,7 @@ pub struct ViewCounts {
 
 impl EvalRow {
     /// The row's numbers by JSON field name, for checks and messages.
-    fn numbers(&self) -> [(&'static str, Option<f64>); 8] {
+    fn numbers(&self) -> [(&'static str, Option<f64>); 14] {
         [
             ("psnr_on_db", Some(self.psnr_on_db)),
             ("psnr_between_db", Some(self.psnr_between_db)),
@@ -85,6 +100,12 @@ impl EvalRow {
             ("flip_on", Some(self.flip_on)),
             ("flip_between", Some(self.flip_between)),
             ("flip_above", Some(self.flip_above)),
+            ("psnr_frame_on_db", self.psnr_frame_on_db),
+            ("psnr_frame_between_db", self.psnr_frame_between_db),
+            ("psnr_frame_above_db", self.psnr_frame_above_db),
+            ("flip_frame_on", self.flip_frame_on),
+            ("flip_frame_between", self.flip_frame_between),
+            ("flip_frame_above", self.flip_frame_above),
             ("frame_ms", Some(self.frame_ms)),
             ("frame_ms_p95", self.frame_ms_p95),
         ]
@@ -253,6 +274,12 @@ mod tests {
             flip_on: 0.0625,
             flip_between: 0.07,
             flip_above: 0.1,
+            psnr_frame_on_db: None,
+            psnr_frame_between_db: None,
+            psnr_frame_above_db: None,
+            flip_frame_on: None,
+            flip_frame_between: None,
+            flip_frame_above: None,
             frame_ms: 3.5,
             frame_ms_p95: None,
             views: None,
@@ -280,6 +307,23 @@ mod tests {
                 "flip_above": 0.1,
                 "frame_ms": 3.5
             }]})
+        );
+        // Whole-frame scores, when measured, sit beside the reflector's.
+        let mut framed = row("pem");
+        framed.psnr_frame_above_db = Some(30.5);
+        framed.flip_frame_above = Some(0.08);
+        let value = serde_json::to_value(&framed)?;
+        assert_eq!(value["psnr_frame_above_db"], json!(30.5));
+        assert_eq!(value["flip_frame_above"], json!(0.08));
+        assert!(value.get("flip_frame_on").is_none());
+        framed.flip_frame_on = Some(1.5);
+        let e = EvalTable { rows: vec![framed] }
+            .validate()
+            .err()
+            .map(|e| e.to_string());
+        assert!(
+            e.as_ref().is_some_and(|e| e.contains("flip_frame_on")),
+            "{e:?}"
         );
         Ok(())
     }

@@ -8,5 +8,6 @@ pub mod pem_deferred;
 pub mod probe;
 pub mod readback;
 pub mod room;
+pub mod room_maps;
 pub mod target;
 pub mod upload;

@@ -1,12 +1,17 @@
 //! The diffuse room (and emitters): Lambertian with the baked procedural
-//! textures, lit by the area light as a point emitter plus ambient. Also
-//! the "bare" variant: every mesh with one texture, nothing else.
+//! textures, lit either by the area light as a point emitter plus ambient
+//! (the analytic room) or by each object's inferred light map (the traced
+//! light: `compile::room`). Also the "bare" variant: every mesh with one
+//! texture, nothing else.
 
+use super::room_maps::GpuRoomMap;
 use super::target::{Target, draw_mesh};
 use crate::backend::{Binding, Buffer, Device, GpuResult, Pipeline, PipelineDesc};
 use crate::gpu_scene::GpuScene;
 use crate::graph::{Access, Pass};
-use crate::shader_interface::{RoomLight, RoomPush, Vertex, spirv};
+use crate::shader_interface::{
+    LIGHT_UV_BINDING, ROOM_INFERRED_ATTRIBUTES, RoomLight, RoomPush, Vertex, spirv,
+};
 use ash::vk;
 use glam::{Mat4, Vec4};
 use inference::scene::{Material, Scene};
@@ -15,6 +20,8 @@ struct Draw {
     object: usize,
     set: vk::DescriptorSet,
     push: RoomPush,
+    /// The light-map coordinates (index into `light_uvs`), inferred room only.
+    light_uvs: Option<usize>,
 }
 
 /// Owns the room pipeline and one draw per diffuse or emissive object.
@@ -24,6 +31,10 @@ pub struct RoomRenderer {
     draws: Vec<Draw>,
     /// The `Light` uniform block, constant for the scene.
     _light: Buffer,
+    /// Inferred room: the light maps, and per drawn object without one a
+    /// zero coordinate stream (so the second vertex binding is always bound).
+    _maps: Vec<(usize, crate::backend::Image)>,
+    light_uvs: Vec<Buffer>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -32,6 +43,29 @@ pub enum RoomStyle {
     Lit,
     /// Every object, one texture, no lighting: the bare reference pass.
     Bare,
+    /// Diffuse room from inferred light maps (`compile::room`), emitters.
+    Inferred,
+}
+
+/// What a room draw of `o` pushes under `style`: albedo (a = textured),
+/// emission and the texture; None for objects other passes draw.
+fn material_of(
+    style: RoomStyle,
+    scene: &Scene,
+    o: &inference::scene::Object,
+) -> Option<(Vec4, Vec4, Option<usize>)> {
+    let first_texture = scene.textures.first().map(|_| 0);
+    match (style, scene.materials.get(o.material)) {
+        (RoomStyle::Bare, _) => Some((Vec4::ONE, Vec4::ZERO, first_texture)),
+        (_, Some(Material::Diffuse { albedo, texture })) => {
+            let textured = if texture.is_some() { 1.0 } else { 0.0 };
+            Some((albedo.extend(textured), Vec4::ZERO, *texture))
+        }
+        (_, Some(Material::Emissive { radiance })) => {
+            Some((Vec4::ZERO, radiance.extend(0.0), None))
+        }
+        _ => None, // reflectors and glass have their own passes
+    }
 }
 
 impl RoomRenderer {
@@ -50,20 +84,10 @@ impl RoomRenderer {
             vk::BufferUsageFlags::UNIFORM_BUFFER,
             &[room_lighting(scene)],
         )?;
-        let first_texture = scene.textures.first().map(|_| 0);
         let mut draws = Vec::new();
         for (object, o) in scene.objects.iter().enumerate() {
-            let material = scene.materials.get(o.material);
-            let (albedo, emission, texture) = match (style, material) {
-                (RoomStyle::Bare, _) => (Vec4::ONE, Vec4::ZERO, first_texture),
-                (_, Some(Material::Diffuse { albedo, texture })) => {
-                    let textured = if texture.is_some() { 1.0 } else { 0.0 };
-                    (albedo.extend(textured), Vec4::ZERO, *texture)
-                }
-                (_, Some(Material::Emissive { radiance })) => {
-                    (Vec4::ZERO, radiance.extend(0.0), None)
-                }
-                _ => continue, // reflectors and glass have their own passes
+            let Some((albedo, emission, texture)) = material_of(style, scene, o) else {
+                continue;
             };
             let image = gpu.texture(texture);
             let set = pipeline.descriptor_set(&[
@@ -78,6 +102,7 @@ impl RoomRenderer {
                     emission,
                     ..RoomPush::default()
                 },
+                light_uvs: None,
             });
         }
         Ok(Self {
@@ -85,6 +110,78 @@ impl RoomRenderer {
             pipeline,
             draws,
             _light: light,
+            _maps: Vec::new(),
+            light_uvs: Vec::new(),
+        })
+    }
+
+    /// The room from inferred light maps (`maps`, uploaded): each diffuse
+    /// object's albedo times its light map; an object without one (no view
+    /// saw it) shows its albedo alone, emitters their emission.
+    pub fn inferred(
+        device: &Device,
+        scene: &Scene,
+        gpu: &GpuScene,
+        maps: Vec<GpuRoomMap>,
+        color_format: vk::Format,
+        depth_format: vk::Format,
+    ) -> GpuResult<Self> {
+        let style = RoomStyle::Inferred;
+        let pipeline = room_pipeline(device, style, color_format, depth_format)?;
+        let light = Buffer::with_data(
+            device,
+            "room light",
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            &[RoomLight::default()],
+        )?;
+        let mut draws = Vec::new();
+        let mut light_uvs = Vec::new();
+        let mut uvs_of: std::collections::HashMap<usize, Buffer> = Default::default();
+        let mut images = Vec::new();
+        for m in maps {
+            uvs_of.insert(m.object, m.uvs);
+            images.push((m.object, m.image));
+        }
+        for (object, o) in scene.objects.iter().enumerate() {
+            let Some((albedo, emission, texture)) = material_of(style, scene, o) else {
+                continue;
+            };
+            let light_map = images
+                .iter()
+                .find(|(k, _)| *k == object)
+                .map_or(&gpu.white, |(_, image)| image);
+            let set = pipeline.descriptor_set(&[
+                Binding::Image(gpu.texture(texture).view, gpu.sampler.raw),
+                Binding::Image(light_map.view, gpu.sampler.raw),
+            ])?;
+            let light_uv = match uvs_of.remove(&object) {
+                Some(uvs) => uvs,
+                None => Buffer::with_data(
+                    device,
+                    "room light-map uvs (none)",
+                    vk::BufferUsageFlags::VERTEX_BUFFER,
+                    &vec![[0.5f32; 2]; o.mesh.positions.len().max(1)],
+                )?,
+            };
+            light_uvs.push(light_uv);
+            draws.push(Draw {
+                object,
+                set,
+                push: RoomPush {
+                    albedo,
+                    emission,
+                    ..RoomPush::default()
+                },
+                light_uvs: Some(light_uvs.len() - 1),
+            });
+        }
+        Ok(Self {
+            device: device.clone(),
+            pipeline,
+            draws,
+            _light: light,
+            _maps: images,
+            light_uvs,
         })
     }
 
@@ -101,7 +198,8 @@ impl RoomRenderer {
             };
             self.pipeline.bind(cmd, Some(draw.set), &push)?;
             if let Some(mesh) = gpu.meshes.get(draw.object) {
-                draw_mesh(&self.device, cmd, mesh, None);
+                let light_uvs = draw.light_uvs.and_then(|i| self.light_uvs.get(i));
+                draw_mesh(&self.device, cmd, mesh, light_uvs);
             }
         }
         Ok(())
@@ -132,26 +230,42 @@ pub fn room_pipeline(
     color_format: vk::Format,
     depth_format: vk::Format,
 ) -> GpuResult<Pipeline> {
-    let (name, fragment_spirv) = match style {
-        RoomStyle::Lit => ("room", spirv::ROOM_FRAG),
-        RoomStyle::Bare => ("bare", spirv::BARE_FRAG),
+    let (name, vertex_spirv, fragment_spirv) = match style {
+        RoomStyle::Lit => ("room", spirv::ROOM_VERT, spirv::ROOM_FRAG),
+        RoomStyle::Bare => ("bare", spirv::ROOM_VERT, spirv::BARE_FRAG),
+        RoomStyle::Inferred => (
+            "room inferred",
+            spirv::ROOM_INFERRED_VERT,
+            spirv::ROOM_INFERRED_FRAG,
+        ),
+    };
+    let inferred = style == RoomStyle::Inferred;
+    let (vertex_bindings, vertex_attributes): (&[_], &[_]) = if inferred {
+        (
+            &[Vertex::BINDING, LIGHT_UV_BINDING],
+            &ROOM_INFERRED_ATTRIBUTES,
+        )
+    } else {
+        (&[Vertex::BINDING], &Vertex::ATTRIBUTES)
+    };
+    let second = if inferred {
+        vk::DescriptorType::COMBINED_IMAGE_SAMPLER
+    } else {
+        vk::DescriptorType::UNIFORM_BUFFER
     };
     Pipeline::new(
         device,
         &PipelineDesc {
             name,
-            vertex_spirv: spirv::ROOM_VERT,
+            vertex_spirv,
             fragment_spirv,
-            vertex_bindings: &[Vertex::BINDING],
-            vertex_attributes: &Vertex::ATTRIBUTES,
+            vertex_bindings,
+            vertex_attributes,
             color_formats: &[color_format],
             depth_format,
             cull_mode: vk::CullModeFlags::BACK,
             push_constant_size: size_of::<RoomPush>() as u32,
-            bindings: &[
-                vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-                vk::DescriptorType::UNIFORM_BUFFER,
-            ],
+            bindings: &[vk::DescriptorType::COMBINED_IMAGE_SAMPLER, second],
             blend_by_alpha: false,
             depth: crate::backend::DepthTest::TestWrite,
             stencil: crate::backend::StencilTest::Off,

@@ -2,6 +2,7 @@
 //! rendering matrix from probe renders, the regularized solve, and the
 //! forward-mapping baseline it is measured against.
 
+pub mod factored;
 pub mod forward;
 pub mod layer;
 pub mod maps;

@@ -3,7 +3,7 @@
 
 use clap::{Args, Parser, Subcommand};
 use engine::backend::{DeviceOptions, Filtering};
-use engine::options::{Maps, Mode, PemOptions, PlayOptions, RunPlace};
+use engine::options::{Maps, Mode, PemOptions, PlayOptions, RoomShading, RunPlace};
 use engine::pem::settings::Compositing;
 use std::path::PathBuf;
 
@@ -323,6 +323,11 @@ pub struct PemArgs {
     /// the scene's `[objects.glass] tau`].
     #[arg(long)]
     pub tau: Option<f32>,
+    /// How the room is lit: `inferred` light maps of the traced light
+    /// (compiled with the maps, cached under `<out>/room/`) or the
+    /// `analytic` point light plus ambient.
+    #[arg(long, value_enum, default_value_t = RoomShading::Inferred)]
+    pub room: RoomShading,
 }
 
 /// Parses `WIDTHxHEIGHT`, each 1..=8192.
@@ -385,6 +390,7 @@ impl PemArgs {
             filtering: self.filtering,
             compositing: self.compositing,
             tau: self.tau,
+            room: self.room,
         }
     }
 }

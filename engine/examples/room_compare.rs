@@ -1,0 +1,165 @@
+//! The layered-PEM frame of one view with the inferred room and with the
+//! analytic room, each scored against a traced reference over the whole
+//! frame as `engine eval` scores it (display PSNR, FLIP) and split by
+//! object (the reference's `<object>.mask` layers); optionally pictures,
+//! each frame halved: OUT.png = engine (inferred room) | tracer, and
+//! OUT_diff.png = the display-referred difference (sRGB, grey, ×4) of the
+//! inferred room | of the analytic room.
+//!
+//! ```sh
+//! cargo run --release -p engine --example room_compare -- \
+//!     SCENE DATA_DIR AZIMUTH ELEVATION REF.exr [OUT.png]
+//! ```
+//! DATA_DIR holds the compiled maps (the main job's `--out`); REF.exr is a
+//! traced view at the same azimuth, elevation and size (e.g. one of
+//! `engine eval`'s `reference/` files).
+
+use anyhow::{Context, Result, bail};
+use engine::eval::metrics::{display_psnr_masked, frame_scores};
+use engine::options::{Mode, PemOptions, RoomShading, RunPlace};
+use engine::play::{Session, compile_context, setup_mode};
+use inference::trace::output::read_exr;
+use std::path::{Path, PathBuf};
+
+type Frame = Vec<[f32; 4]>;
+
+fn main() -> Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let [scene, data, az, el, reference, rest @ ..] = args.as_slice() else {
+        bail!("usage: room_compare SCENE DATA_DIR AZIMUTH ELEVATION REF.exr [OUT.png]");
+    };
+    let (az, el): (f32, f32) = (
+        az.parse().context("AZIMUTH: expected degrees")?,
+        el.parse().context("ELEVATION: expected degrees")?,
+    );
+    let layers = read_exr(Path::new(reference))?;
+    let channel = |layer: &str, c: &str| {
+        layers
+            .iter()
+            .find(|(n, _)| n == layer)
+            .and_then(|(_, chs)| chs.iter().find(|(n, _)| n == c))
+            .map(|(_, v)| v.clone())
+            .with_context(|| format!("{reference}: no {layer}.{c}"))
+    };
+    let (r, g, b) = (
+        channel("beauty", "R")?,
+        channel("beauty", "G")?,
+        channel("beauty", "B")?,
+    );
+    let traced: Frame = (0..r.len()).map(|i| [r[i], g[i], b[i], 1.0]).collect();
+    let place = RunPlace {
+        scene: scene.clone(),
+        out: Some(PathBuf::from(data)),
+        device: Default::default(),
+        size: (640, 480),
+    };
+    let mut session = Session::open(&place)?;
+    let (width, height) = session.renderer.size();
+    if traced.len() != (width * height) as usize {
+        bail!("{reference}: expected a {width}x{height} trace");
+    }
+    let eye = session.scene.orbit.eye(az, el);
+    let mut frames = Vec::new();
+    for room in [RoomShading::Inferred, RoomShading::Analytic] {
+        let pem = PemOptions {
+            room,
+            ..PemOptions::default()
+        };
+        let ctx = compile_context(&place, &session.scene, &session.out);
+        let mut source = setup_mode(&ctx, &mut session.renderer, Mode::LayeredPem, &pem, 16)?;
+        source.frame(&mut session.renderer, &session.scene, eye)?;
+        let pixels = source.frame(&mut session.renderer, &session.scene, eye)?.1;
+        let s = frame_scores(&traced, &pixels, width, height)?;
+        println!(
+            "{room:?} room: whole frame {:.2} dB, FLIP {:.4}",
+            s.psnr_db, s.flip
+        );
+        print_split(&layers, &traced, &pixels)?;
+        frames.push(pixels);
+    }
+    if let Some(out) = rest.first() {
+        let out = Path::new(out);
+        let diff = |f: &Frame| display_diff(&traced, f, 4.0);
+        side_by_side(out, [&frames[0], &traced], width, height)?;
+        let diffs = out.with_file_name(format!(
+            "{}_diff.png",
+            out.file_stem().and_then(|s| s.to_str()).unwrap_or("room")
+        ));
+        side_by_side(
+            &diffs,
+            [&diff(&frames[0]), &diff(&frames[1])],
+            width,
+            height,
+        )?;
+    }
+    Ok(())
+}
+
+/// `frame` at half size, 2×2 box filtered (linear).
+fn half(frame: &[[f32; 4]], width: u32, height: u32) -> Frame {
+    let (w, h) = (width as usize / 2, height as usize / 2);
+    let mut out = Vec::with_capacity(w * h);
+    for y in 0..h {
+        for x in 0..w {
+            let at = |dx: usize, dy: usize| frame[(2 * y + dy) * width as usize + 2 * x + dx];
+            let q = [at(0, 0), at(1, 0), at(0, 1), at(1, 1)];
+            out.push(std::array::from_fn(|c| {
+                q.iter().map(|p| p[c]).sum::<f32>() / 4.0
+            }));
+        }
+    }
+    out
+}
+
+/// `frames` halved, side by side, written to `path`.
+fn side_by_side(path: &Path, frames: [&Frame; 2], width: u32, height: u32) -> Result<()> {
+    let halves = frames.map(|f| half(f, width, height));
+    let (w, h) = (width as usize / 2, height as usize / 2);
+    let mut mosaic = vec![[0.0f32; 4]; 2 * w * h];
+    for y in 0..h {
+        for (k, img) in halves.iter().enumerate() {
+            mosaic[y * 2 * w + k * w..y * 2 * w + (k + 1) * w]
+                .copy_from_slice(&img[y * w..(y + 1) * w]);
+        }
+    }
+    engine::capture::write_png(path, 2 * w as u32, h as u32, &mosaic)?;
+    Ok(())
+}
+
+/// |sRGB(a) − sRGB(b)| × `gain`, the largest channel, as a grey frame that
+/// the PNG shows at that value: the error as the goals weigh it.
+fn display_diff(a: &Frame, b: &Frame, gain: f32) -> Frame {
+    use engine::capture::{linear_to_srgb, srgb_to_linear};
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| {
+            let d = (0..3)
+                .map(|c| (linear_to_srgb(p[c]) - linear_to_srgb(q[c])).abs())
+                .fold(0.0f32, f32::max);
+            let v = srgb_to_linear((d * gain).min(1.0));
+            [v, v, v, 1.0]
+        })
+        .collect()
+}
+
+/// Display PSNR of `pixels` per object of the reference (its `.mask` layers).
+fn print_split(
+    layers: &[inference::trace::output::ExrLayer],
+    traced: &Frame,
+    pixels: &Frame,
+) -> Result<()> {
+    for (name, chs) in layers.iter().filter(|(n, _)| n.ends_with(".mask")) {
+        let Some((_, mask)) = chs.first() else {
+            continue;
+        };
+        let mask: Vec<bool> = mask.iter().map(|&m| m >= 0.5).collect();
+        if let Some((db, share)) = display_psnr_masked(traced, pixels, &mask)? {
+            println!(
+                "  {:<10} {db:6.2} dB ({:5.1}% of the squared error)",
+                name.trim_end_matches(".mask"),
+                100.0 * share
+            );
+        }
+    }
+    Ok(())
+}
