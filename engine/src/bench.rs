@@ -145,91 +145,23 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
     let ctx = compile_context(place, &scene, &out);
     let (width, height) = place.size;
     let variants = variants();
-    // One renderer per PEM variant: switching settings re-creates slots.
-    let mut renderers = vec![renderer];
-    let mut which = Vec::new();
-    let room = match opts.pem.room {
-        crate::options::RoomShading::Inferred => Some(crate::compile::room::room_maps(&ctx)?),
-        crate::options::RoomShading::Analytic => None,
-    };
-    for (name, draws) in &variants {
-        match draws {
-            Draws::Bare | Draws::StaticEm => which.push(0),
-            Draws::Pem(settings) => {
-                let mut r = Renderer::new(&device, &scene, width, height)?;
-                let source = crate::compile::map_source(&ctx, &opts.pem, &settings.layers())?;
-                r.set_pem(&scene, *settings, source)?;
-                if *name != "default, analytic room" {
-                    r.set_room(&scene, room.as_ref())?;
-                }
-                which.push(renderers.len());
-                renderers.push(r);
-            }
-        }
-    }
-    let mode = |d: &Draws| match d {
-        Draws::Bare => FrameMode::Bare,
-        Draws::StaticEm => FrameMode::StaticEm,
-        Draws::Pem(_) => FrameMode::Pem,
-    };
-    let moving = variants.len() - 1;
+    let (mut renderers, which) = renderers_for(&ctx, &device, opts, &variants, renderer)?;
     let views = 8u32;
     let per_view = opts.frames_per_view.max(1);
     let mut logs: Vec<PerfLog> = variants.iter().map(|_| PerfLog::default()).collect();
-    let mut covered = Vec::new();
-    let o = &scene.orbit;
-    // With elevation rings, views sit between rings too: four samples blend.
-    let between_rings = if o.rings > 1 {
-        0.5 * o.ring_step_deg
-    } else {
-        0.0
-    };
     let progress = indicatif::ProgressBar::new(u64::from(2 * views * per_view));
-    // Resident variants, interleaved view by view.
-    for v in 0..views {
-        let k = ((v as f32 + 0.5) / views as f32 * o.samples.saturating_sub(1) as f32) as u32;
-        let eye = o.eye(o.angle_deg(k) + 0.5 * o.step_deg, between_rings);
-        for i in 0..opts.warmup + per_view {
-            if i == opts.warmup {
-                // Decoding ahead, started by the new view, must not run
-                // behind the timed frames.
-                renderers.iter_mut().for_each(Renderer::settle);
-                covered.push(renderers[which[2]].covered_pixels()? as f64);
-            }
-            for (index, (_, draws)) in variants.iter().enumerate().take(moving) {
-                let start = Instant::now();
-                let stats = renderers[which[index]].frame(mode(draws), eye, o.view(eye))?;
-                if i >= opts.warmup {
-                    logs[index].record(
-                        start.elapsed().as_secs_f64() * 1e3,
-                        &stats.passes,
-                        stats.cpu,
-                    );
-                }
-            }
-            if i >= opts.warmup {
-                progress.inc(1);
-            }
-        }
-    }
-    // Then the moving variant alone: one sample further every frame, its
-    // maps decoded ahead while the previous frame draws.
-    let last = o.samples.saturating_sub(1).max(1);
-    for i in 0..opts.warmup + views * per_view {
-        let eye = o.eye(o.angle_deg(i % last) + 0.5 * o.step_deg, between_rings);
-        let start = Instant::now();
-        let stats = renderers[which[moving]].frame(FrameMode::Pem, eye, o.view(eye))?;
-        if i >= opts.warmup {
-            logs[moving].record(
-                start.elapsed().as_secs_f64() * 1e3,
-                &stats.passes,
-                stats.cpu,
-            );
-            progress.inc(1);
-        }
-    }
+    let run = Run {
+        orbit: &scene.orbit,
+        variants: &variants,
+        which: &which,
+        views,
+        per_view,
+        warmup: opts.warmup,
+        progress: &progress,
+    };
+    let covered = run.resident(&mut renderers, &mut logs)?;
+    run.moving(&mut renderers, &mut logs)?;
     progress.finish_and_clear();
-    let covered = median(&covered);
     let reports: Vec<PerfReport> = logs
         .into_iter()
         .zip(&variants)
@@ -243,6 +175,129 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
     };
     crate::util::files::write_json(&out.join("bench.json"), &report)?;
     Ok(report)
+}
+
+/// One renderer per PEM variant (switching settings re-creates slots),
+/// the first shared by the raster variants; which renderer each variant
+/// draws with.
+fn renderers_for(
+    ctx: &crate::compile::CompileContext,
+    device: &crate::backend::Device,
+    opts: &BenchOptions,
+    variants: &[(&'static str, Draws)],
+    first: Renderer,
+) -> Result<(Vec<Renderer>, Vec<usize>)> {
+    let scene = ctx.scene;
+    let (width, height) = ctx.size;
+    let mut renderers = vec![first];
+    let mut which = Vec::new();
+    let room = match opts.pem.room {
+        crate::options::RoomShading::Inferred => Some(crate::compile::room::room_maps(ctx)?),
+        crate::options::RoomShading::Analytic => None,
+    };
+    for (name, draws) in variants {
+        match draws {
+            Draws::Bare | Draws::StaticEm => which.push(0),
+            Draws::Pem(settings) => {
+                let mut r = Renderer::new(device, scene, width, height)?;
+                let source = crate::compile::map_source(ctx, &opts.pem, &settings.layers())?;
+                r.set_pem(scene, *settings, source)?;
+                if *name != "default, analytic room" {
+                    r.set_room(scene, room.as_ref())?;
+                }
+                which.push(renderers.len());
+                renderers.push(r);
+            }
+        }
+    }
+    Ok((renderers, which))
+}
+
+/// The measuring loop's fixed inputs.
+struct Run<'a> {
+    orbit: &'a inference::scene::Orbit,
+    variants: &'a [(&'static str, Draws)],
+    which: &'a [usize],
+    views: u32,
+    per_view: u32,
+    warmup: u32,
+    progress: &'a indicatif::ProgressBar,
+}
+
+impl Run<'_> {
+    /// With elevation rings, views sit between rings too: four samples blend.
+    fn between_rings(&self) -> f32 {
+        if self.orbit.rings > 1 {
+            0.5 * self.orbit.ring_step_deg
+        } else {
+            0.0
+        }
+    }
+
+    /// Every variant but the last, interleaved view by view with the maps
+    /// resident; returns the median covered reflector pixels.
+    fn resident(&self, renderers: &mut [Renderer], logs: &mut [PerfLog]) -> Result<f64> {
+        let o = self.orbit;
+        let moving = self.variants.len() - 1;
+        let mut covered = Vec::new();
+        for v in 0..self.views {
+            let k =
+                ((v as f32 + 0.5) / self.views as f32 * o.samples.saturating_sub(1) as f32) as u32;
+            let eye = o.eye(o.angle_deg(k) + 0.5 * o.step_deg, self.between_rings());
+            for i in 0..self.warmup + self.per_view {
+                if i == self.warmup {
+                    // Decoding ahead, started by the new view, must not run
+                    // behind the timed frames.
+                    renderers.iter_mut().for_each(Renderer::settle);
+                    covered.push(renderers[self.which[2]].covered_pixels()? as f64);
+                }
+                for (index, (_, draws)) in self.variants.iter().enumerate().take(moving) {
+                    let start = Instant::now();
+                    let stats =
+                        renderers[self.which[index]].frame(mode(draws), eye, o.view(eye))?;
+                    if i >= self.warmup {
+                        let ms = start.elapsed().as_secs_f64() * 1e3;
+                        logs[index].record(ms, &stats.passes, stats.cpu);
+                    }
+                }
+                if i >= self.warmup {
+                    self.progress.inc(1);
+                }
+            }
+        }
+        Ok(median(&covered))
+    }
+
+    /// The last variant alone: one sample further every frame, its maps
+    /// decoded ahead while the previous frame draws.
+    fn moving(&self, renderers: &mut [Renderer], logs: &mut [PerfLog]) -> Result<()> {
+        let o = self.orbit;
+        let moving = self.variants.len() - 1;
+        let last = o.samples.saturating_sub(1).max(1);
+        for i in 0..self.warmup + self.views * self.per_view {
+            let eye = o.eye(
+                o.angle_deg(i % last) + 0.5 * o.step_deg,
+                self.between_rings(),
+            );
+            let start = Instant::now();
+            let stats = renderers[self.which[moving]].frame(FrameMode::Pem, eye, o.view(eye))?;
+            if i >= self.warmup {
+                let ms = start.elapsed().as_secs_f64() * 1e3;
+                logs[moving].record(ms, &stats.passes, stats.cpu);
+                self.progress.inc(1);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// How a variant's frames are drawn.
+fn mode(d: &Draws) -> FrameMode {
+    match d {
+        Draws::Bare => FrameMode::Bare,
+        Draws::StaticEm => FrameMode::StaticEm,
+        Draws::Pem(_) => FrameMode::Pem,
+    }
 }
 
 /// The table's rows: ratios to the bare and static-EM frames (rows 0, 1),

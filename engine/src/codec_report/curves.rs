@@ -21,7 +21,6 @@ pub(super) fn curves(
     say: &dyn Fn(String),
     notes: &mut Vec<String>,
 ) -> Result<Vec<codec::report::Curve>> {
-    use codec::report::{Curve, ReportOptions};
     let ratios = &req.curve_ratios;
     say(format!(
         "curve: encoding at {} ratios (one analysis of the whole PEM, then a budget each)",
@@ -34,11 +33,33 @@ pub(super) fn curves(
         "curve: encoded in {:.1} s",
         start.elapsed().as_secs_f64()
     ));
+    let mut bench = bench;
+    let (mut out, sizes) = codec_curves(encoded, input, bench.as_deref_mut(), say)?;
+    out.extend(baseline_curves(
+        input,
+        &sizes,
+        bench.as_deref(),
+        views,
+        ffmpeg,
+        say,
+        notes,
+    )?);
+    Ok(out)
+}
+
+/// The codec's own curves at each encoded size: texture PSNR and, with
+/// rendered frames, their PSNR; the sizes, for the baselines.
+fn codec_curves(
+    encoded: Vec<(Vec<u8>, codec::EncodeReport)>,
+    input: &EncodeInput,
+    mut bench: Option<&mut FrameBench>,
+    say: &dyn Fn(String),
+) -> Result<(Vec<codec::report::Curve>, Vec<u64>)> {
+    use codec::report::{Curve, ReportOptions};
     let mut texture = Curve::new("pyramid-codec", "texture");
     let mut frames = Curve::new("pyramid-codec-frames", "frames_vs_traced");
     let mut frames_c = Curve::new("pyramid-codec-frames", "frames_vs_uncompressed");
     let mut sizes = Vec::new();
-    let mut bench = bench;
     for (bytes, _) in encoded {
         let c = codec::Container::from_bytes(bytes)?;
         let rep = codec::report::report(
@@ -70,6 +91,22 @@ pub(super) fn curves(
         out.push(frames);
         out.push(frames_c);
     }
+    Ok((out, sizes))
+}
+
+/// The baselines' curves at the codec's sizes (JPEG per texture; with
+/// ffmpeg, MPEG-texture and MPEG-view), and the curves' notes.
+fn baseline_curves(
+    input: &EncodeInput,
+    sizes: &[u64],
+    bench: Option<&FrameBench>,
+    views: Option<&mut ViewFrames>,
+    ffmpeg: bool,
+    say: &dyn Fn(String),
+    notes: &mut Vec<String>,
+) -> Result<Vec<codec::report::Curve>> {
+    use codec::report::Curve;
+    let mut out = Vec::new();
     // A baseline that cannot get as small as a target gives its smallest
     // setting for each such target: one point, not several.
     let to_curve = |name: &str, metric, bs: Vec<codec::report::Baseline>| {
@@ -85,15 +122,15 @@ pub(super) fn curves(
     out.push(to_curve(
         "jpeg-per-texture",
         "texture",
-        codec::report::jpeg_baselines(input, &sizes, &mut say_mut)?,
+        codec::report::jpeg_baselines(input, sizes, &mut say_mut)?,
     ));
     if ffmpeg {
         out.push(to_curve(
             "mpeg-texture",
             "texture",
-            codec::report::mpeg_texture_baselines(input, &sizes, &mut say_mut)?,
+            codec::report::mpeg_texture_baselines(input, sizes, &mut say_mut)?,
         ));
-        match (views, bench.as_deref()) {
+        match (views, bench) {
             (Some(v), Some(b)) => out.push(to_curve(
                 "mpeg-view",
                 "frames_vs_uncompressed",

@@ -44,9 +44,8 @@ pub(super) const FRAME_PIXELS: &str = "the reflector's pixels (rendered coverage
 
 impl FrameBench {
     pub(super) fn new(req: &CodecReportRequest, scene: &Scene) -> Result<Option<Self>> {
-        use inference::em_geometry::{EmGeometry, texgen};
         use inference::infer::Target;
-        use inference::probe::{Lookup, ProbeGeometry, ProbeRenderer};
+        use inference::probe::ProbeRenderer;
         if req.frames_every == 0 {
             return Ok(None);
         }
@@ -54,7 +53,6 @@ impl FrameBench {
         let device = crate::backend::create_device(&req.device)?;
         let mut probe = crate::probe::VulkanProbe::new(&device)?;
         let projection = inference::trace::camera::projection(scene, width, height);
-        let (room_min, room_max) = scene.bounds();
         let mut items = Vec::new();
         for (index, spec) in map_specs(scene).iter().enumerate() {
             if spec.layer != MapLayer::Distant {
@@ -64,7 +62,6 @@ impl FrameBench {
                 continue;
             };
             let layout = spec.layout();
-            let origin = object.mesh.area_weighted_centroid();
             for k in (0..scene.orbit.sample_count()).step_by(req.frames_every as usize) {
                 let traced = output::with_suffix(&traced_stem(&req.trace_dir, k), ".exr");
                 if !traced.is_file() {
@@ -79,34 +76,7 @@ impl FrameBench {
                     (width * height) as usize,
                 )
                 .with_context(|| format!("{}", traced.display()))?;
-                let eye = scene.orbit.sample_eye(k)?;
-                let mut lookups = vec![[0.0f32; 4]; object.mesh.positions.len()];
-                let geometry_em = EmGeometry::Box {
-                    min: room_min,
-                    max: room_max,
-                };
-                texgen(
-                    &geometry_em,
-                    origin,
-                    eye,
-                    &object.mesh.positions,
-                    &object.mesh.normals,
-                    &mut lookups,
-                );
-                let geometry = ProbeGeometry {
-                    key: 0xC0DEC ^ u64::from(k),
-                    positions: object.mesh.positions.clone(),
-                    indices: object.mesh.indices.clone(),
-                    lookup: Lookup::Cube(
-                        lookups
-                            .iter()
-                            .map(|l| glam::Vec3::new(l[0], l[1], l[2]))
-                            .collect(),
-                    ),
-                    view_proj: projection * scene.orbit.view(eye),
-                    width,
-                    height,
-                };
+                let geometry = distant_geometry(scene, object, k, projection, (width, height))?;
                 let path = map_path(&req.infer_dir, k, &spec.object, spec.layer);
                 // Alpha 1 everywhere, like the decoded maps: the rendered
                 // alpha is the object's coverage either way.
@@ -170,4 +140,47 @@ impl FrameBench {
     pub(super) fn raw_db(&self) -> f64 {
         median(&self.items.iter().map(|i| i.raw_db).collect::<Vec<_>>())
     }
+}
+
+/// The probe geometry of `object`'s distant layer seen from sample `k`:
+/// box texgen from its centroid, the traced camera.
+fn distant_geometry(
+    scene: &Scene,
+    object: &inference::scene::Object,
+    k: u32,
+    projection: glam::Mat4,
+    (width, height): (u32, u32),
+) -> Result<inference::probe::ProbeGeometry> {
+    use inference::em_geometry::{EmGeometry, texgen};
+    use inference::probe::{Lookup, ProbeGeometry};
+    let (room_min, room_max) = scene.bounds();
+    let origin = object.mesh.area_weighted_centroid();
+    let eye = scene.orbit.sample_eye(k)?;
+    let mut lookups = vec![[0.0f32; 4]; object.mesh.positions.len()];
+    let geometry_em = EmGeometry::Box {
+        min: room_min,
+        max: room_max,
+    };
+    texgen(
+        &geometry_em,
+        origin,
+        eye,
+        &object.mesh.positions,
+        &object.mesh.normals,
+        &mut lookups,
+    );
+    Ok(ProbeGeometry {
+        key: 0xC0DEC ^ u64::from(k),
+        positions: object.mesh.positions.clone(),
+        indices: object.mesh.indices.clone(),
+        lookup: Lookup::Cube(
+            lookups
+                .iter()
+                .map(|l| glam::Vec3::new(l[0], l[1], l[2]))
+                .collect(),
+        ),
+        view_proj: projection * scene.orbit.view(eye),
+        width,
+        height,
+    })
 }
