@@ -400,3 +400,24 @@ fn every_shipped_scene_loads_and_the_rings_scene_is_2d() {
     assert_eq!(s.orbit.sample_count(), 16);
     assert_eq!(s.orbit.ring_elevations(), [0.0, 10.0, 20.0, 30.0]);
 }
+
+#[test]
+fn ring_layouts_change_the_orbit_key_and_1d_orbits_keep_theirs() {
+    let s = Scene::load("teapot").expect("teapot");
+    let key = |s: &Scene| crate::trace::cache::scene_key(s);
+    let base = key(&s);
+    // A 1D orbit's key ignores the (unused) ring step: old caches stay valid.
+    let mut one = s.clone();
+    one.orbit.ring_step_deg = 25.0;
+    assert_eq!(key(&one), base);
+    // Rings move samples k ≥ samples off the plane: the key says so.
+    let mut rings = s.clone();
+    rings.orbit.rings = 3;
+    assert_eq!(key(&rings).changes(&base), ["orbit"]);
+    let mut step = rings.clone();
+    step.orbit.ring_step_deg = 15.0;
+    assert_eq!(key(&step).changes(&key(&rings)), ["orbit"]);
+    let mut lines = rings.clone();
+    lines.orbit.samples = 50;
+    assert_eq!(key(&lines).changes(&key(&rings)), ["orbit"]);
+}
