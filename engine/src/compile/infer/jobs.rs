@@ -13,7 +13,7 @@ use inference::solve::layout::TextureShape;
 use std::hash::Hasher;
 
 /// Bump when a change to inference changes the maps it makes.
-pub const INFERENCE_VERSION: u32 = 2;
+pub const INFERENCE_VERSION: u32 = 3;
 
 /// One map of one reflector to infer.
 pub struct Job<'a> {

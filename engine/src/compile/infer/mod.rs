@@ -19,6 +19,7 @@ pub(crate) mod targets;
 
 pub use diffuse::{DiffuseRequest, infer_diffuse};
 pub use jobs::{INFERENCE_VERSION, Job, jobs_for, map_key};
+pub use sample::WARM_CHAIN;
 
 use crate::backend::{DeviceOptions, create_device};
 use crate::maps::{MapLayer, map_path};

@@ -21,6 +21,12 @@ use inference::scene::Mesh;
 use inference::trace::{Tracer, camera, output};
 use std::collections::HashMap;
 
+/// Samples per warm chain: inside a chain each sample's solve starts from
+/// the previous sample's map (fewer iterations), the first starts cold, so
+/// a shard of whole chains (`engine compile --shard`) infers exactly the
+/// bits one process would.
+pub const WARM_CHAIN: u32 = 10;
+
 /// What every sample of a run shares: the plan, the device's probe
 /// renderer, the static EMs (a baseline), the tracer for missing targets.
 pub(super) struct SampleRun<'a> {
@@ -86,6 +92,28 @@ impl<'a> SampleRun<'a> {
         Ok((report, lines))
     }
 
+    /// The map sample `k`'s solve of `job` starts from: the previous
+    /// sample's, when both lie in one warm chain and it is fresh (made from
+    /// today's inputs, so by induction the same bits whichever process made
+    /// it); None starts cold.
+    fn warm_start(
+        &self,
+        k: u32,
+        job: &Job,
+        layout: &inference::solve::layout::TextureLayout,
+    ) -> Result<Option<Vec<Vec<f32>>>> {
+        if k % WARM_CHAIN == 0 {
+            return Ok(None);
+        }
+        let p = k - 1;
+        let path = map_path(&self.req.infer_dir, p, &job.object.name, job.layer);
+        let key = self.plan.key(&self.plan.trace_key(p)?, job);
+        if inference::key::freshness(&path, &key) != inference::key::Freshness::Fresh {
+            return Ok(None);
+        }
+        Ok(read_map(&path, layout, job.channels()).ok())
+    }
+
     /// One map: probe renders, solve, baselines; the map, its pictures and
     /// its key record written. Returns its report and whether it was
     /// warm-started.
@@ -123,11 +151,7 @@ impl<'a> SampleRun<'a> {
             height,
         };
         let layout = job.layer.layout(job.resolution);
-        // Warm start from the previous sample's map, when it reads.
-        let previous = k
-            .checked_sub(1)
-            .map(|p| map_path(&self.req.infer_dir, p, &job.object.name, job.layer))
-            .and_then(|p| read_map(&p, &layout, job.channels()).ok());
+        let previous = self.warm_start(k, job, &layout)?;
         let target = Target {
             name: &name,
             pixels: &pixels,
