@@ -52,6 +52,7 @@ fn main() -> Result<()> {
         out: Some(PathBuf::from(data)),
         device: Default::default(),
         size: (640, 480),
+        recompile: false,
     };
     let mut session = Session::open(&place)?;
     let (width, height) = session.renderer.size();

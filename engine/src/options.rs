@@ -168,6 +168,9 @@ pub struct RunPlace {
     pub out: Option<PathBuf>,
     pub device: DeviceOptions,
     pub size: (u32, u32),
+    /// Ignore the compiled data shipped in `assets/compiled/` and compile
+    /// everything missing under the output folder.
+    pub recompile: bool,
 }
 
 /// The main job: what to draw along the default path, and what to keep.

@@ -63,6 +63,11 @@ pub fn compile_context<'a>(
         out,
         size: place.size,
         device: &place.device,
+        shipped: if place.recompile {
+            None
+        } else {
+            crate::compile::shipped::dir(scene)
+        },
     }
 }
 

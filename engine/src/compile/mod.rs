@@ -7,6 +7,9 @@
 pub mod encode;
 pub mod infer;
 pub mod room;
+pub mod scene;
+pub mod shard;
+pub mod shipped;
 pub mod trace;
 
 use crate::backend::DeviceOptions;
@@ -28,6 +31,9 @@ pub struct CompileContext<'a> {
     pub out: &'a Path,
     pub size: (u32, u32),
     pub device: &'a DeviceOptions,
+    /// The compiled data shipped for this scene (`assets/compiled/<scene>`),
+    /// played when its keys match; None with `--recompile`.
+    pub shipped: Option<std::path::PathBuf>,
 }
 
 impl CompileContext<'_> {
@@ -84,6 +90,29 @@ pub fn map_source(
             .collect()
     };
     let stale = stale_maps(&plan, &req, &wanted)?;
+    let plays_container = pem.maps == Maps::Container && !sphere;
+    if !stale.is_empty() && plays_container && pem.infer_dir.is_none() && pem.container.is_none() {
+        // A fresh container needs no maps: the one under --out, else the
+        // shipped one.
+        let key = expected_container_key(ctx, &plan, &req)?;
+        if inference::key::freshness(&dirs.container, &key) == Freshness::Fresh {
+            return MapSource::container(scene, &dirs.container);
+        }
+        if let Some(path) = shipped::container(ctx, &key) {
+            // Read only: a shipped file that fails to read is passed over.
+            match MapSource::container(scene, &path) {
+                Ok(source) => {
+                    eprintln!(
+                        "{}: playing the shipped compiled scene {} (its key matches; --recompile compiles it here)",
+                        scene.name,
+                        path.display()
+                    );
+                    return Ok(source);
+                }
+                Err(e) => eprintln!("{}: {e:#}; compiling instead", path.display()),
+            }
+        }
+    }
     if !stale.is_empty() {
         if pem.infer_dir.is_some() {
             bail!(
@@ -113,6 +142,32 @@ pub fn map_source(
         return Ok(MapSource::exr(&dirs.infer));
     }
     container_source(ctx, pem, &plan, &req, &dirs)
+}
+
+/// The samples of `ctx`'s scene some map of which is not fresh under its
+/// output folder, in order.
+pub fn missing_maps(ctx: &CompileContext) -> Result<Vec<u32>> {
+    let dirs = DataDirs::under(ctx.out, ctx.scene);
+    let req = ctx.request(&dirs, false);
+    let plan = Plan::new(ctx.scene, &req)?;
+    let mut samples: Vec<u32> = plan
+        .stale(&req.samples, &req.infer_dir)?
+        .into_iter()
+        .map(|s| s.0)
+        .collect();
+    samples.dedup();
+    Ok(samples)
+}
+
+/// Traces and infers what is not fresh of `samples` under `ctx`'s output
+/// folder (one shard of a farmed compile).
+pub fn infer_samples(ctx: &CompileContext, samples: &[u32]) -> Result<String> {
+    let dirs = DataDirs::under(ctx.out, ctx.scene);
+    let req = InferRequest {
+        samples: samples.to_vec(),
+        ..ctx.request(&dirs, false)
+    };
+    infer::infer(ctx.scene, &req)
 }
 
 /// (sample, job, what is wrong) for every map of a `wanted` layer that is
@@ -151,15 +206,17 @@ fn describe(plan: &Plan, stale: &[(u32, usize, Freshness)]) -> String {
     parts.join("; ")
 }
 
-/// The container: the one named by the user (checked, read only) or the
-/// one under the output folder, encoded again when stale or damaged.
-fn container_source(
-    ctx: &CompileContext,
-    pem: &PemOptions,
-    plan: &Plan,
-    req: &InferRequest,
-    dirs: &DataDirs,
-) -> Result<MapSource> {
+/// The key `ctx`'s container carries when compiled today from fresh maps.
+pub fn container_key_for(ctx: &CompileContext) -> Result<Key> {
+    let dirs = DataDirs::under(ctx.out, ctx.scene);
+    let req = ctx.request(&dirs, false);
+    let plan = Plan::new(ctx.scene, &req)?;
+    expected_container_key(ctx, &plan, &req)
+}
+
+/// The key the container of `req`'s samples carries when encoded from
+/// fresh maps at the default ratio.
+fn expected_container_key(ctx: &CompileContext, plan: &Plan, req: &InferRequest) -> Result<Key> {
     let target = codec::Target::Ratio(encode::DEFAULT_RATIO);
     let mut map_keys = Vec::new();
     for &k in &req.samples {
@@ -174,7 +231,19 @@ fn container_source(
             }
         }
     }
-    let key = container_key(map_keys.iter(), target);
+    Ok(container_key(map_keys.iter(), target))
+}
+
+/// The container: the one named by the user (checked, read only) or the
+/// one under the output folder, encoded again when stale or damaged.
+fn container_source(
+    ctx: &CompileContext,
+    pem: &PemOptions,
+    plan: &Plan,
+    req: &InferRequest,
+    dirs: &DataDirs,
+) -> Result<MapSource> {
+    let key = expected_container_key(ctx, plan, req)?;
     let path = pem
         .container
         .clone()
@@ -199,6 +268,7 @@ fn container_source(
         _ => {}
     }
     let input = load_or_reinfer(ctx, req, dirs)?;
+    let target = codec::Target::Ratio(encode::DEFAULT_RATIO);
     let e = encode::encode_to(&input, target, &path, &key)?;
     eprintln!(
         "{}: {} bytes from {} raw (ratio {:.1}:1, worst texture {:.1} dB) in {:.1} s{}",

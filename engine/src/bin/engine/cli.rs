@@ -36,6 +36,10 @@ pub enum Command {
     Encode(EncodeArgs),
     /// Measure a container: ratio, PSNR, decode time, baselines (JSON).
     CodecReport(CodecReportArgs),
+    /// Compile what the main job plays (traces, maps, room light maps,
+    /// container) without playing: whole, one shard of the samples for a
+    /// farmed compile (--shard I/N), or the merge that finishes one.
+    Compile(CompileArgs),
     /// Measure every mode and speed/accuracy knob against the tracer on
     /// views on the orbit, between samples and above the orbit plane;
     /// writes eval.json and tradeoff.png.
@@ -43,6 +47,46 @@ pub enum Command {
     /// Ray-trace the gold-standard layers of one parameter sample, a free view or all samples
     /// (CPU, no Vulkan): one multi-layer EXR and a tone-mapped PNG per image.
     Trace(TraceArgs),
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct CompileArgs {
+    /// A built-in scene's name (teapot) or the path of a .toml scene file.
+    #[arg(long, default_value = "teapot")]
+    pub scene: String,
+    /// Where the compiled files go (and shards' files are merged from)
+    /// [default: out/<scene>].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Frame size as WIDTHxHEIGHT (of the targets and probe renders).
+    #[arg(long, default_value = "640x480", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Compile only shard I of N (0-based): whole chains of 10 samples,
+    /// dealt round robin; bit-identical to one process's maps.
+    #[arg(long, value_parser = parse_shard, conflicts_with_all = ["merge", "ship"])]
+    pub shard: Option<engine::compile::shard::Shard>,
+    /// Finish a farmed compile: room light maps and the container from
+    /// the maps every shard wrote into --out; fails if a sample is missing.
+    #[arg(long)]
+    pub merge: bool,
+    /// Also copy the compiled container and room light maps into DIR
+    /// (`assets/compiled/<scene>` regenerates the shipped scene).
+    #[arg(long)]
+    pub ship: Option<PathBuf>,
+    /// Only check the compiled scene shipped in assets/compiled/ against
+    /// today's inputs (writes nothing; fails when stale).
+    #[arg(long, conflicts_with_all = ["shard", "merge", "ship"])]
+    pub check_shipped: bool,
+    /// Vulkan device to use (substring of its name) [default: lavapipe].
+    #[arg(long, env = "ENGINE_DEVICE")]
+    pub device: Option<String>,
+    /// Turn the Khronos validation layer on for the probe renders.
+    #[arg(long)]
+    pub validate: bool,
+}
+
+fn parse_shard(s: &str) -> Result<engine::compile::shard::Shard, String> {
+    engine::compile::shard::Shard::parse(s).map_err(|e| e.to_string())
 }
 
 #[derive(Args, Debug, Clone)]
@@ -280,6 +324,10 @@ pub struct PlayArgs {
     /// Samples per pixel of `--mode trace` frames.
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub trace_spp: u32,
+    /// Ignore the compiled scene shipped in assets/compiled/ and run the
+    /// full pipeline (trace, infer, room light maps, encode) under --out.
+    #[arg(long)]
+    pub recompile: bool,
 }
 
 /// Where PEM playback reads maps and the knobs that trade speed for accuracy.
@@ -360,6 +408,7 @@ impl PlayArgs {
             out: self.out.clone(),
             device: device(&self.device, self.validate),
             size: self.size,
+            recompile: self.recompile,
         }
     }
 

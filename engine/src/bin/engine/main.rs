@@ -18,6 +18,7 @@ fn main() -> ExitCode {
         Some(Command::Eval(args)) => (cmd::eval::run(args), args.validate),
         Some(Command::Encode(args)) => (cmd::encode::run(args), false),
         Some(Command::CodecReport(args)) => (cmd::codec_report::run(args), args.validate),
+        Some(Command::Compile(args)) => (cmd::compile::run(args), args.validate),
     };
     let mut code = ExitCode::SUCCESS;
     match result {

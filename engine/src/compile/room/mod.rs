@@ -84,7 +84,10 @@ pub fn room_maps(ctx: &CompileContext) -> Result<RoomMaps> {
         };
         match store::load(&dir, &layout, &sight.charts, sight.object, &key) {
             Ok(map) => out.objects.push(map),
-            Err(why) => stale.push((sight, layout, why)),
+            Err(why) => match shipped_map(ctx, &layout, sight, &key) {
+                Some(map) => out.objects.push(map),
+                None => stale.push((sight, layout, why)),
+            },
         }
     }
     if !stale.is_empty() {
@@ -112,6 +115,30 @@ pub fn room_maps(ctx: &CompileContext) -> Result<RoomMaps> {
     }
     out.objects.sort_by_key(|m| m.object);
     Ok(out)
+}
+
+/// The key every light map of `ctx`'s scene carries when compiled today.
+pub fn expected_key(ctx: &CompileContext) -> Result<Key> {
+    let dirs = DataDirs::under(ctx.out, ctx.scene);
+    let req = ctx.request(&dirs, false);
+    Ok(maps_key(
+        ctx.scene,
+        &req.trace_settings()?,
+        &Rule::default(),
+        req.eps_f,
+    ))
+}
+
+/// `layout`'s light map from the shipped compiled scene, when its key
+/// matches (read only; a stale shipped map is compiled under --out).
+fn shipped_map(
+    ctx: &CompileContext,
+    layout: &ObjectLightmap,
+    sight: &inference::lightmap::ObjectSight,
+    key: &Key,
+) -> Option<ObjectRoomMap> {
+    let dir = room_dir(ctx.shipped.as_ref()?);
+    store::load(&dir, layout, &sight.charts, sight.object, key).ok()
 }
 
 /// What every light map of `scene` depends on: the scene (through the

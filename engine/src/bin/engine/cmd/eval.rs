@@ -11,6 +11,7 @@ pub fn run(args: &EvalArgs) -> Result<String> {
         out: args.data.clone(),
         device: device(&args.device, args.validate),
         size: args.size,
+        recompile: false,
     };
     let opts = EvalOptions {
         out: args.out.clone(),

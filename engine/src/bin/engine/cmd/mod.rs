@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod codec_report;
+pub mod compile;
 pub mod encode;
 pub mod eval;
 pub mod infer;

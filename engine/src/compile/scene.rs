@@ -1,0 +1,154 @@
+//! `engine compile`: everything the main job plays for a scene, compiled
+//! under the output folder without playing — whole, one shard of the
+//! samples for a farmed compile, or the merge that finishes a farmed
+//! compile (room light maps and the container from the shards' maps).
+
+use super::shard::Shard;
+use super::{CompileContext, map_source, missing_maps, room::room_maps, shipped};
+use crate::options::{Mode, PemOptions, RunPlace};
+use crate::util::files::claim_dir;
+use anyhow::{Result, bail};
+use inference::scene::Scene;
+use std::fmt::Write;
+use std::path::{Path, PathBuf};
+
+use std::time::Instant;
+
+/// Which part of the compile this process does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Part {
+    /// Everything missing: traces, maps, room light maps, container.
+    Whole,
+    /// The traces and maps of one shard's samples only.
+    Shard(Shard),
+    /// Room light maps and container from maps every shard has finished;
+    /// fails naming the samples still missing.
+    Merge,
+}
+
+/// Compiles `part` of `place`'s scene under its output folder; with
+/// `ship`, copies the compiled container and light maps there too.
+pub fn compile_scene(place: &RunPlace, part: Part, ship: Option<&Path>) -> Result<String> {
+    let scene = Scene::load(&place.scene)?;
+    if Mode::default_for(&scene) == Mode::Hybrid {
+        bail!(
+            "{}: a glass scene compiles its shells when played (`engine --scene {}`)",
+            scene.source.display(),
+            place.scene
+        );
+    }
+    let out = place
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
+    claim_dir(&out)?;
+    let ctx = CompileContext {
+        scene: &scene,
+        scene_arg: &place.scene,
+        out: &out,
+        size: place.size,
+        device: &place.device,
+        shipped: None,
+    };
+    let start = Instant::now();
+    let mut text = String::new();
+    if let Part::Shard(shard) = part {
+        let samples = shard.samples(scene.orbit.sample_count());
+        text += &super::infer_samples(&ctx, &samples)?;
+        writeln!(
+            text,
+            "shard {}/{}: {} samples compiled under {} in {:.1} s; when every shard is done, \
+             `engine compile --scene {} --merge --out {}` finishes the compile",
+            shard.index,
+            shard.count,
+            samples.len(),
+            out.display(),
+            start.elapsed().as_secs_f64(),
+            place.scene,
+            out.display()
+        )?;
+        return Ok(text);
+    }
+    if part == Part::Merge {
+        let missing = missing_maps(&ctx)?;
+        if !missing.is_empty() {
+            bail!(
+                "{}: {} samples have no fresh maps yet ({}): a shard is unfinished or its files \
+                 were not copied here",
+                out.display(),
+                missing.len(),
+                preview(&missing)
+            );
+        }
+    }
+    let room = room_maps(&ctx)?;
+    // The container holds every layer of every sample whatever the layers
+    // asked for (only a sphere EM would be read as EXR instead).
+    map_source(&ctx, &PemOptions::default(), &[])?;
+    writeln!(
+        text,
+        "{}: compiled under {} in {:.1} s ({} room light maps)",
+        scene.name,
+        out.display(),
+        start.elapsed().as_secs_f64(),
+        room.objects.len()
+    )?;
+    if let Some(dest) = ship {
+        for file in shipped::ship(&ctx, dest)? {
+            writeln!(text, "shipped {}", file.display())?;
+        }
+    }
+    Ok(text)
+}
+
+/// Checks every file shipped for `place`'s scene in `assets/compiled/`
+/// against the key it would be compiled with today, writing nothing:
+/// one `<file>: fresh` line each, or an error naming the stale ones and the
+/// command that regenerates them.
+pub fn check_shipped(place: &RunPlace) -> Result<String> {
+    let scene = Scene::load(&place.scene)?;
+    let Some(dir) = shipped::dir(&scene) else {
+        bail!(
+            "{}: nothing shipped for scene {}",
+            shipped::root().join(&scene.name).display(),
+            scene.name
+        );
+    };
+    let ctx = CompileContext {
+        scene: &scene,
+        scene_arg: &place.scene,
+        out: &dir,
+        size: place.size,
+        device: &place.device,
+        shipped: Some(dir.clone()),
+    };
+    let report = shipped::check(&ctx)?;
+    let stale: Vec<&str> = report
+        .iter()
+        .filter(|(_, fresh)| !fresh.is_empty() && fresh != "fresh")
+        .map(|(line, _)| line.as_str())
+        .collect();
+    let mut text = String::new();
+    for (line, fresh) in &report {
+        writeln!(text, "{line}: {fresh}")?;
+    }
+    if !stale.is_empty() {
+        bail!(
+            "{text}the shipped compiled scene no longer matches its inputs; regenerate it with \
+             `cargo run --release -p engine -- compile --scene {} --ship {}`",
+            place.scene,
+            dir.display()
+        );
+    }
+    Ok(text)
+}
+
+/// "3, 4, 5, … (17 in all)".
+fn preview(samples: &[u32]) -> String {
+    let head: Vec<String> = samples.iter().take(6).map(u32::to_string).collect();
+    if samples.len() > 6 {
+        format!("{}, … ({} in all)", head.join(", "), samples.len())
+    } else {
+        head.join(", ")
+    }
+}

@@ -1,0 +1,149 @@
+//! `engine compile`: a compile farmed over shards gives the same maps (every
+//! texel, bit for bit) and the same container (byte for byte) as one
+//! process; the merge refuses to finish while a shard's samples are
+//! missing; the shipped compiled scene still matches its inputs.
+
+mod common;
+
+use common::tiny_scene;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn compile(scene: &Path, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "compile",
+        "--scene",
+        scene.to_str().expect("utf-8"),
+        "--size",
+        "64x48",
+        "--out",
+        out.to_str().expect("utf-8"),
+        "--validate",
+    ];
+    args.extend_from_slice(extra);
+    Command::new(env!("CARGO_BIN_EXE_engine"))
+        .args(&args)
+        .output()
+        .expect("run engine")
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "stdout:\n{}\nstderr:\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+fn ok(o: Output) -> String {
+    let log = text(&o);
+    assert!(o.status.success(), "{log}");
+    assert!(log.contains("validation messages: 0"), "{log}");
+    log
+}
+
+/// Every inferred map under `out/infer`, as (relative path → every
+/// channel's texel bits). EXR chunk order may differ between files the
+/// exr crate compressed in parallel; the texels may not.
+fn maps(out: &Path) -> BTreeMap<PathBuf, Vec<(String, Vec<u32>)>> {
+    let mut found = BTreeMap::new();
+    let infer = out.join("infer");
+    for sample in std::fs::read_dir(&infer).expect("infer dir") {
+        let sample = sample.expect("entry").path();
+        if !sample.is_dir() {
+            continue;
+        }
+        for file in std::fs::read_dir(&sample).expect("sample dir") {
+            let file = file.expect("entry").path();
+            if file.extension().is_some_and(|e| e == "exr") {
+                found.insert(
+                    file.strip_prefix(out).expect("under out").to_path_buf(),
+                    texels(&file),
+                );
+            }
+        }
+    }
+    found
+}
+
+fn texels(file: &Path) -> Vec<(String, Vec<u32>)> {
+    let image = exr::prelude::read_all_flat_layers_from_file(file).expect("readable EXR");
+    let mut channels = Vec::new();
+    for (l, layer) in image.layer_data.iter().enumerate() {
+        for ch in &layer.channel_data.list {
+            let bits = ch.sample_data.values_as_f32().map(f32::to_bits).collect();
+            channels.push((format!("{l}.{}", ch.name), bits));
+        }
+    }
+    channels
+}
+
+#[test]
+fn a_sharded_compile_is_bit_identical_to_one_process() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = tiny_scene(dir.path());
+    // 12 samples: two warm chains (0–9, 10–11), one per shard.
+    let text_of_scene = std::fs::read_to_string(&scene).expect("scene");
+    std::fs::write(
+        &scene,
+        text_of_scene.replacen("samples = 3", "samples = 12", 1),
+    )
+    .expect("write scene");
+    let one = dir.path().join("one");
+    let farm = dir.path().join("farm");
+
+    ok(compile(&scene, &one, &[]));
+
+    // Shard 1 alone: the merge names what is missing and writes nothing.
+    let log = ok(compile(&scene, &farm, &["--shard", "1/2"]));
+    assert!(log.contains("shard 1/2: 2 samples"), "{log}");
+    let early = compile(&scene, &farm, &["--merge"]);
+    assert!(!early.status.success(), "{}", text(&early));
+    assert!(
+        text(&early).contains("10 samples have no fresh maps yet (0, 1, 2, 3, 4, 5, …"),
+        "{}",
+        text(&early)
+    );
+    assert!(!farm.join("teapot.ptxc").exists());
+
+    ok(compile(&scene, &farm, &["--shard", "0/2"]));
+    ok(compile(&scene, &farm, &["--merge"]));
+
+    let (a, b) = (maps(&one), maps(&farm));
+    assert_eq!(a.len(), 36, "12 samples × 3 maps: {:?}", a.keys());
+    assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
+    for (path, texels) in &a {
+        assert!(&b[path] == texels, "{} differs", path.display());
+    }
+    let container = |d: &Path| std::fs::read(d.join("teapot.ptxc")).expect("container");
+    assert!(container(&one) == container(&farm), "containers differ");
+}
+
+#[test]
+fn bad_shards_fail_before_any_work() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = tiny_scene(dir.path());
+    let out = dir.path().join("out");
+    for bad in [&["--shard", "2/2"][..], &["--shard", "1/2", "--merge"]] {
+        let o = compile(&scene, &out, bad);
+        assert!(!o.status.success(), "{bad:?}: {}", text(&o));
+    }
+    assert!(!out.join("trace").exists(), "no work was done");
+}
+
+/// The compiled scene shipped in `assets/compiled/` is played only while
+/// its keys match the inputs; this fails as soon as they no longer do (a
+/// scene, tracer, solve or codec change): regenerate it with
+/// `engine compile --scene teapot --ship assets/compiled/teapot`.
+#[test]
+fn the_shipped_compiled_scene_matches_its_inputs() {
+    let o = Command::new(env!("CARGO_BIN_EXE_engine"))
+        .args(["compile", "--scene", "teapot", "--check-shipped"])
+        .output()
+        .expect("run engine");
+    let log = text(&o);
+    assert!(o.status.success(), "{log}");
+    assert!(log.contains("teapot.ptxc: fresh"), "{log}");
+    assert!(log.contains("floor.light.exr: fresh"), "{log}");
+}
