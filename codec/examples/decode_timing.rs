@@ -12,7 +12,7 @@
 use std::time::Instant;
 
 use codec::synth::{SynthSpec, scene};
-use codec::{Container, DecodeCache, EncodeOptions, ParamGrid, Target, encode};
+use codec::{Container, DecodeCache, EncodeOptions, ParamGrid, Target, TextureInfo, encode};
 use half::f16;
 
 fn fnv(h: &mut u64, bytes: impl IntoIterator<Item = u8>) {
@@ -42,56 +42,130 @@ fn mean(v: &[f64]) -> f64 {
     v.iter().sum::<f64>() / v.len() as f64
 }
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// What the command line asks for.
+struct Args {
+    reps: usize,
+    hash: bool,
+    path: Option<String>,
+    only: Option<usize>,
+}
+
+fn parse_args() -> Result<Args, Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let mut reps = 1usize;
-    let mut hash = false;
-    let mut path = None;
-    let mut only = None;
+    let mut parsed = Args {
+        reps: 1,
+        hash: false,
+        path: None,
+        only: None,
+    };
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
-            "--reps" => reps = it.next().ok_or("--reps N")?.parse()?,
-            "--hash" => hash = true,
-            "--texture" => only = Some(it.next().ok_or("--texture I")?.parse::<usize>()?),
-            p => path = Some(p.to_string()),
+            "--reps" => parsed.reps = it.next().ok_or("--reps N")?.parse()?,
+            "--hash" => parsed.hash = true,
+            "--texture" => parsed.only = Some(it.next().ok_or("--texture I")?.parse::<usize>()?),
+            p => parsed.path = Some(p.to_string()),
         }
     }
-    let c = match &path {
+    Ok(parsed)
+}
+
+/// The container at `path`, or the benchmark's synthetic leaf EM encoded.
+fn open_or_synthesise(path: Option<&str>) -> Result<Container, Box<dyn std::error::Error>> {
+    Ok(match path {
         Some(p) => Container::open(p.as_ref())?,
         None => {
             let input = scene(&SynthSpec::cube(1, 1, ParamGrid::one_d(8), 256));
             let (bytes, _) = encode(&input, Target::Ratio(384.0), &EncodeOptions::default())?;
             Container::from_bytes(bytes)?
         }
-    };
+    })
+}
+
+/// One texture's decode times (wall and thread CPU, ms) over `reps` timed
+/// passes along the parameter path, after an untimed one.
+struct Timed {
+    wall: Vec<f64>,
+    cpu: Vec<f64>,
+    peak_images: usize,
+    peak_bytes: usize,
+}
+
+fn time_texture(
+    c: &Container,
+    t: &TextureInfo,
+    reps: usize,
+    out: &mut [f16],
+) -> codec::Result<Timed> {
+    let mut cache = DecodeCache::default();
+    let (mut times, mut cpu) = (Vec::new(), Vec::new());
+    let (mut peak_images, mut peak_bytes) = (0, 0);
+    for pass in 0..=reps {
+        for s1 in 0..t.grid.n1 {
+            for s0 in 0..t.grid.n0 {
+                let (start, c0) = (Instant::now(), cpu_ms());
+                cache.decode_leaf_all(c, t.id.object, t.id.layer, [s0, s1], out)?;
+                let ms = start.elapsed().as_secs_f64() * 1e3;
+                let c1 = cpu_ms();
+                cache.end_frame();
+                if pass > 0 {
+                    times.push(ms);
+                    cpu.push(c1 - c0);
+                }
+            }
+        }
+        peak_images = peak_images.max(cache.stats().resident_images);
+        peak_bytes = peak_bytes.max(cache.stats().resident_bytes);
+        cache.clear();
+    }
+    Ok(Timed {
+        wall: times,
+        cpu,
+        peak_images,
+        peak_bytes,
+    })
+}
+
+/// FNV hashes of every decoded texel of `t` along the parameter path, as
+/// f32 and as f16 (`out` is the f16 output buffer).
+fn hash_texture(c: &Container, t: &TextureInfo, out: &mut [f16]) -> codec::Result<(u64, u64)> {
+    let mut h32 = 0xcbf2_9ce4_8422_2325u64;
+    let mut h16 = h32;
+    let mut out32 = vec![0.0f32; out.len()];
+    let mut c32 = DecodeCache::default();
+    let mut c16 = DecodeCache::default();
+    for s1 in 0..t.grid.n1 {
+        for s0 in 0..t.grid.n0 {
+            let s = [s0, s1];
+            c32.decode_leaf_all(c, t.id.object, t.id.layer, s, &mut out32)?;
+            c16.decode_leaf_all(c, t.id.object, t.id.layer, s, out)?;
+            c32.end_frame();
+            c16.end_frame();
+            fnv(
+                &mut h32,
+                out32.iter().flat_map(|v| v.to_bits().to_le_bytes()),
+            );
+            fnv(&mut h16, out.iter().flat_map(|v| v.to_bits().to_le_bytes()));
+        }
+    }
+    Ok((h32, h16))
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args = parse_args()?;
+    let c = open_or_synthesise(args.path.as_deref())?;
     let (mut all, mut all_cpu) = (Vec::new(), Vec::new());
     for (ti, t) in c.textures().iter().enumerate() {
-        if only.is_some_and(|o| o != ti) {
+        if args.only.is_some_and(|o| o != ti) {
             continue;
         }
         let mut out = vec![f16::ZERO; t.layout.texels() * 4];
-        let mut cache = DecodeCache::default();
-        let (mut times, mut cpu) = (Vec::new(), Vec::new());
-        let (mut peak_images, mut peak_bytes) = (0, 0);
-        for pass in 0..=reps {
-            for s1 in 0..t.grid.n1 {
-                for s0 in 0..t.grid.n0 {
-                    let (start, c0) = (Instant::now(), cpu_ms());
-                    cache.decode_leaf_all(&c, t.id.object, t.id.layer, [s0, s1], &mut out)?;
-                    let ms = start.elapsed().as_secs_f64() * 1e3;
-                    let c1 = cpu_ms();
-                    cache.end_frame();
-                    if pass > 0 {
-                        times.push(ms);
-                        cpu.push(c1 - c0);
-                    }
-                }
-            }
-            peak_images = peak_images.max(cache.stats().resident_images);
-            peak_bytes = peak_bytes.max(cache.stats().resident_bytes);
-            cache.clear();
-        }
+        let Timed {
+            wall: mut times,
+            mut cpu,
+            peak_images,
+            peak_bytes,
+        } = time_texture(&c, t, args.reps, &mut out)?;
         all.extend_from_slice(&times);
         all_cpu.extend_from_slice(&cpu);
         let l = t.layout;
@@ -111,26 +185,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             peak_images,
             peak_bytes as f64 / 1e6
         );
-        if hash {
-            let mut h32 = 0xcbf2_9ce4_8422_2325u64;
-            let mut h16 = h32;
-            let mut out32 = vec![0.0f32; out.len()];
-            let mut c32 = DecodeCache::default();
-            let mut c16 = DecodeCache::default();
-            for s1 in 0..t.grid.n1 {
-                for s0 in 0..t.grid.n0 {
-                    let s = [s0, s1];
-                    c32.decode_leaf_all(&c, t.id.object, t.id.layer, s, &mut out32)?;
-                    c16.decode_leaf_all(&c, t.id.object, t.id.layer, s, &mut out)?;
-                    c32.end_frame();
-                    c16.end_frame();
-                    fnv(
-                        &mut h32,
-                        out32.iter().flat_map(|v| v.to_bits().to_le_bytes()),
-                    );
-                    fnv(&mut h16, out.iter().flat_map(|v| v.to_bits().to_le_bytes()));
-                }
-            }
+        if args.hash {
+            let (h32, h16) = hash_texture(&c, t, &mut out)?;
             print!("  hash f32 {h32:016x} f16 {h16:016x}");
         }
         println!();

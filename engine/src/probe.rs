@@ -218,19 +218,7 @@ impl VulkanProbe {
         layout: &TextureLayout,
         texels: &[[f32; 4]],
     ) -> GpuResult<Vec<[f32; 4]>> {
-        if texels.len() != layout.len() {
-            return Err(GpuError::Invalid(format!(
-                "probe texture: {} texels for a layout of {}",
-                texels.len(),
-                layout.len()
-            )));
-        }
-        let cube = matches!(geometry.lookup, Lookup::Cube(_));
-        if cube != (layout.faces() == 6) {
-            return Err(GpuError::Invalid(
-                "cube lookups need a cube layout and uv lookups a 2D one".into(),
-            ));
-        }
+        let cube = probe_is_cube(geometry, layout, texels)?;
         self.ensure_targets(geometry.width, geometry.height)?;
         self.ensure_mesh(geometry)?;
         self.upload_texture(layout, cube, texels)?;
@@ -296,6 +284,29 @@ impl VulkanProbe {
         let bytes = targets.readback.mapped()?;
         Ok(bytemuck::cast_slice::<u8, [f32; 4]>(&bytes[..texel_count * 16]).to_vec())
     }
+}
+
+/// Whether a probe render reads a cube map (else a 2D texture), after
+/// checking that `texels` fill `layout` and the lookups match its kind.
+fn probe_is_cube(
+    geometry: &ProbeGeometry,
+    layout: &TextureLayout,
+    texels: &[[f32; 4]],
+) -> GpuResult<bool> {
+    if texels.len() != layout.len() {
+        return Err(GpuError::Invalid(format!(
+            "probe texture: {} texels for a layout of {}",
+            texels.len(),
+            layout.len()
+        )));
+    }
+    let cube = matches!(geometry.lookup, Lookup::Cube(_));
+    if cube != (layout.faces() == 6) {
+        return Err(GpuError::Invalid(
+            "cube lookups need a cube layout and uv lookups a 2D one".into(),
+        ));
+    }
+    Ok(cube)
 }
 
 impl ProbeRenderer for VulkanProbe {

@@ -154,6 +154,123 @@ fn run_once(
     Ok((run, s.x))
 }
 
+/// The benchmark's system: A, its layout, b, and the neighbouring
+/// parameter sample's b (the same A, b off by ~1%).
+struct Problem<'a> {
+    a: &'a CsrMatrix,
+    layout: &'a TextureLayout,
+    b: &'a [f32],
+    b_next: &'a [f32],
+}
+
+/// The single-channel cases: name, form, eps_b, warm-started.
+const CASES: [(&str, Form, f32, bool); 5] = [
+    ("A", Form::A, 0.0, false),
+    ("NormalMatrix", Form::NormalMatrix, 0.0, false),
+    ("A warm", Form::A, 0.0, true),
+    ("NormalMatrix warm", Form::NormalMatrix, 0.0, true),
+    ("A eps_b=1/32", Form::A, 1.0 / 32.0, false),
+];
+
+/// Prints the problem's size and AᵀA's fill, and which form the K-switch picks.
+fn describe_problem(
+    a: &CsrMatrix,
+    layout: &TextureLayout,
+    built_since: Instant,
+) -> Result<(), Box<dyn Error>> {
+    println!(
+        "problem: n_s = {} rows, n_t = {} texels, nnz = {} ({:.2}/row), built in {:.2} s",
+        a.rows,
+        a.cols,
+        a.nnz(),
+        a.nnz() as f64 / a.rows as f64,
+        built_since.elapsed().as_secs_f64()
+    );
+    let ata = a.normal_matrix();
+    println!(
+        "AᵀA: nnz = {} ({:.2} per texel, {:.2}× nnz(A)); K-switch picks {:?}",
+        ata.nnz(),
+        ata.nnz() as f64 / a.cols as f64,
+        ata.nnz() as f64 / a.nnz() as f64,
+        Solver::new(a, layout, &SolveOptions::default())?.form()
+    );
+    Ok(())
+}
+
+/// One row of the table: the medians of `runs` solves of one case.
+fn time_case(
+    pool: &rayon::ThreadPool,
+    threads: usize,
+    p: &Problem,
+    (name, form, eps_b, warm): (&str, Form, f32, bool),
+    runs: usize,
+) -> Result<(), Box<dyn Error>> {
+    let options = SolveOptions {
+        force_form: Some(form),
+        eps_b,
+        tolerance: 1e-4,
+        max_iterations: 5000,
+        ..SolveOptions::default()
+    };
+    let mut rs = Vec::new();
+    for _ in 0..runs {
+        let r = pool.install(|| -> Result<Run, SolveError> {
+            if warm {
+                let (_, x_prev) = run_once(p.a, p.layout, &options, p.b, None)?;
+                Ok(run_once(p.a, p.layout, &options, p.b_next, Some(&x_prev))?.0)
+            } else {
+                Ok(run_once(p.a, p.layout, &options, p.b, None)?.0)
+            }
+        })?;
+        rs.push(r);
+    }
+    let m = |f: fn(&Run) -> f64| median(rs.iter().map(f).collect());
+    println!(
+        "{threads:>7} {name:<18} {:>8.3} {:>8.3} {:>12.2} {:>11} {:>13.2e}",
+        m(|r| r.setup),
+        m(|r| r.wall),
+        m(|r| r.cpu),
+        m(|r| r.iterations),
+        m(|r| r.residual)
+    );
+    Ok(())
+}
+
+/// RGB: three channels of one A through solve_channels (setup shared,
+/// channels in parallel); times are per channel.
+fn time_rgb(
+    pool: &rayon::ThreadPool,
+    threads: usize,
+    p: &Problem,
+    runs: usize,
+) -> Result<(), Box<dyn Error>> {
+    let options = SolveOptions {
+        tolerance: 1e-4,
+        max_iterations: 5000,
+        ..SolveOptions::default()
+    };
+    let greens: Vec<f32> = p.b.iter().map(|v| 0.8 * v).collect();
+    let bs: Vec<&[f32]> = vec![p.b, p.b_next, &greens];
+    let (mut wall, mut cpu) = (Vec::new(), Vec::new());
+    for _ in 0..runs {
+        let (t0, c0) = (Instant::now(), cpu_seconds());
+        let sols = pool.install(|| solve_channels(p.a, &bs, p.layout, None, &options))?;
+        wall.push(t0.elapsed().as_secs_f64() / 3.0);
+        cpu.push((cpu_seconds() - c0) / 3.0);
+        if sols.iter().any(|s| !s.converged) {
+            println!("  a channel did not converge");
+        }
+    }
+    println!(
+        "{threads:>7} {:<18} {:>8} {:>8.3} {:>12.2}   (per channel, setup included)",
+        "RGB solve_channels",
+        "-",
+        median(wall),
+        median(cpu)
+    );
+    Ok(())
+}
+
 fn main() -> Result<(), Box<dyn Error>> {
     let mut args = std::env::args().skip(1);
     let runs: usize = args
@@ -166,23 +283,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let layout = TextureLayout::full_chain(TextureShape::Cube { size });
     let t = Instant::now();
     let (a, b) = build_problem(&layout, size)?;
-    println!(
-        "problem: n_s = {} rows, n_t = {} texels, nnz = {} ({:.2}/row), built in {:.2} s",
-        a.rows,
-        a.cols,
-        a.nnz(),
-        a.nnz() as f64 / a.rows as f64,
-        t.elapsed().as_secs_f64()
-    );
-    let ata = a.normal_matrix();
-    println!(
-        "AᵀA: nnz = {} ({:.2} per texel, {:.2}× nnz(A)); K-switch picks {:?}",
-        ata.nnz(),
-        ata.nnz() as f64 / a.cols as f64,
-        ata.nnz() as f64 / a.nnz() as f64,
-        Solver::new(&a, &layout, &SolveOptions::default())?.form()
-    );
-    drop(ata);
+    describe_problem(&a, &layout, t)?;
     // The neighbouring parameter sample: the same A, b off by ~1%.
     let b_next: Vec<f32> = b
         .iter()
@@ -191,73 +292,20 @@ fn main() -> Result<(), Box<dyn Error>> {
         .collect();
     println!("runs = {runs}; medians; tolerance 1e-4, eps_f = 0.1");
     println!("threads case               setup_s  solve_s  solve_cpu_s  iterations  rel_residual");
-    let cases: [(&str, Form, f32, bool); 5] = [
-        ("A", Form::A, 0.0, false),
-        ("NormalMatrix", Form::NormalMatrix, 0.0, false),
-        ("A warm", Form::A, 0.0, true),
-        ("NormalMatrix warm", Form::NormalMatrix, 0.0, true),
-        ("A eps_b=1/32", Form::A, 1.0 / 32.0, false),
-    ];
+    let problem = Problem {
+        a: &a,
+        layout: &layout,
+        b: &b,
+        b_next: &b_next,
+    };
     for threads in [1, 2] {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()?;
-        for (name, form, eps_b, warm) in cases {
-            let options = SolveOptions {
-                force_form: Some(form),
-                eps_b,
-                tolerance: 1e-4,
-                max_iterations: 5000,
-                ..SolveOptions::default()
-            };
-            let mut rs = Vec::new();
-            for _ in 0..runs {
-                let r = pool.install(|| -> Result<Run, SolveError> {
-                    if warm {
-                        let (_, x_prev) = run_once(&a, &layout, &options, &b, None)?;
-                        Ok(run_once(&a, &layout, &options, &b_next, Some(&x_prev))?.0)
-                    } else {
-                        Ok(run_once(&a, &layout, &options, &b, None)?.0)
-                    }
-                })?;
-                rs.push(r);
-            }
-            let m = |f: fn(&Run) -> f64| median(rs.iter().map(f).collect());
-            println!(
-                "{threads:>7} {name:<18} {:>8.3} {:>8.3} {:>12.2} {:>11} {:>13.2e}",
-                m(|r| r.setup),
-                m(|r| r.wall),
-                m(|r| r.cpu),
-                m(|r| r.iterations),
-                m(|r| r.residual)
-            );
+        for case in CASES {
+            time_case(&pool, threads, &problem, case, runs)?;
         }
-        // RGB: three channels of one A through solve_channels (setup shared,
-        // channels in parallel); times are per channel.
-        let options = SolveOptions {
-            tolerance: 1e-4,
-            max_iterations: 5000,
-            ..SolveOptions::default()
-        };
-        let greens: Vec<f32> = b.iter().map(|v| 0.8 * v).collect();
-        let bs: Vec<&[f32]> = vec![&b, &b_next, &greens];
-        let (mut wall, mut cpu) = (Vec::new(), Vec::new());
-        for _ in 0..runs {
-            let (t0, c0) = (Instant::now(), cpu_seconds());
-            let sols = pool.install(|| solve_channels(&a, &bs, &layout, None, &options))?;
-            wall.push(t0.elapsed().as_secs_f64() / 3.0);
-            cpu.push((cpu_seconds() - c0) / 3.0);
-            if sols.iter().any(|s| !s.converged) {
-                println!("  a channel did not converge");
-            }
-        }
-        println!(
-            "{threads:>7} {:<18} {:>8} {:>8.3} {:>12.2}   (per channel, setup included)",
-            "RGB solve_channels",
-            "-",
-            median(wall),
-            median(cpu)
-        );
+        time_rgb(&pool, threads, &problem, runs)?;
     }
     Ok(())
 }

@@ -208,6 +208,31 @@ type Picked = (
 );
 
 fn pick_and_create(instance: &ash::Instance, options: &DeviceOptions) -> GpuResult<Picked> {
+    let (physical, properties, name) = pick_physical(instance, options)?;
+    let missing = |what: &str| GpuError::MissingFeature {
+        device: name.clone(),
+        what: what.into(),
+    };
+
+    // SAFETY: queries on a physical device of this instance.
+    let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
+    let queue_family = families
+        .iter()
+        .position(|f| {
+            f.queue_flags.contains(vk::QueueFlags::GRAPHICS) && f.timestamp_valid_bits > 0
+        })
+        .ok_or_else(|| missing("a graphics queue with timestamps"))? as u32;
+    require_features(instance, physical, missing)?;
+    let device = create_logical_device(instance, physical, queue_family)?;
+    Ok((physical, device, queue_family, properties, name))
+}
+
+/// The Vulkan 1.3 device named like `options.device_name`, or lavapipe
+/// (llvmpipe) when no name is given, or else the first 1.3 device.
+fn pick_physical(
+    instance: &ash::Instance,
+    options: &DeviceOptions,
+) -> GpuResult<(vk::PhysicalDevice, vk::PhysicalDeviceProperties, String)> {
     // SAFETY: enumeration on a valid instance.
     let physicals =
         unsafe { instance.enumerate_physical_devices() }.vk("vkEnumeratePhysicalDevices")?;
@@ -237,21 +262,16 @@ fn pick_and_create(instance: &ash::Instance, options: &DeviceOptions) -> GpuResu
             .or(candidates.first())
             .ok_or_else(|| GpuError::NoDevice(String::new()))?,
     };
-    let (physical, properties, name) = chosen.clone();
-    let missing = |what: &str| GpuError::MissingFeature {
-        device: name.clone(),
-        what: what.into(),
-    };
+    Ok(chosen.clone())
+}
 
-    // SAFETY: queries on a physical device of this instance.
-    let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
-    let queue_family = families
-        .iter()
-        .position(|f| {
-            f.queue_flags.contains(vk::QueueFlags::GRAPHICS) && f.timestamp_valid_bits > 0
-        })
-        .ok_or_else(|| missing("a graphics queue with timestamps"))? as u32;
-
+/// Fails, naming the first one missing, unless `physical` supports every
+/// feature the engine enables.
+fn require_features(
+    instance: &ash::Instance,
+    physical: vk::PhysicalDevice,
+    missing: impl Fn(&str) -> GpuError,
+) -> GpuResult<()> {
     let mut supported13 = vk::PhysicalDeviceVulkan13Features::default();
     let mut supported = vk::PhysicalDeviceFeatures2::default().push_next(&mut supported13);
     // SAFETY: the output chain borrows locals alive for the call.
@@ -272,7 +292,16 @@ fn pick_and_create(instance: &ash::Instance, options: &DeviceOptions) -> GpuResu
     if core.image_cube_array == 0 {
         return Err(missing("cube-map arrays (PEM slots)"));
     }
+    Ok(())
+}
 
+/// The logical device with one queue of `queue_family` and the features
+/// `require_features` checked.
+fn create_logical_device(
+    instance: &ash::Instance,
+    physical: vk::PhysicalDevice,
+    queue_family: u32,
+) -> GpuResult<ash::Device> {
     let priorities = [1.0];
     let queue_infos = [vk::DeviceQueueCreateInfo::default()
         .queue_family_index(queue_family)
@@ -288,7 +317,6 @@ fn pick_and_create(instance: &ash::Instance, options: &DeviceOptions) -> GpuResu
         .queue_create_infos(&queue_infos)
         .enabled_features(&features)
         .push_next(&mut features13);
-    // SAFETY: every feature enabled was checked as supported above.
-    let device = unsafe { instance.create_device(physical, &info, None) }.vk("vkCreateDevice")?;
-    Ok((physical, device, queue_family, properties, name))
+    // SAFETY: every feature enabled was checked as supported (require_features).
+    unsafe { instance.create_device(physical, &info, None) }.vk("vkCreateDevice")
 }

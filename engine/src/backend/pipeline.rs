@@ -318,47 +318,14 @@ unsafe fn create_graphics_pipeline(
     let multisample = vk::PipelineMultisampleStateCreateInfo::default()
         .rasterization_samples(vk::SampleCountFlags::TYPE_1);
     let depth = depth_stencil_state(desc);
-    let mut attachment = vk::PipelineColorBlendAttachmentState::default()
-        .color_write_mask(vk::ColorComponentFlags::RGBA);
-    if desc.blend_by_alpha {
-        attachment = attachment
-            .blend_enable(true)
-            .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
-            .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
-            .color_blend_op(vk::BlendOp::ADD)
-            .src_alpha_blend_factor(vk::BlendFactor::ZERO)
-            .dst_alpha_blend_factor(vk::BlendFactor::ONE)
-            .alpha_blend_op(vk::BlendOp::ADD);
-    }
-    let plain = vk::PipelineColorBlendAttachmentState::default()
-        .color_write_mask(vk::ColorComponentFlags::RGBA);
-    let blend_attachments: Vec<_> = (0..desc.color_formats.len())
-        .map(|i| if i == 0 { attachment } else { plain })
-        .collect();
+    let blend_attachments = color_blend_attachments(desc);
     let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
-    // Front face is dynamic: the same pipeline renders mirrored cube faces;
-    // so is the stencil reference: one pipeline marks or tests every value.
-    let mut dynamic_states = vec![
-        vk::DynamicState::VIEWPORT,
-        vk::DynamicState::SCISSOR,
-        vk::DynamicState::FRONT_FACE,
-    ];
-    if desc.stencil != StencilTest::Off {
-        dynamic_states.push(vk::DynamicState::STENCIL_REFERENCE);
-    }
+    let dynamic_states = dynamic_states(desc);
     let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-    let stencil_format = if matches!(
-        desc.depth_format,
-        vk::Format::D32_SFLOAT_S8_UINT | vk::Format::D24_UNORM_S8_UINT
-    ) {
-        desc.depth_format
-    } else {
-        vk::Format::UNDEFINED
-    };
     let mut rendering = vk::PipelineRenderingCreateInfo::default()
         .color_attachment_formats(desc.color_formats)
         .depth_attachment_format(desc.depth_format)
-        .stencil_attachment_format(stencil_format);
+        .stencil_attachment_format(stencil_format(desc.depth_format));
     let info = vk::GraphicsPipelineCreateInfo::default()
         .stages(&stages)
         .vertex_input_state(&vertex_input)
@@ -376,6 +343,56 @@ unsafe fn create_graphics_pipeline(
         .map(|p| p[0])
         .map_err(|(_, e)| e)
         .vk("vkCreateGraphicsPipelines")
+}
+
+/// One blend state per colour attachment: the first blended by alpha when
+/// `desc` asks for it, every other written as is.
+fn color_blend_attachments(desc: &PipelineDesc) -> Vec<vk::PipelineColorBlendAttachmentState> {
+    let mut attachment = vk::PipelineColorBlendAttachmentState::default()
+        .color_write_mask(vk::ColorComponentFlags::RGBA);
+    if desc.blend_by_alpha {
+        attachment = attachment
+            .blend_enable(true)
+            .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
+            .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+            .color_blend_op(vk::BlendOp::ADD)
+            .src_alpha_blend_factor(vk::BlendFactor::ZERO)
+            .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+            .alpha_blend_op(vk::BlendOp::ADD);
+    }
+    let plain = vk::PipelineColorBlendAttachmentState::default()
+        .color_write_mask(vk::ColorComponentFlags::RGBA);
+    (0..desc.color_formats.len())
+        .map(|i| if i == 0 { attachment } else { plain })
+        .collect()
+}
+
+/// The state set per draw rather than baked in. Front face is dynamic: the
+/// same pipeline renders mirrored cube faces; so is the stencil reference:
+/// one pipeline marks or tests every value.
+fn dynamic_states(desc: &PipelineDesc) -> Vec<vk::DynamicState> {
+    let mut dynamic_states = vec![
+        vk::DynamicState::VIEWPORT,
+        vk::DynamicState::SCISSOR,
+        vk::DynamicState::FRONT_FACE,
+    ];
+    if desc.stencil != StencilTest::Off {
+        dynamic_states.push(vk::DynamicState::STENCIL_REFERENCE);
+    }
+    dynamic_states
+}
+
+/// The stencil attachment format: the depth format when it has a stencil
+/// aspect, else none.
+fn stencil_format(depth_format: vk::Format) -> vk::Format {
+    if matches!(
+        depth_format,
+        vk::Format::D32_SFLOAT_S8_UINT | vk::Format::D24_UNORM_S8_UINT
+    ) {
+        depth_format
+    } else {
+        vk::Format::UNDEFINED
+    }
 }
 
 /// Depth and stencil state from `desc`.

@@ -6,7 +6,7 @@ use super::player::{PemKind, PemPlayer};
 use super::reflector::PemReflector;
 use super::samples::SampleBlend;
 use crate::backend::{GpuError, GpuResult};
-use crate::gpu_scene::GpuScene;
+use crate::gpu_scene::{GpuMesh, GpuScene};
 use crate::graph::Pass;
 use crate::passes::pem::{PemDraw, PemPass, Shading};
 use crate::passes::pem_deferred::{
@@ -37,38 +37,11 @@ impl PemPlayer {
             let Some(mesh) = gpu.meshes.get(r.object) else {
                 return Err(GpuError::Invalid(format!("{}: no GPU mesh", r.name)));
             };
-            let local_stream = if layered {
-                &r.texgen_local
-            } else {
-                &r.texgen_distant
-            };
             // One stencil mark per reflector: its composite draw shades every
             // pixel it covers once, whichever part the pixel belongs to.
             let stencil = ri as u32 + 1;
-            let draw = |first_index, index_count, local| GBufferDraw {
-                mesh,
-                indices: &r.indices,
-                first_index,
-                index_count,
-                texgen: (&r.texgen_distant, local_stream),
-                stencil,
-                local,
-            };
-            gdraws.push(draw(0, r.hull_index_count, false));
-            gdraws.push(draw(
-                r.hull_index_count,
-                r.index_count - r.hull_index_count,
-                layered,
-            ));
-            let Some(area) = screen_bounds(
-                view_proj,
-                r.bounds.0,
-                r.bounds.1,
-                extent.width,
-                extent.height,
-            )
-            .or(Some(full(extent)))
-            .filter(|a| a.extent.width > 0 && a.extent.height > 0) else {
+            gdraws.extend(gbuffer_draws(r, mesh, stencil, layered));
+            let Some(area) = composite_area(r, view_proj, extent) else {
                 continue;
             };
             let slot: Vec<f32> = slots[ri].iter().map(|&e| e as f32).collect();
@@ -196,6 +169,52 @@ impl PemPlayer {
             _ => vec![draw(Shading::SingleEm, s.single_set, 0, r.index_count)],
         })
     }
+}
+
+/// A reflector's two G-buffer draws: its hull triangles with the distant
+/// layer alone, then the rest with the local layer too when `layered`.
+fn gbuffer_draws<'a>(
+    r: &'a PemReflector,
+    mesh: &'a GpuMesh,
+    stencil: u32,
+    layered: bool,
+) -> [GBufferDraw<'a>; 2] {
+    let local_stream = if layered {
+        &r.texgen_local
+    } else {
+        &r.texgen_distant
+    };
+    let draw = |first_index, index_count, local| GBufferDraw {
+        mesh,
+        indices: &r.indices,
+        first_index,
+        index_count,
+        texgen: (&r.texgen_distant, local_stream),
+        stencil,
+        local,
+    };
+    [
+        draw(0, r.hull_index_count, false),
+        draw(
+            r.hull_index_count,
+            r.index_count - r.hull_index_count,
+            layered,
+        ),
+    ]
+}
+
+/// Where a reflector's composite draw shades: its screen bounds (the whole
+/// target when a corner of its bounds is behind the eye); None when empty.
+fn composite_area(r: &PemReflector, view_proj: Mat4, extent: vk::Extent2D) -> Option<vk::Rect2D> {
+    screen_bounds(
+        view_proj,
+        r.bounds.0,
+        r.bounds.1,
+        extent.width,
+        extent.height,
+    )
+    .or(Some(full(extent)))
+    .filter(|a| a.extent.width > 0 && a.extent.height > 0)
 }
 
 fn full(extent: vk::Extent2D) -> vk::Rect2D {

@@ -11,11 +11,13 @@ use crate::util::files::claim_dir;
 use anyhow::{Context, Result, bail};
 use inference::infer::Target;
 use inference::infer::maps::write_map;
+use inference::infer::stacked::StackedResult;
+use inference::key::Key;
 use inference::probe::{Lookup, ProbeGeometry};
-use inference::scene::{Material, Scene};
+use inference::scene::{Material, Object, Scene};
 use inference::solve::SolveOptions;
 use inference::solve::layout::TextureShape;
-use inference::trace::{Tracer, cache, camera};
+use inference::trace::{TraceSettings, Tracer, cache, camera};
 use serde::Serialize;
 
 #[derive(Serialize)]
@@ -68,32 +70,8 @@ pub struct DiffuseRequest {
 
 /// One texture for all `req.views`, stacked into one solve.
 pub fn infer_diffuse(scene: &Scene, req: &DiffuseRequest) -> Result<String> {
-    let object_name = req.object.as_str();
+    let object = checked_diffuse_object(scene, req)?;
     let args = &req.common;
-    let object = scene.object(object_name).with_context(|| {
-        format!(
-            "--diffuse {object_name}: no such object in {}",
-            scene.source.display()
-        )
-    })?;
-    if !matches!(
-        scene.materials.get(object.material),
-        Some(Material::Diffuse { .. })
-    ) {
-        bail!(
-            "--diffuse {object_name}: the object's material is not diffuse (expected a Lambertian object)"
-        );
-    }
-    let size = req.texture_size;
-    if size == 0 || !size.is_power_of_two() || size > 4096 {
-        bail!("--texture-size {size}: expected a power of two up to 4096");
-    }
-    if let Some(&k) = req.views.iter().find(|&&k| k >= scene.orbit.sample_count()) {
-        bail!(
-            "--views: sample {k} out of range 0..{} (orbit.samples × orbit.rings)",
-            scene.orbit.sample_count()
-        );
-    }
     let tracer = Tracer::new(scene)?;
     let (width, height) = args.size;
     let settings = args.trace_settings()?;
@@ -103,20 +81,9 @@ pub fn infer_diffuse(scene: &Scene, req: &DiffuseRequest) -> Result<String> {
     let device = crate::backend::create_device(&args.device)?;
     let mut probe = VulkanProbe::new(&device)?;
     let projection = camera::projection(scene, width, height);
-    let layer = format!("{object_name}.diffuse");
+    let layer = format!("{}.diffuse", req.object);
     let uvs = unique_uvs(&object.mesh);
-    let mut targets = Vec::new();
-    for &k in &req.views {
-        let stem = traced_stem(&args.trace_dir, k);
-        let eye = tracer.sample_eye(k)?;
-        let (layers, _) = traced_layers(&tracer, &scene_key, eye, &settings, &stem)?;
-        targets.push(target_pixels(
-            &layers,
-            &layer,
-            false,
-            width as usize * height as usize,
-        )?);
-    }
+    let targets = traced_targets(&tracer, &scene_key, &settings, req, &layer)?;
     let views: Vec<(ProbeGeometry, Target)> = req
         .views
         .iter()
@@ -146,8 +113,8 @@ pub fn infer_diffuse(scene: &Scene, req: &DiffuseRequest) -> Result<String> {
         ..SolveOptions::default()
     };
     let shape = TextureShape::Tex2D {
-        width: size,
-        height: size,
+        width: req.texture_size,
+        height: req.texture_size,
     };
     let result = inference::infer::stacked::infer_stacked(&mut probe, &views, shape, &options)
         .with_context(|| format!("stacked solve for {layer}"))?;
@@ -156,31 +123,99 @@ pub fn infer_diffuse(scene: &Scene, req: &DiffuseRequest) -> Result<String> {
         &result.layout,
         &result.map,
     )?;
-    let report = DiffuseReport {
-        object: object_name.into(),
-        views: req.views.clone(),
-        rows: result.rows,
-        probe_renders: result.probe_renders,
-        psnr_per_view_db: result
-            .psnr_per_view_db
-            .iter()
-            .map(|&v| finite_or_max(v))
-            .collect(),
-        cg_iterations: result.iterations.clone(),
-        solve_s: result.solve_time.as_secs_f64(),
-    };
+    let report = DiffuseReport::new(req, &result);
     crate::util::files::write_json(&out.join("diffuse_report.json"), &report)?;
-    Ok(format!(
-        "{layer}: {} views stacked, {} rows, {} probe renders, PSNR per view {:?} dB, solve {:.2} s ({:?} CG it.)\n",
-        req.views.len(),
-        report.rows,
-        report.probe_renders,
-        report
-            .psnr_per_view_db
-            .iter()
-            .map(|v| (v * 100.0).round() / 100.0)
-            .collect::<Vec<_>>(),
-        report.solve_s,
-        report.cg_iterations
-    ))
+    Ok(report.summary_line(&layer))
+}
+
+/// The object `req` names, checked before any file is touched: it exists
+/// and is diffuse, the texture size is a power of two up to 4096, every
+/// view is an orbit sample.
+fn checked_diffuse_object<'s>(scene: &'s Scene, req: &DiffuseRequest) -> Result<&'s Object> {
+    let object_name = req.object.as_str();
+    let object = scene.object(object_name).with_context(|| {
+        format!(
+            "--diffuse {object_name}: no such object in {}",
+            scene.source.display()
+        )
+    })?;
+    if !matches!(
+        scene.materials.get(object.material),
+        Some(Material::Diffuse { .. })
+    ) {
+        bail!(
+            "--diffuse {object_name}: the object's material is not diffuse (expected a Lambertian object)"
+        );
+    }
+    let size = req.texture_size;
+    if size == 0 || !size.is_power_of_two() || size > 4096 {
+        bail!("--texture-size {size}: expected a power of two up to 4096");
+    }
+    if let Some(&k) = req.views.iter().find(|&&k| k >= scene.orbit.sample_count()) {
+        bail!(
+            "--views: sample {k} out of range 0..{} (orbit.samples × orbit.rings)",
+            scene.orbit.sample_count()
+        );
+    }
+    Ok(object)
+}
+
+/// The traced pixels of `layer` in every view of `req` (traced first where
+/// missing or stale).
+fn traced_targets(
+    tracer: &Tracer,
+    scene_key: &Key,
+    settings: &TraceSettings,
+    req: &DiffuseRequest,
+    layer: &str,
+) -> Result<Vec<Vec<[f32; 4]>>> {
+    let args = &req.common;
+    let (width, height) = args.size;
+    let mut targets = Vec::new();
+    for &k in &req.views {
+        let stem = traced_stem(&args.trace_dir, k);
+        let eye = tracer.sample_eye(k)?;
+        let (layers, _) = traced_layers(tracer, scene_key, eye, settings, &stem)?;
+        targets.push(target_pixels(
+            &layers,
+            layer,
+            false,
+            width as usize * height as usize,
+        )?);
+    }
+    Ok(targets)
+}
+
+impl DiffuseReport {
+    fn new(req: &DiffuseRequest, result: &StackedResult) -> Self {
+        Self {
+            object: req.object.clone(),
+            views: req.views.clone(),
+            rows: result.rows,
+            probe_renders: result.probe_renders,
+            psnr_per_view_db: result
+                .psnr_per_view_db
+                .iter()
+                .map(|&v| finite_or_max(v))
+                .collect(),
+            cg_iterations: result.iterations.clone(),
+            solve_s: result.solve_time.as_secs_f64(),
+        }
+    }
+
+    /// The line `engine infer --diffuse` prints.
+    fn summary_line(&self, layer: &str) -> String {
+        format!(
+            "{layer}: {} views stacked, {} rows, {} probe renders, PSNR per view {:?} dB, solve {:.2} s ({:?} CG it.)\n",
+            self.views.len(),
+            self.rows,
+            self.probe_renders,
+            self.psnr_per_view_db
+                .iter()
+                .map(|v| (v * 100.0).round() / 100.0)
+                .collect::<Vec<_>>(),
+            self.solve_s,
+            self.cg_iterations
+        )
+    }
 }

@@ -129,27 +129,9 @@ impl<'a> SampleRun<'a> {
         let pixel_count = width as usize * height as usize;
         let name = job.name();
         let mesh = &job.object.mesh;
-        let pixels = match job.layer {
-            MapLayer::Distant | MapLayer::Local => {
-                target_pixels(layers, &name, job.layer == MapLayer::Local, pixel_count)?
-            }
-            MapLayer::Sphere => specular_pixels(layers, &job.object.name, pixel_count)?,
-            MapLayer::Ptm => composite_pixels(layers, &job.object.name, pixel_count)?,
-        };
-        let lookup = match job.geometry {
-            Some(g) => cube_lookup(&g, job.origin, eye, mesh),
-            None => Lookup::Uv(mesh.uvs.clone()),
-        };
+        let pixels = job_target_pixels(job, layers, pixel_count)?;
         let key = self.plan.key(trace_key, job);
-        let geometry = ProbeGeometry {
-            key: key.hash() ^ u64::from(k),
-            positions: mesh.positions.clone(),
-            indices: mesh.indices.clone(),
-            lookup,
-            view_proj: self.projection * self.plan.scene.orbit.view(eye),
-            width,
-            height,
-        };
+        let geometry = self.probe_geometry(k, eye, job, &key);
         let layout = job.layer.layout(job.resolution);
         let previous = self.warm_start(k, job, &layout)?;
         let target = Target {
@@ -199,6 +181,47 @@ impl<'a> SampleRun<'a> {
         }
         Ok((report, previous.is_some()))
     }
+
+    /// The probe renders' geometry of `job` at sample `k` seen from `eye`:
+    /// the object's mesh with its UVs or, for an EM, its per-vertex cube
+    /// lookups.
+    fn probe_geometry(&self, k: u32, eye: Vec3, job: &Job, key: &Key) -> ProbeGeometry {
+        let (width, height) = self.req.size;
+        let mesh = &job.object.mesh;
+        let lookup = match job.geometry {
+            Some(g) => cube_lookup(&g, job.origin, eye, mesh),
+            None => Lookup::Uv(mesh.uvs.clone()),
+        };
+        ProbeGeometry {
+            key: key.hash() ^ u64::from(k),
+            positions: mesh.positions.clone(),
+            indices: mesh.indices.clone(),
+            lookup,
+            view_proj: self.projection * self.plan.scene.orbit.view(eye),
+            width,
+            height,
+        }
+    }
+}
+
+/// The traced pixels `job`'s map must reproduce: its own layer (the local
+/// one premultiplied), the whole specular appearance for the sphere EM, or
+/// the composite for the PTM.
+fn job_target_pixels(
+    job: &Job,
+    layers: &[output::ExrLayer],
+    pixel_count: usize,
+) -> Result<Vec<[f32; 4]>> {
+    Ok(match job.layer {
+        MapLayer::Distant | MapLayer::Local => target_pixels(
+            layers,
+            &job.name(),
+            job.layer == MapLayer::Local,
+            pixel_count,
+        )?,
+        MapLayer::Sphere => specular_pixels(layers, &job.object.name, pixel_count)?,
+        MapLayer::Ptm => composite_pixels(layers, &job.object.name, pixel_count)?,
+    })
 }
 
 /// One printed line per map inferred.

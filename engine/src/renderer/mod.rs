@@ -1,24 +1,27 @@
 //! Owns everything a scene needs on the device and builds each frame as an
 //! explicit list of passes — only the passes the scene requires.
 
+mod frame_passes;
+mod readback;
+mod reflectors;
+
 use crate::backend::{Buffer, Device, GpuError, GpuResult, Image, ImageDesc};
 use crate::compile::room::RoomMaps;
 use crate::gpu_scene::GpuScene;
 use crate::graph::{Executor, Pass, PassTiming};
-use crate::passes::em_capture::{CubeTarget, EmCapturePass, MipPass};
-use crate::passes::mirror::{MirrorDraw, MirrorRenderer};
+use crate::passes::em_capture::{EmCapturePass, MipPass};
+use crate::passes::mirror::MirrorRenderer;
 use crate::passes::pem_deferred::GBuffer;
-use crate::passes::readback::ReadbackPass;
 use crate::passes::room::{RoomRenderer, RoomStyle};
 use crate::passes::room_maps::upload_room_maps;
-use crate::passes::target::{Target, area_of};
 use crate::pem::player::{PemPlayer, PemSettings};
 use crate::pem::samples::SampleBlend;
 use crate::pem::source::MapSource;
 use ash::vk;
+use frame_passes::{FrameParts, frame_passes};
 use glam::{Mat4, Vec3};
-use half::f16;
-use inference::scene::{Material, Scene};
+use inference::scene::Scene;
+use reflectors::{Reflector, static_em_reflectors};
 use std::time::Instant;
 
 pub const COLOR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
@@ -39,17 +42,6 @@ pub enum FrameMode {
     Pem,
     /// The lit room, glass by hybrid rendering (`crate::glass`).
     Hybrid,
-}
-
-/// A reflective object and the static environment map it samples.
-struct Reflector {
-    draw: MirrorDraw,
-    cube: CubeTarget,
-    /// World-space vertices, the input of CPU texgen every frame.
-    positions: Vec<Vec3>,
-    normals: Vec<Vec3>,
-    /// World-space bounds, for the mirror pass's render area.
-    bounds: (Vec3, Vec3),
 }
 
 /// Why a frame could not be drawn: the device (kept typed: device lost,
@@ -114,68 +106,11 @@ impl Renderer {
         }
         let mut executor = Executor::new(device)?;
         let gpu = GpuScene::upload(device, &mut executor, scene)?;
-        let room = RoomRenderer::new(
-            device,
-            scene,
-            &gpu,
-            RoomStyle::Lit,
-            COLOR_FORMAT,
-            DEPTH_FORMAT,
-        )?;
-        let bare = RoomRenderer::new(
-            device,
-            scene,
-            &gpu,
-            RoomStyle::Bare,
-            COLOR_FORMAT,
-            DEPTH_FORMAT,
-        )?;
+        let room = room_renderer(device, scene, &gpu, RoomStyle::Lit)?;
+        let bare = room_renderer(device, scene, &gpu, RoomStyle::Bare)?;
         let mirror = MirrorRenderer::new(device, &mut executor, COLOR_FORMAT, DEPTH_FORMAT)?;
-        let mut reflectors = Vec::new();
-        for (index, object) in scene.objects.iter().enumerate() {
-            let f0 = match scene.materials.get(object.material) {
-                Some(Material::Mirror { f0 }) | Some(Material::Glossy { f0, .. }) => *f0,
-                _ => continue,
-            };
-            let size = object
-                .em
-                .as_ref()
-                .map_or(DEFAULT_EM_RESOLUTION, |em| em.resolution);
-            let cube = CubeTarget::new(
-                device,
-                &format!("{} static EM", object.name),
-                size,
-                COLOR_FORMAT,
-                object.mesh.area_weighted_centroid(),
-            )?;
-            let draw = mirror.draw_for(index, object.mesh.positions.len(), f0, &cube.color)?;
-            reflectors.push(Reflector {
-                draw,
-                cube,
-                positions: object.mesh.positions.clone(),
-                normals: object.mesh.normals.clone(),
-                bounds: object.mesh.bounds(),
-            });
-        }
-        let color = Image::new(
-            device,
-            "frame colour",
-            ImageDesc::new_2d(COLOR_FORMAT, width, height)
-                .usage(vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC),
-        )?;
-        let depth = Image::new(
-            device,
-            "frame depth",
-            ImageDesc::new_2d(DEPTH_FORMAT, width, height)
-                .usage(vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT),
-        )?;
-        let readback = Buffer::new(
-            device,
-            "frame read-back",
-            u64::from(width) * u64::from(height) * 8,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            gpu_allocator::MemoryLocation::GpuToCpu,
-        )?;
+        let reflectors = static_em_reflectors(device, scene, &mirror)?;
+        let (color, depth, readback) = frame_images(device, width, height)?;
         let glass =
             crate::glass::GlassPlayer::for_scene(device, scene, (COLOR_FORMAT, DEPTH_FORMAT))?;
         // Shared with the tracer so traced and rasterised pixels line up exactly.
@@ -215,14 +150,7 @@ impl Renderer {
                 let (c, d) = (COLOR_FORMAT, DEPTH_FORMAT);
                 RoomRenderer::inferred(&self.device, scene, &self.gpu, uploaded, c, d)?
             }
-            None => RoomRenderer::new(
-                &self.device,
-                scene,
-                &self.gpu,
-                RoomStyle::Lit,
-                COLOR_FORMAT,
-                DEPTH_FORMAT,
-            )?,
+            None => room_renderer(&self.device, scene, &self.gpu, RoomStyle::Lit)?,
         };
         Ok(())
     }
@@ -307,85 +235,27 @@ impl Renderer {
         }
         let size = (self.width, self.height);
         crate::glass::prepare_frame(self.glass.as_mut(), mode, (eye, view_proj), size, &mut cpu)?;
-        let target = Target {
+        let blend = match mode {
+            FrameMode::Pem => Some(self.prepare_pem(eye, &mut cpu)?),
+            _ => None,
+        };
+        let parts = FrameParts {
+            device: &self.device,
+            gpu: &self.gpu,
+            room: &self.room,
+            bare: &self.bare,
+            mirror: &self.mirror,
+            reflectors: &self.reflectors,
+            pem: self.pem.as_ref(),
+            gbuffer: &self.gbuffer,
+            glass: self.glass.as_ref(),
             color: &self.color,
             depth: &self.depth,
-            level: 0,
-            layer: 0,
-            clear: true,
-            front_face: vk::FrontFace::COUNTER_CLOCKWISE,
-            area: None,
+            readback: &self.readback,
+            width: self.width,
+            height: self.height,
         };
-        let mut blend = None;
-        if mode == FrameMode::Pem {
-            let Some(pem) = self.pem.as_mut() else {
-                return Err(GpuError::Invalid("PEM frame without set_pem()".into()).into());
-            };
-            let b = pem.blend(eye);
-            let prepared = pem.prepare(eye, &b)?;
-            cpu.texgen_ms += prepared.texgen_ms;
-            cpu.decode_ms += prepared.decode_ms;
-            cpu.decoded_maps += prepared.decoded_maps;
-            cpu.prefetched_maps += prepared.prefetched_maps;
-            blend = Some(b);
-        }
-        let mut passes: Vec<Box<dyn Pass + '_>> = Vec::new();
-        match mode {
-            FrameMode::StaticEm | FrameMode::Pem | FrameMode::Hybrid => {
-                let upload = match (&self.pem, mode) {
-                    (Some(pem), FrameMode::Pem) => pem.upload_pass()?,
-                    _ => None,
-                };
-                if let Some(upload) = upload {
-                    passes.push(Box::new(upload));
-                }
-                passes.push(Box::new(
-                    self.room.pass("room", &self.gpu, target, view_proj),
-                ));
-                let later = Target {
-                    clear: false,
-                    ..target
-                };
-                if let (Some(pem), Some(b)) = (&self.pem, &blend) {
-                    passes.extend(pem.draw_passes(
-                        &self.gpu,
-                        &self.gbuffer,
-                        b,
-                        later,
-                        view_proj,
-                    )?);
-                } else if !self.reflectors.is_empty() {
-                    let area = area_of(
-                        view_proj,
-                        self.reflectors.iter().map(|r| r.bounds),
-                        self.width,
-                        self.height,
-                    );
-                    let later = Target { area, ..later };
-                    passes.push(Box::new(self.mirror.pass(
-                        &self.gpu,
-                        self.reflectors.iter().map(|r| &r.draw).collect(),
-                        self.reflectors.iter().map(|r| &r.cube.color).collect(),
-                        later,
-                        view_proj,
-                    )));
-                }
-                if let Some(g) = self.glass.as_ref().filter(|_| mode != FrameMode::Pem) {
-                    let area = area_of(view_proj, [g.bounds()], self.width, self.height);
-                    passes.push(Box::new(g.pass(Target { area, ..later }, view_proj)));
-                }
-            }
-            FrameMode::Bare => {
-                passes.push(Box::new(
-                    self.bare.pass("bare", &self.gpu, target, view_proj),
-                ));
-            }
-        }
-        passes.push(Box::new(ReadbackPass {
-            device: &self.device,
-            image: &self.color,
-            buffer: &self.readback,
-        }));
+        let passes = frame_passes(&parts, mode, blend.as_ref(), view_proj)?;
         let list: Vec<&dyn Pass> = passes.iter().map(|p| p.as_ref()).collect();
         let start = Instant::now();
         let timings = self.executor.run(&list)?;
@@ -394,6 +264,21 @@ impl Renderer {
             passes: timings,
             cpu,
         })
+    }
+
+    /// The samples a PEM frame from `eye` blends, their maps read into
+    /// staging; what that cost on the CPU is added to `cpu`.
+    fn prepare_pem(&mut self, eye: Vec3, cpu: &mut CpuTimes) -> Result<SampleBlend, RenderError> {
+        let Some(pem) = self.pem.as_mut() else {
+            return Err(GpuError::Invalid("PEM frame without set_pem()".into()).into());
+        };
+        let blend = pem.blend(eye);
+        let prepared = pem.prepare(eye, &blend)?;
+        cpu.texgen_ms += prepared.texgen_ms;
+        cpu.decode_ms += prepared.decode_ms;
+        cpu.decoded_maps += prepared.decoded_maps;
+        cpu.prefetched_maps += prepared.prefetched_maps;
+        Ok(blend)
     }
 
     /// Replaces the glass object's shell map (all levels, f16 RGBA in
@@ -426,82 +311,39 @@ impl Renderer {
         }
         Ok(())
     }
-
-    /// The static EM of the `index`-th reflector (scene order): its cube
-    /// size, its world-space EM origin and every texel of every MIP level as
-    /// linear RGBA f32, level-major, then face, then rows.
-    pub fn static_em(&mut self, index: usize) -> GpuResult<(u32, Vec3, Vec<[f32; 4]>)> {
-        let Some(r) = self.reflectors.get(index) else {
-            return Err(GpuError::Invalid(format!("no reflector {index}")));
-        };
-        let bytes = crate::backend::upload::image_bytes(&r.cube.color)?;
-        let buffer = Buffer::new(
-            &self.device,
-            "static EM read-back",
-            bytes,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            gpu_allocator::MemoryLocation::GpuToCpu,
-        )?;
-        let pass = ReadbackPass {
-            device: &self.device,
-            image: &r.cube.color,
-            buffer: &buffer,
-        };
-        self.executor.run(&[&pass])?;
-        let texels = rgba16f_to_f32(&buffer.mapped()?[..bytes as usize]);
-        Ok((r.cube.color.desc.width, r.cube.origin, texels))
-    }
-
-    /// Reflector pixels the last deferred PEM frame covered (counted on the
-    /// G-buffer read back: the cosine's clear value marks the rest).
-    pub fn covered_pixels(&mut self) -> GpuResult<u64> {
-        let image = &self.gbuffer.images[2];
-        let bytes = crate::backend::upload::image_bytes(image)?;
-        let buffer = Buffer::new(
-            &self.device,
-            "g-buffer read-back",
-            bytes,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            gpu_allocator::MemoryLocation::GpuToCpu,
-        )?;
-        let pass = ReadbackPass {
-            device: &self.device,
-            image,
-            buffer: &buffer,
-        };
-        self.executor.run(&[&pass])?;
-        let cos: &[f32] = bytemuck::cast_slice(&buffer.mapped()?[..bytes as usize]);
-        // Only the last G-buffer pass's area was cleared this frame.
-        let bounds = self.reflectors.iter().map(|r| r.bounds);
-        let full = vk::Rect2D {
-            offset: vk::Offset2D::default(),
-            extent: vk::Extent2D {
-                width: self.width,
-                height: self.height,
-            },
-        };
-        let a = area_of(self.last_view_proj, bounds, self.width, self.height).unwrap_or(full);
-        let (x0, y0) = (a.offset.x.max(0) as usize, a.offset.y.max(0) as usize);
-        let (x1, y1) = (x0 + a.extent.width as usize, y0 + a.extent.height as usize);
-        let w = self.width as usize;
-        Ok((y0..y1.min(self.height as usize))
-            .flat_map(|y| (x0..x1.min(w)).map(move |x| y * w + x))
-            .filter(|&i| cos[i] >= -1.5)
-            .count() as u64)
-    }
-
-    /// The last frame's pixels as linear RGBA f32, row-major from the top.
-    pub fn pixels(&self) -> GpuResult<Vec<[f32; 4]>> {
-        let bytes = self.readback.mapped()?;
-        let texels = (self.width * self.height) as usize;
-        Ok(rgba16f_to_f32(&bytes[..texels * 8]))
-    }
 }
 
-/// RGBA16F texels read back from the device as linear RGBA f32.
-fn rgba16f_to_f32(bytes: &[u8]) -> Vec<[f32; 4]> {
-    bytemuck::cast_slice::<u8, f16>(bytes)
-        .chunks_exact(4)
-        .map(|c| [c[0].to_f32(), c[1].to_f32(), c[2].to_f32(), c[3].to_f32()])
-        .collect()
+/// The room (lit or bare) drawn into the frame's formats.
+fn room_renderer(
+    device: &Device,
+    scene: &Scene,
+    gpu: &GpuScene,
+    style: RoomStyle,
+) -> GpuResult<RoomRenderer> {
+    RoomRenderer::new(device, scene, gpu, style, COLOR_FORMAT, DEPTH_FORMAT)
+}
+
+/// The frame's colour and depth attachments and the host-visible buffer its
+/// colour is read back into.
+fn frame_images(device: &Device, width: u32, height: u32) -> GpuResult<(Image, Image, Buffer)> {
+    let color = Image::new(
+        device,
+        "frame colour",
+        ImageDesc::new_2d(COLOR_FORMAT, width, height)
+            .usage(vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC),
+    )?;
+    let depth = Image::new(
+        device,
+        "frame depth",
+        ImageDesc::new_2d(DEPTH_FORMAT, width, height)
+            .usage(vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT),
+    )?;
+    let readback = Buffer::new(
+        device,
+        "frame read-back",
+        u64::from(width) * u64::from(height) * 8,
+        vk::BufferUsageFlags::TRANSFER_DST,
+        gpu_allocator::MemoryLocation::GpuToCpu,
+    )?;
+    Ok((color, depth, readback))
 }

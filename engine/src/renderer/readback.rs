@@ -1,0 +1,90 @@
+//! Reading the device's images back to the CPU: the last frame, a
+//! reflector's static EM, and the pixels the last deferred PEM frame covered.
+
+use super::Renderer;
+use crate::backend::{Buffer, GpuError, GpuResult};
+use crate::passes::readback::ReadbackPass;
+use crate::passes::target::area_of;
+use ash::vk;
+use glam::Vec3;
+use half::f16;
+
+impl Renderer {
+    /// The static EM of the `index`-th reflector (scene order): its cube
+    /// size, its world-space EM origin and every texel of every MIP level as
+    /// linear RGBA f32, level-major, then face, then rows.
+    pub fn static_em(&mut self, index: usize) -> GpuResult<(u32, Vec3, Vec<[f32; 4]>)> {
+        let Some(r) = self.reflectors.get(index) else {
+            return Err(GpuError::Invalid(format!("no reflector {index}")));
+        };
+        let bytes = crate::backend::upload::image_bytes(&r.cube.color)?;
+        let buffer = Buffer::new(
+            &self.device,
+            "static EM read-back",
+            bytes,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            gpu_allocator::MemoryLocation::GpuToCpu,
+        )?;
+        let pass = ReadbackPass {
+            device: &self.device,
+            image: &r.cube.color,
+            buffer: &buffer,
+        };
+        self.executor.run(&[&pass])?;
+        let texels = rgba16f_to_f32(&buffer.mapped()?[..bytes as usize]);
+        Ok((r.cube.color.desc.width, r.cube.origin, texels))
+    }
+
+    /// Reflector pixels the last deferred PEM frame covered (counted on the
+    /// G-buffer read back: the cosine's clear value marks the rest).
+    pub fn covered_pixels(&mut self) -> GpuResult<u64> {
+        let image = &self.gbuffer.images[2];
+        let bytes = crate::backend::upload::image_bytes(image)?;
+        let buffer = Buffer::new(
+            &self.device,
+            "g-buffer read-back",
+            bytes,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            gpu_allocator::MemoryLocation::GpuToCpu,
+        )?;
+        let pass = ReadbackPass {
+            device: &self.device,
+            image,
+            buffer: &buffer,
+        };
+        self.executor.run(&[&pass])?;
+        let cos: &[f32] = bytemuck::cast_slice(&buffer.mapped()?[..bytes as usize]);
+        // Only the last G-buffer pass's area was cleared this frame.
+        let bounds = self.reflectors.iter().map(|r| r.bounds);
+        let full = vk::Rect2D {
+            offset: vk::Offset2D::default(),
+            extent: vk::Extent2D {
+                width: self.width,
+                height: self.height,
+            },
+        };
+        let a = area_of(self.last_view_proj, bounds, self.width, self.height).unwrap_or(full);
+        let (x0, y0) = (a.offset.x.max(0) as usize, a.offset.y.max(0) as usize);
+        let (x1, y1) = (x0 + a.extent.width as usize, y0 + a.extent.height as usize);
+        let w = self.width as usize;
+        Ok((y0..y1.min(self.height as usize))
+            .flat_map(|y| (x0..x1.min(w)).map(move |x| y * w + x))
+            .filter(|&i| cos[i] >= -1.5)
+            .count() as u64)
+    }
+
+    /// The last frame's pixels as linear RGBA f32, row-major from the top.
+    pub fn pixels(&self) -> GpuResult<Vec<[f32; 4]>> {
+        let bytes = self.readback.mapped()?;
+        let texels = (self.width * self.height) as usize;
+        Ok(rgba16f_to_f32(&bytes[..texels * 8]))
+    }
+}
+
+/// RGBA16F texels read back from the device as linear RGBA f32.
+fn rgba16f_to_f32(bytes: &[u8]) -> Vec<[f32; 4]> {
+    bytemuck::cast_slice::<u8, f16>(bytes)
+        .chunks_exact(4)
+        .map(|c| [c[0].to_f32(), c[1].to_f32(), c[2].to_f32(), c[3].to_f32()])
+        .collect()
+}
