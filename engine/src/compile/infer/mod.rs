@@ -201,13 +201,12 @@ pub fn infer(scene: &Scene, req: &InferRequest) -> Result<String> {
         req.samples.len() * plan.jobs.len() - todo.iter().map(|t| t.1.len()).sum::<usize>();
     let device = create_device(&req.device)?;
     let mut run = sample::SampleRun::new(&plan, req, &device, Tracer::new(scene)?)?;
-    let bar = indicatif::ProgressBar::new(todo.iter().map(|t| t.1.len() as u64).sum())
-        .with_style(
-            indicatif::ProgressStyle::with_template(
-                "infer [{bar:30}] {pos}/{len} maps {elapsed}, about {eta} left: {msg}",
-            )
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
+    let bar = indicatif::ProgressBar::new(todo.iter().map(|t| t.1.len() as u64).sum()).with_style(
+        indicatif::ProgressStyle::with_template(
+            "infer [{bar:30}] {pos}/{len} maps {elapsed}, about {eta} left: {msg}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
     let mut text = String::new();
     let mut reports = Vec::new();
     for (k, jobs) in &todo {
