@@ -65,6 +65,7 @@ fn inferred_room_holds_the_traced_light_and_beats_the_analytic_room() {
         out: &out,
         size: SIZE,
         device: &options,
+        shipped: None,
     };
     let maps = room_maps(&ctx).expect("room maps");
     assert!(maps.compile_s > 0.0);

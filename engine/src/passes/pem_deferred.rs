@@ -6,7 +6,7 @@
 //! frame's cost no longer grows with the 2×2-quad overdraw of small
 //! triangles times the number of samples blended.
 
-use super::target::{Target, has_stencil};
+use super::target::{Target, render_into, union};
 use crate::backend::{
     Buffer, DepthTest, Device, GpuResult, Image, ImageDesc, Pipeline, PipelineDesc, StencilTest,
 };
@@ -238,7 +238,12 @@ impl Pass for CompositePass<'_> {
         a
     }
     fn record(&self, cmd: vk::CommandBuffer) -> GpuResult<()> {
-        let union = self.draws.iter().map(|d| d.area).reduce(union_of);
+        let union = self
+            .draws
+            .iter()
+            .map(|d| Some(d.area))
+            .reduce(union)
+            .flatten();
         let attachments = Attachments {
             colors: &[self.target.color],
             load: ColorLoad::Keep,
@@ -264,21 +269,6 @@ impl Pass for CompositePass<'_> {
             }
             Ok(())
         })
-    }
-}
-
-/// The smallest rectangle holding both.
-fn union_of(a: vk::Rect2D, b: vk::Rect2D) -> vk::Rect2D {
-    let x0 = a.offset.x.min(b.offset.x);
-    let y0 = a.offset.y.min(b.offset.y);
-    let x1 = (a.offset.x + a.extent.width as i32).max(b.offset.x + b.extent.width as i32);
-    let y1 = (a.offset.y + a.extent.height as i32).max(b.offset.y + b.extent.height as i32);
-    vk::Rect2D {
-        offset: vk::Offset2D { x: x0, y: y0 },
-        extent: vk::Extent2D {
-            width: (x1 - x0) as u32,
-            height: (y1 - y0) as u32,
-        },
     }
 }
 
@@ -347,40 +337,17 @@ impl Attachments<'_> {
             .load_op(vk::AttachmentLoadOp::LOAD)
             .store_op(store);
         let (width, height) = self.depth.desc.mip_extent(0);
-        let full = vk::Rect2D {
-            offset: vk::Offset2D::default(),
-            extent: vk::Extent2D { width, height },
-        };
-        let area = self.area.unwrap_or(full);
-        let mut info = vk::RenderingInfo::default()
-            .render_area(area)
-            .layer_count(1)
-            .color_attachments(&colors)
-            .depth_attachment(&depth);
-        if has_stencil(self.depth) {
-            info = info.stencil_attachment(&depth);
-        }
-        let viewport = vk::Viewport {
-            x: 0.0,
-            y: 0.0,
-            width: width as f32,
-            height: height as f32,
-            min_depth: 0.0,
-            max_depth: 1.0,
-        };
-        // SAFETY: the executor moved every attachment to the layout named
-        // here (the pass declares them); the views are alive.
-        unsafe {
-            let d = &device.device;
-            d.cmd_begin_rendering(cmd, &info);
-            d.cmd_set_viewport(cmd, 0, &[viewport]);
-            d.cmd_set_scissor(cmd, 0, &[area]);
-            d.cmd_set_front_face(cmd, vk::FrontFace::COUNTER_CLOCKWISE);
-        }
-        let drawn = draw();
-        // SAFETY: matches cmd_begin_rendering above.
-        unsafe { device.device.cmd_end_rendering(cmd) };
-        drawn
+        render_into(
+            device,
+            cmd,
+            &colors,
+            &depth,
+            self.depth,
+            vk::Extent2D { width, height },
+            self.area,
+            vk::FrontFace::COUNTER_CLOCKWISE,
+            draw,
+        )
     }
 }
 

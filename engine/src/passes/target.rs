@@ -73,40 +73,67 @@ impl<'a> Target<'a> {
                     stencil: 0,
                 },
             });
-        let extent = self.extent();
-        let area = self.area.unwrap_or(vk::Rect2D {
-            offset: vk::Offset2D::default(),
-            extent,
-        });
-        let mut info = vk::RenderingInfo::default()
-            .render_area(area)
-            .layer_count(1)
-            .color_attachments(&color)
-            .depth_attachment(&depth);
-        if has_stencil(self.depth) {
-            info = info.stencil_attachment(&depth);
-        }
-        let viewport = vk::Viewport {
-            x: 0.0,
-            y: 0.0,
-            width: extent.width as f32,
-            height: extent.height as f32,
-            min_depth: 0.0,
-            max_depth: 1.0,
-        };
-        // SAFETY: the executor transitioned both attachments to the layouts
-        // named here (the pass declares them as targets); views are alive.
-        unsafe {
-            device.device.cmd_begin_rendering(cmd, &info);
-            device.device.cmd_set_viewport(cmd, 0, &[viewport]);
-            device.device.cmd_set_scissor(cmd, 0, &[area]);
-            device.device.cmd_set_front_face(cmd, self.front_face);
-        }
-        let drawn = draw();
-        // SAFETY: matches cmd_begin_rendering above.
-        unsafe { device.device.cmd_end_rendering(cmd) };
-        drawn
+        render_into(
+            device,
+            cmd,
+            &color,
+            &depth,
+            self.depth,
+            self.extent(),
+            self.area,
+            self.front_face,
+            draw,
+        )
     }
+}
+
+/// Begins dynamic rendering into `colors` and `depth` (bound as the
+/// stencil too when `depth_image` has one) over `area` (None: the whole
+/// `extent`) with a viewport over the whole extent, runs `draw`, ends.
+#[allow(clippy::too_many_arguments)]
+pub fn render_into(
+    device: &Device,
+    cmd: vk::CommandBuffer,
+    colors: &[vk::RenderingAttachmentInfo],
+    depth: &vk::RenderingAttachmentInfo,
+    depth_image: &Image,
+    extent: vk::Extent2D,
+    area: Option<vk::Rect2D>,
+    front_face: vk::FrontFace,
+    draw: impl FnOnce() -> GpuResult<()>,
+) -> GpuResult<()> {
+    let area = area.unwrap_or(vk::Rect2D {
+        offset: vk::Offset2D::default(),
+        extent,
+    });
+    let mut info = vk::RenderingInfo::default()
+        .render_area(area)
+        .layer_count(1)
+        .color_attachments(colors)
+        .depth_attachment(depth);
+    if has_stencil(depth_image) {
+        info = info.stencil_attachment(depth);
+    }
+    let viewport = vk::Viewport {
+        x: 0.0,
+        y: 0.0,
+        width: extent.width as f32,
+        height: extent.height as f32,
+        min_depth: 0.0,
+        max_depth: 1.0,
+    };
+    // SAFETY: the executor transitioned every attachment to the layout its
+    // info names (the pass declares them as targets); the views are alive.
+    unsafe {
+        device.device.cmd_begin_rendering(cmd, &info);
+        device.device.cmd_set_viewport(cmd, 0, &[viewport]);
+        device.device.cmd_set_scissor(cmd, 0, &[area]);
+        device.device.cmd_set_front_face(cmd, front_face);
+    }
+    let drawn = draw();
+    // SAFETY: matches cmd_begin_rendering above.
+    unsafe { device.device.cmd_end_rendering(cmd) };
+    drawn
 }
 
 /// Whether `image` has a stencil aspect (then it is bound as both).
