@@ -17,8 +17,10 @@ use std::path::{Path, PathBuf};
 
 /// Where the engine's shipped compiled scenes live in the source tree.
 pub fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
+    let engine = Path::new(env!("CARGO_MANIFEST_DIR"));
+    engine
+        .parent()
+        .unwrap_or(engine)
         .join("assets")
         .join("compiled")
 }
@@ -60,6 +62,7 @@ pub fn ship(ctx: &CompileContext, dest: &Path) -> Result<Vec<PathBuf>> {
     if !container.is_file() {
         bail!("{}: no compiled container to ship", container.display());
     }
+    crate::util::files::claim_dir(dest)?;
     let mut written = Vec::new();
     for rel in files(ctx.out)? {
         let (from, to) = (ctx.out.join(&rel), dest.join(&rel));
