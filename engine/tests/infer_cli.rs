@@ -10,6 +10,53 @@ fn engine(args: &[&str]) -> Output {
         .expect("run engine")
 }
 
+/// A one-sample report: probe renders, the A-vs-render check, the three
+/// layers in order with finite PSNRs, and least squares beating forward
+/// mapping on the distant layer beside its static-EM baseline.
+fn assert_sample_report(report: &serde_json::Value) {
+    assert!(report["probe_renders"].as_u64().is_some_and(|n| n > 2));
+    assert!(
+        report["a_vs_render_psnr_db"]
+            .as_f64()
+            .is_some_and(|v| v >= 140.0),
+        "{report}"
+    );
+    assert!(report["solve_s"].as_f64().is_some_and(|v| v >= 0.0));
+    let layers = report["layers"].as_array().expect("layers");
+    let names: Vec<&str> = layers.iter().filter_map(|l| l["name"].as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "teapot.specular_distant",
+            "teapot.specular_local",
+            "teapot.ptm"
+        ]
+    );
+    for l in layers {
+        let ls = l["psnr_db"]["least_squares"].as_f64().expect("LS PSNR");
+        let fm = l["psnr_db"]["forward_mapping"].as_f64().expect("FM PSNR");
+        assert!(ls.is_finite() && fm.is_finite() && ls > 5.0, "{l}");
+    }
+    // Distant layer: least squares must beat forward mapping (the thesis's
+    // claim); the static-EM baseline is reported beside them.
+    let distant = &layers[0];
+    assert!(
+        distant["psnr_db"]["static_em"]
+            .as_f64()
+            .is_some_and(f64::is_finite),
+        "{distant}"
+    );
+    assert!(
+        layers[1]["psnr_db"].get("static_em").is_none(),
+        "static EM is a distant-layer baseline"
+    );
+    assert!(
+        distant["psnr_db"]["least_squares"].as_f64()
+            > distant["psnr_db"]["forward_mapping"].as_f64(),
+        "{distant}"
+    );
+}
+
 #[test]
 fn infers_em_layers_and_ptm_of_a_sample_and_reports() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -62,47 +109,7 @@ fn infers_em_layers_and_ptm_of_a_sample_and_reports() {
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("report.json")).expect("report.json"))
             .expect("JSON");
-    assert!(report["probe_renders"].as_u64().is_some_and(|n| n > 2));
-    assert!(
-        report["a_vs_render_psnr_db"]
-            .as_f64()
-            .is_some_and(|v| v >= 140.0),
-        "{report}"
-    );
-    assert!(report["solve_s"].as_f64().is_some_and(|v| v >= 0.0));
-    let layers = report["layers"].as_array().expect("layers");
-    let names: Vec<&str> = layers.iter().filter_map(|l| l["name"].as_str()).collect();
-    assert_eq!(
-        names,
-        [
-            "teapot.specular_distant",
-            "teapot.specular_local",
-            "teapot.ptm"
-        ]
-    );
-    for l in layers {
-        let ls = l["psnr_db"]["least_squares"].as_f64().expect("LS PSNR");
-        let fm = l["psnr_db"]["forward_mapping"].as_f64().expect("FM PSNR");
-        assert!(ls.is_finite() && fm.is_finite() && ls > 5.0, "{l}");
-    }
-    // Distant layer: least squares must beat forward mapping (the thesis's
-    // claim); the static-EM baseline is reported beside them.
-    let distant = &layers[0];
-    assert!(
-        distant["psnr_db"]["static_em"]
-            .as_f64()
-            .is_some_and(f64::is_finite),
-        "{distant}"
-    );
-    assert!(
-        layers[1]["psnr_db"].get("static_em").is_none(),
-        "static EM is a distant-layer baseline"
-    );
-    assert!(
-        distant["psnr_db"]["least_squares"].as_f64()
-            > distant["psnr_db"]["forward_mapping"].as_f64(),
-        "{distant}"
-    );
+    assert_sample_report(&report);
 }
 
 /// The teapot scene with only `samples` orbit samples, written into `dir`.
@@ -139,68 +146,20 @@ fn layer_names(report: &serde_json::Value) -> Vec<String> {
         .collect()
 }
 
-#[test]
-fn sphere_em_is_added_to_an_inferred_pem_without_redoing_its_maps() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let scene = small_scene(dir.path(), 2);
-    let out = dir.path().join("infer");
-    let traces = dir.path().join("trace");
-    let base = [
-        "infer",
-        "--scene",
-        &scene,
-        "--size",
-        "48x36",
-        "--em-size",
-        "8",
-        "--spp",
-        "2",
-        "--out",
-        out.to_str().expect("utf-8"),
-        "--trace-dir",
-        traces.to_str().expect("utf-8"),
-    ];
-    let run = |extra: &[&str]| {
-        let o = engine(&[&base[..], extra].concat());
-        let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
-        let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
-        assert!(o.status.success(), "{stderr}\n{stdout}");
-        (stdout, stderr)
-    };
-    let (text, _) = run(&["--all"]);
-    assert!(!text.contains("specular_sphere"), "{text}");
+/// The keys of the distant, local and PTM maps of samples 0 and 1.
+fn map_keys(out: &std::path::Path) -> Vec<String> {
     let key = |k: u32, name: &str| {
         std::fs::read_to_string(out.join(format!("sample_{k:04}/teapot.{name}.exr.key")))
             .expect("key")
     };
-    let keys: Vec<String> = ["specular_distant", "specular_local", "ptm"]
+    ["specular_distant", "specular_local", "ptm"]
         .iter()
         .flat_map(|n| [key(0, n), key(1, n)])
-        .collect();
+        .collect()
+}
 
-    // Adding the sphere EM infers it alone: the other maps keep their keys
-    // and are skipped, and say so before any work.
-    let (text, stderr) = run(&["--all", "--sphere"]);
-    assert!(
-        stderr.contains("teapot.specular_distant 2/0")
-            && stderr.contains("teapot.specular_sphere 0/2"),
-        "{stderr}"
-    );
-    assert!(text.contains("6 maps already inferred"), "{text}");
-    let inferred: Vec<&str> = text.lines().filter(|l| l.starts_with("sample")).collect();
-    assert_eq!(inferred.len(), 2, "{text}");
-    assert!(
-        inferred
-            .iter()
-            .all(|l| l.contains("teapot.specular_sphere")),
-        "{text}"
-    );
-    let after: Vec<String> = ["specular_distant", "specular_local", "ptm"]
-        .iter()
-        .flat_map(|n| [key(0, n), key(1, n)])
-        .collect();
-    assert_eq!(keys, after);
-    // Each sample's report gains the sphere EM and keeps the other layers.
+/// Each sample's report gains the sphere EM and keeps the other layers.
+fn assert_sphere_in_sample_reports(out: &std::path::Path) {
     for k in 0..2 {
         let sample = out.join(format!("sample_{k:04}"));
         assert!(sample.join("teapot.specular_sphere.exr").is_file());
@@ -232,7 +191,10 @@ fn sphere_em_is_added_to_an_inferred_pem_without_redoing_its_maps() {
             .sum();
         assert_eq!(report["probe_renders"].as_u64(), Some(renders), "{report}");
     }
-    // The summary has the sphere EM beside the others, with its baselines.
+}
+
+/// The summary has the sphere EM beside the others, with its baselines.
+fn assert_sphere_in_summary(out: &std::path::Path, text: &str) {
     assert!(
         text.contains("teapot.specular_sphere") && text.contains("2 samples: LS"),
         "{text}"
@@ -254,6 +216,66 @@ fn sphere_em_is_added_to_an_inferred_pem_without_redoing_its_maps() {
         summary["teapot.specular_distant"]["samples"].as_u64(),
         Some(2)
     );
+}
+
+/// The run that adds the sphere EM: the other 6 maps are skipped, said
+/// before any work, and only the sphere EM of each sample is inferred.
+fn assert_only_the_sphere_is_inferred(text: &str, stderr: &str) {
+    assert!(
+        stderr.contains("teapot.specular_distant 2/0")
+            && stderr.contains("teapot.specular_sphere 0/2"),
+        "{stderr}"
+    );
+    assert!(text.contains("6 maps already inferred"), "{text}");
+    let inferred: Vec<&str> = text.lines().filter(|l| l.starts_with("sample")).collect();
+    assert_eq!(inferred.len(), 2, "{text}");
+    assert!(
+        inferred
+            .iter()
+            .all(|l| l.contains("teapot.specular_sphere")),
+        "{text}"
+    );
+}
+
+#[test]
+fn sphere_em_is_added_to_an_inferred_pem_without_redoing_its_maps() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = small_scene(dir.path(), 2);
+    let out = dir.path().join("infer");
+    let traces = dir.path().join("trace");
+    let base = [
+        "infer",
+        "--scene",
+        &scene,
+        "--size",
+        "48x36",
+        "--em-size",
+        "8",
+        "--spp",
+        "2",
+        "--out",
+        out.to_str().expect("utf-8"),
+        "--trace-dir",
+        traces.to_str().expect("utf-8"),
+    ];
+    let run = |extra: &[&str]| {
+        let o = engine(&[&base[..], extra].concat());
+        let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+        let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(o.status.success(), "{stderr}\n{stdout}");
+        (stdout, stderr)
+    };
+    let (text, _) = run(&["--all"]);
+    assert!(!text.contains("specular_sphere"), "{text}");
+    let keys = map_keys(&out);
+
+    // Adding the sphere EM infers it alone: the other maps keep their keys
+    // and are skipped, and say so before any work.
+    let (text, stderr) = run(&["--all", "--sphere"]);
+    assert_only_the_sphere_is_inferred(&text, &stderr);
+    assert_eq!(keys, map_keys(&out));
+    assert_sphere_in_sample_reports(&out);
+    assert_sphere_in_summary(&out, &text);
 
     // A third run has nothing left to do.
     let (text, _) = run(&["--all", "--sphere"]);
