@@ -54,13 +54,10 @@ fn pass_names(out: &Path) -> Vec<String> {
         .collect()
 }
 
-#[test]
-fn main_job_compiles_what_is_missing_then_plays_every_mode() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let scene = tiny_scene(dir.path());
-    let out = dir.path().join("out");
-
-    let first = play(&scene, &out, &[]);
+/// The first run traces, infers and encodes what is missing, then plays
+/// deferred layered PEMs.
+fn assert_first_run_compiles(scene: &Path, out: &Path) {
+    let first = play(scene, out, &[]);
     assert!(first.status.success(), "{}", text(&first));
     let log = text(&first);
     assert!(log.contains("validation messages: 0"), "{log}");
@@ -78,46 +75,25 @@ fn main_job_compiles_what_is_missing_then_plays_every_mode() {
     // Deferred by default: the reflector rasterized once into lookups, one
     // composite over the covered pixels; maps uploaded through the staging
     // ring.
-    let names = pass_names(&out);
+    let names = pass_names(out);
     for pass in ["upload", "room", "pem_gbuffer", "pem_composite", "readback"] {
         assert!(names.iter().any(|n| n == pass), "{pass} missing: {names:?}");
     }
     assert!(!names.iter().any(|n| n == "pem_blend"), "{names:?}");
+}
 
-    // The papers' multipass mode: the path passes between samples, so the
-    // blend pass runs.
-    let multi = play(&scene, &out, &["--compositing", "multipass"]);
-    assert!(multi.status.success(), "{}", text(&multi));
-    let names = pass_names(&out);
-    for pass in ["pem", "pem_blend"] {
-        assert!(names.iter().any(|n| n == pass), "{pass} missing: {names:?}");
-    }
-
-    // A second run compiles nothing.
-    let again = play(&scene, &out, &["--no-capture"]);
-    assert!(again.status.success(), "{}", text(&again));
-    assert!(
-        !text(&again).contains("tracing and inferring"),
-        "{}",
-        text(&again)
-    );
-    assert!(
-        !text(&again).contains("ratio"),
-        "re-encoded: {}",
-        text(&again)
-    );
-
-    // An edited scene (the light's colour) is never played from old maps:
-    // the run says what changed, traces, infers and encodes again.
-    let text_of_scene = std::fs::read_to_string(&scene).expect("scene");
+/// An edited scene (the light's colour) is never played from old maps:
+/// the run says what changed, traces, infers and encodes again.
+fn assert_edited_scene_recompiles(scene: &Path, out: &Path) {
+    let text_of_scene = std::fs::read_to_string(scene).expect("scene");
     let edited = text_of_scene.replacen(
         "radiance = [12.0, 11.5, 10.5]",
         "radiance = [12.0, 11.5, 4.0]",
         1,
     );
     assert_ne!(edited, text_of_scene, "the tiny scene has the light");
-    std::fs::write(&scene, edited).expect("edit scene");
-    let stale = play(&scene, &out, &["--no-capture"]);
+    std::fs::write(scene, edited).expect("edit scene");
+    let stale = play(scene, out, &["--no-capture"]);
     let log = text(&stale);
     assert!(stale.status.success(), "{log}");
     assert!(
@@ -125,8 +101,10 @@ fn main_job_compiles_what_is_missing_then_plays_every_mode() {
         "not said what changed: {log}"
     );
     assert!(log.contains("ratio"), "not re-encoded: {log}");
+}
 
-    // The bench measures every variant at the same views (maps compiled above).
+/// The bench measures every variant at the same views (maps compiled above).
+fn assert_bench_rows(scene: &Path, out: &Path) {
     let o = engine(&[
         "bench",
         "--scene",
@@ -161,17 +139,19 @@ fn main_job_compiles_what_is_missing_then_plays_every_mode() {
         rows.iter()
             .all(|r| r["frame_ms_median"].as_f64().is_some_and(|v| v > 0.0))
     );
+}
 
-    // Every mode and knob plays cleanly (sphere PEMs are inferred on first
-    // use); each mode's frame between samples matches its golden image (the
-    // goldens hold the analytic room: the reflectors are what they test;
-    // the inferred room has its own test, room_maps.rs).
+/// Every mode and knob plays cleanly (sphere PEMs are inferred on first
+/// use); each mode's frame between samples matches its golden image (the
+/// goldens hold the analytic room: the reflectors are what they test;
+/// the inferred room has its own test, room_maps.rs).
+fn assert_every_mode_plays(scene: &Path, out: &Path) {
     for (mode, golden) in [
         ("layered-pem", "tiny_layered_pem"),
         ("sphere-pem", "tiny_sphere_pem"),
         ("ptm", "tiny_ptm"),
     ] {
-        let o = play(&scene, &out, &["--mode", mode, "--room", "analytic"]);
+        let o = play(scene, out, &["--mode", mode, "--room", "analytic"]);
         assert!(o.status.success(), "{mode}: {}", text(&o));
         let (w, h, pixels) = engine::capture::read_png(&out.join("frame_0001.png")).expect("frame");
         common::assert_matches_golden(golden, w, h, &pixels, 45.0);
@@ -185,14 +165,50 @@ fn main_job_compiles_what_is_missing_then_plays_every_mode() {
     ] {
         let mut args = vec!["--no-capture"];
         args.extend_from_slice(extra);
-        let o = play(&scene, &out, &args);
+        let o = play(scene, out, &args);
         assert!(o.status.success(), "{extra:?}: {}", text(&o));
         assert!(text(&o).contains("validation messages: 0"), "{extra:?}");
-        let names = pass_names(&out);
+        let names = pass_names(out);
         if extra.contains(&"--no-blend") {
             assert!(!names.iter().any(|n| n == "pem_blend"), "{names:?}");
         }
     }
+}
+
+#[test]
+fn main_job_compiles_what_is_missing_then_plays_every_mode() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = tiny_scene(dir.path());
+    let out = dir.path().join("out");
+
+    assert_first_run_compiles(&scene, &out);
+
+    // The papers' multipass mode: the path passes between samples, so the
+    // blend pass runs.
+    let multi = play(&scene, &out, &["--compositing", "multipass"]);
+    assert!(multi.status.success(), "{}", text(&multi));
+    let names = pass_names(&out);
+    for pass in ["pem", "pem_blend"] {
+        assert!(names.iter().any(|n| n == pass), "{pass} missing: {names:?}");
+    }
+
+    // A second run compiles nothing.
+    let again = play(&scene, &out, &["--no-capture"]);
+    assert!(again.status.success(), "{}", text(&again));
+    assert!(
+        !text(&again).contains("tracing and inferring"),
+        "{}",
+        text(&again)
+    );
+    assert!(
+        !text(&again).contains("ratio"),
+        "re-encoded: {}",
+        text(&again)
+    );
+
+    assert_edited_scene_recompiles(&scene, &out);
+    assert_bench_rows(&scene, &out);
+    assert_every_mode_plays(&scene, &out);
 }
 
 #[test]
