@@ -41,6 +41,116 @@ fn ok(o: &Output) -> String {
     stdout
 }
 
+/// Whether ffmpeg runs here (the MPEG baselines need it).
+fn ffmpeg_on_path() -> bool {
+    std::process::Command::new("ffmpeg")
+        .arg("-version")
+        .output()
+        .is_ok_and(|o| o.status.success())
+}
+
+/// Runs `engine codec-report` on `container` with `args`, writing and
+/// returning the JSON report at `json`.
+fn codec_report(container: &str, json: &Path, args: &[&str]) -> serde_json::Value {
+    let json_s = json.to_str().expect("utf-8");
+    ok(&engine(
+        &[&["codec-report", container, "--json", json_s][..], args].concat(),
+    ));
+    serde_json::from_slice(&std::fs::read(json).expect("json")).expect("JSON")
+}
+
+/// The codec's report: frames, ratio, PSNR, size, decode time and the
+/// baselines (the MPEG ones only with ffmpeg).
+fn assert_codec_report(report: &serde_json::Value, ffmpeg: bool) {
+    // Rendered frames of the decoded distant layer at samples 0 and 2.
+    assert!(
+        report["frames_psnr_db"]
+            .as_f64()
+            .is_some_and(|p| p.is_finite() && p > 10.0),
+        "{report}"
+    );
+    let notes = report["notes"].to_string();
+    assert!(notes.contains("at 2 samples"), "{notes}");
+    assert!(
+        report["ratio"].as_f64().is_some_and(|r| r > 10.0),
+        "{report}"
+    );
+    assert!(
+        report["psnr_db"]
+            .as_f64()
+            .is_some_and(|p| p.is_finite() && p > 20.0),
+        "{report}"
+    );
+    assert!(report["bytes"].as_u64().is_some_and(|b| b > 0));
+    assert!(report["decode_ms_median"].as_f64().is_some_and(|t| t > 0.0));
+    assert!(report["baselines"].is_array());
+    assert!(
+        report["frames_vs_uncompressed_psnr_db"]
+            .as_f64()
+            .is_some_and(|p| p.is_finite() && p > 10.0),
+        "{report}"
+    );
+    let names: Vec<&str> = report["baselines"]
+        .as_array()
+        .expect("baselines")
+        .iter()
+        .filter_map(|b| b["name"].as_str())
+        .collect();
+    if ffmpeg {
+        // The traced images of the 3 samples through x264, measured on
+        // the rendered frames' pixels.
+        let view = report["baselines"]
+            .as_array()
+            .and_then(|b| b.iter().find(|b| b["name"] == "mpeg-view"))
+            .expect("mpeg-view baseline");
+        assert!(view["psnr_db"].as_f64().is_some_and(|p| p > 10.0), "{view}");
+        assert!(
+            view["pixels"]
+                .as_str()
+                .is_some_and(|p| p.contains("coverage"))
+        );
+        assert!(names.contains(&"mpeg-view-same-ratio"), "{names:?}");
+    } else {
+        assert!(!names.contains(&"mpeg-view"), "{names:?}");
+        assert!(notes.contains("ffmpeg not on PATH"), "{notes}");
+    }
+}
+
+/// Curves: the codec at two ratios, the baselines at its sizes.
+fn assert_curves(report: &serde_json::Value, ffmpeg: bool) {
+    let curves = report["curves"].as_array().expect("curves");
+    let curve = |name: &str, metric: &str| {
+        curves
+            .iter()
+            .find(|c| c["name"] == name && c["metric"] == metric)
+            .and_then(|c| c["points"].as_array())
+            .unwrap_or_else(|| panic!("no {name} {metric} curve: {report}"))
+    };
+    let codec = curve("pyramid-codec", "texture");
+    assert_eq!(codec.len(), 2);
+    let r = |p: &serde_json::Value, k: &str| p[k].as_f64().expect("number");
+    assert!(r(&codec[0], "ratio") < r(&codec[1], "ratio"), "{codec:?}");
+    assert!(
+        r(&codec[0], "psnr_db") > r(&codec[1], "psnr_db"),
+        "{codec:?}"
+    );
+    assert!(
+        codec
+            .iter()
+            .all(|p| p["bytes"].as_u64().is_some_and(|b| b > 0))
+    );
+    assert_eq!(curve("pyramid-codec-frames", "frames_vs_traced").len(), 2);
+    assert_eq!(
+        curve("pyramid-codec-frames", "frames_vs_uncompressed").len(),
+        2
+    );
+    assert!(!curve("jpeg-per-texture", "texture").is_empty());
+    if ffmpeg {
+        assert!(!curve("mpeg-texture", "texture").is_empty());
+        assert!(!curve("mpeg-view", "frames_vs_uncompressed").is_empty());
+    }
+}
+
 #[test]
 fn encode_and_report_an_inferred_pem() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -90,12 +200,8 @@ fn encode_and_report_an_inferred_pem() {
     ]));
     assert!(text.contains("3 textures x 3 samples"), "{text}");
     assert!(container.is_file());
-    let json = dir.path().join("report.json");
-    ok(&engine(&[
-        "codec-report",
-        container_s,
-        "--json",
-        json.to_str().expect("utf-8"),
+    let ffmpeg = ffmpeg_on_path();
+    let inputs = [
         "--scene",
         &scene,
         "--infer-dir",
@@ -106,120 +212,12 @@ fn encode_and_report_an_inferred_pem() {
         "64x48",
         "--frames-every",
         "2",
-    ]));
-    let report: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(&json).expect("json")).expect("JSON");
-    // Rendered frames of the decoded distant layer at samples 0 and 2.
-    assert!(
-        report["frames_psnr_db"]
-            .as_f64()
-            .is_some_and(|p| p.is_finite() && p > 10.0),
-        "{report}"
-    );
-    let notes = report["notes"].to_string();
-    assert!(notes.contains("at 2 samples"), "{notes}");
-    assert!(
-        report["ratio"].as_f64().is_some_and(|r| r > 10.0),
-        "{report}"
-    );
-    assert!(
-        report["psnr_db"]
-            .as_f64()
-            .is_some_and(|p| p.is_finite() && p > 20.0),
-        "{report}"
-    );
-    assert!(report["bytes"].as_u64().is_some_and(|b| b > 0));
-    assert!(report["decode_ms_median"].as_f64().is_some_and(|t| t > 0.0));
-    assert!(report["baselines"].is_array());
-    assert!(
-        report["frames_vs_uncompressed_psnr_db"]
-            .as_f64()
-            .is_some_and(|p| p.is_finite() && p > 10.0),
-        "{report}"
-    );
-    let ffmpeg = std::process::Command::new("ffmpeg")
-        .arg("-version")
-        .output()
-        .is_ok_and(|o| o.status.success());
-    let names: Vec<&str> = report["baselines"]
-        .as_array()
-        .expect("baselines")
-        .iter()
-        .filter_map(|b| b["name"].as_str())
-        .collect();
-    if ffmpeg {
-        // The traced images of the 3 samples through x264, measured on
-        // the rendered frames' pixels.
-        let view = report["baselines"]
-            .as_array()
-            .and_then(|b| b.iter().find(|b| b["name"] == "mpeg-view"))
-            .expect("mpeg-view baseline");
-        assert!(view["psnr_db"].as_f64().is_some_and(|p| p > 10.0), "{view}");
-        assert!(
-            view["pixels"]
-                .as_str()
-                .is_some_and(|p| p.contains("coverage"))
-        );
-        assert!(names.contains(&"mpeg-view-same-ratio"), "{names:?}");
-    } else {
-        assert!(!names.contains(&"mpeg-view"), "{names:?}");
-        assert!(notes.contains("ffmpeg not on PATH"), "{notes}");
-    }
-
-    // Curves: the codec at two ratios, the baselines at its sizes.
-    let json = dir.path().join("curve.json");
-    ok(&engine(&[
-        "codec-report",
-        container_s,
-        "--json",
-        json.to_str().expect("utf-8"),
-        "--scene",
-        &scene,
-        "--infer-dir",
-        infer_s,
-        "--trace-dir",
-        traces_s,
-        "--size",
-        "64x48",
-        "--frames-every",
-        "2",
-        "--curve",
-        "--curve-ratios",
-        "8,16",
-    ]));
-    let report: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(&json).expect("json")).expect("JSON");
-    let curves = report["curves"].as_array().expect("curves");
-    let curve = |name: &str, metric: &str| {
-        curves
-            .iter()
-            .find(|c| c["name"] == name && c["metric"] == metric)
-            .and_then(|c| c["points"].as_array())
-            .unwrap_or_else(|| panic!("no {name} {metric} curve: {report}"))
-    };
-    let codec = curve("pyramid-codec", "texture");
-    assert_eq!(codec.len(), 2);
-    let r = |p: &serde_json::Value, k: &str| p[k].as_f64().expect("number");
-    assert!(r(&codec[0], "ratio") < r(&codec[1], "ratio"), "{codec:?}");
-    assert!(
-        r(&codec[0], "psnr_db") > r(&codec[1], "psnr_db"),
-        "{codec:?}"
-    );
-    assert!(
-        codec
-            .iter()
-            .all(|p| p["bytes"].as_u64().is_some_and(|b| b > 0))
-    );
-    assert_eq!(curve("pyramid-codec-frames", "frames_vs_traced").len(), 2);
-    assert_eq!(
-        curve("pyramid-codec-frames", "frames_vs_uncompressed").len(),
-        2
-    );
-    assert!(!curve("jpeg-per-texture", "texture").is_empty());
-    if ffmpeg {
-        assert!(!curve("mpeg-texture", "texture").is_empty());
-        assert!(!curve("mpeg-view", "frames_vs_uncompressed").is_empty());
-    }
+    ];
+    let report = codec_report(container_s, &dir.path().join("report.json"), &inputs);
+    assert_codec_report(&report, ffmpeg);
+    let curve_args = [&inputs[..], &["--curve", "--curve-ratios", "8,16"]].concat();
+    let report = codec_report(container_s, &dir.path().join("curve.json"), &curve_args);
+    assert_curves(&report, ffmpeg);
 }
 
 #[test]
