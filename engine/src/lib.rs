@@ -3,6 +3,7 @@
 //!
 //! ```text
 //!  play · bench · eval · compile · codec_report   drivers, typed options (options)
+//!  · video                                          results for other programs and people
 //!  renderer · pem · probe                          what a frame and a probe render are
 //!  passes                                          one file per pass
 //!  graph                                           pass trait, executor, image states
@@ -30,3 +31,4 @@ pub mod probe;
 pub mod renderer;
 pub mod shader_interface;
 pub mod util;
+pub mod video;

@@ -277,6 +277,10 @@ pub struct PlayArgs {
     /// Write no frames (only perf.json): for benchmarks.
     #[arg(long)]
     pub no_capture: bool,
+    /// Write no video of the path beside the frames (an H.264 MP4 when
+    /// ffmpeg is on PATH, else an animated PNG).
+    #[arg(long)]
+    pub no_video: bool,
     /// Samples per pixel of `--mode trace` frames.
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub trace_spp: u32,
@@ -372,6 +376,7 @@ impl PlayArgs {
             warmup: self.warmup,
             capture: !self.no_capture,
             exr: self.exr,
+            video: !self.no_video,
             trace_spp: self.trace_spp,
         }
     }
