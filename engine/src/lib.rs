@@ -3,7 +3,7 @@
 //!
 //! ```text
 //!  play · bench · eval · compile · codec_report   drivers, typed options (options)
-//!  · video                                          results for other programs and people
+//!  · export · video                                 results for other programs and people
 //!  renderer · pem · probe                          what a frame and a probe render are
 //!  passes                                          one file per pass
 //!  graph                                           pass trait, executor, image states
@@ -18,6 +18,7 @@ pub mod compare;
 pub mod compile;
 pub mod cube;
 pub mod eval;
+pub mod export;
 pub mod glass;
 pub mod gpu_scene;
 pub mod graph;

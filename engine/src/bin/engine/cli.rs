@@ -40,6 +40,10 @@ pub enum Command {
     /// views on the orbit, between samples and above the orbit plane;
     /// writes eval.json and tradeoff.png.
     Eval(EvalArgs),
+    /// Write every sample's inferred maps as KTX2 files other engines load
+    /// (RGBA float32; cube maps with all their MIP levels) and maps.json
+    /// (each sample's viewpoint, each map's EM geometry).
+    Export(ExportArgs),
     /// Ray-trace the gold-standard layers of one parameter sample, a free view or all samples
     /// (CPU, no Vulkan): one multi-layer EXR and a tone-mapped PNG per image.
     Trace(TraceArgs),
@@ -196,6 +200,20 @@ pub struct EncodeArgs {
     /// The container file to write.
     #[arg(long)]
     pub out: PathBuf,
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct ExportArgs {
+    /// Folder for the KTX2 files and maps.json (made if missing; refused
+    /// when it holds files the engine did not write).
+    #[arg(long)]
+    pub ktx2: PathBuf,
+    /// A built-in scene's name (teapot) or the path of a .toml scene file.
+    #[arg(long, default_value = "teapot")]
+    pub scene: String,
+    /// Where the maps were inferred [default: out/<scene>/infer, where the main job puts them].
+    #[arg(long)]
+    pub infer_dir: Option<PathBuf>,
 }
 
 #[derive(Args, Debug, Clone)]

@@ -5,6 +5,7 @@ pub mod bench;
 pub mod codec_report;
 pub mod encode;
 pub mod eval;
+pub mod export;
 pub mod infer;
 pub mod play;
 pub mod trace;
