@@ -3,6 +3,7 @@
 //!
 //! ```text
 //!  play · bench · eval · compile · codec_report   drivers, typed options (options)
+//!  · export · video                                 results for other programs and people
 //!  renderer · pem · probe                          what a frame and a probe render are
 //!  passes                                          one file per pass
 //!  graph                                           pass trait, executor, image states
@@ -17,6 +18,7 @@ pub mod compare;
 pub mod compile;
 pub mod cube;
 pub mod eval;
+pub mod export;
 pub mod glass;
 pub mod gpu_scene;
 pub mod graph;
@@ -30,3 +32,4 @@ pub mod probe;
 pub mod renderer;
 pub mod shader_interface;
 pub mod util;
+pub mod video;

@@ -187,6 +187,8 @@ pub struct PlayOptions {
     pub capture: bool,
     /// Also write each frame as linear float EXR.
     pub exr: bool,
+    /// With `capture`: also write the path as a video (`crate::video`).
+    pub video: bool,
     /// Samples per pixel of `Mode::Trace` frames.
     pub trace_spp: u32,
 }
@@ -200,6 +202,7 @@ impl PlayOptions {
             warmup: 3,
             capture: true,
             exr: false,
+            video: true,
             trace_spp: 16,
         }
     }

@@ -123,8 +123,16 @@ pub fn setup_mode<'s>(
     })
 }
 
-/// Plays `opts` at `place`: frames along the default path, perf.json.
-pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<PerfReport> {
+/// What a play wrote besides its frames.
+pub struct Played {
+    pub report: PerfReport,
+    /// The path as a video, when frames were captured and a video asked for.
+    pub video: Option<crate::video::Video>,
+}
+
+/// Plays `opts` at `place`: frames along the default path, perf.json and
+/// the path as a video.
+pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<Played> {
     if opts.frames == Some(0) {
         bail!("--frames 0: expected at least one frame");
     }
@@ -181,7 +189,20 @@ pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<PerfReport> {
         &renderer.setup_timings,
     );
     crate::util::files::write_json(&out.join("perf.json"), &report)?;
-    Ok(report)
+    let video = if opts.capture && opts.video {
+        let frames: Vec<PathBuf> = (0..frames)
+            .map(|i| frame_stem(&out, i).with_extension("png"))
+            .collect();
+        Some(crate::video::write_video(&out, &frames)?)
+    } else {
+        None
+    };
+    Ok(Played { report, video })
+}
+
+/// `<out>/frame_NNNN`: the stem of frame `i`'s files.
+pub fn frame_stem(out: &Path, i: u32) -> PathBuf {
+    out.join(format!("frame_{i:04}"))
 }
 
 /// Encoding PNGs takes longer than a frame: a writer thread does it.
@@ -195,7 +216,7 @@ impl FrameWriter {
         let (send, receive) = mpsc::channel::<(u32, Vec<[f32; 4]>)>();
         let thread = std::thread::spawn(move || {
             for (i, pixels) in receive {
-                let stem = dir.join(format!("frame_{i:04}"));
+                let stem = frame_stem(&dir, i);
                 capture::write_png(&stem.with_extension("png"), width, height, &pixels)?;
                 if exr {
                     capture::write_exr(&stem.with_extension("exr"), width, height, &pixels)?;

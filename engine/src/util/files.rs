@@ -80,6 +80,21 @@ pub fn write(path: &Path, bytes: &[u8]) -> Result<()> {
     Ok(inference::files::write_bytes(path, bytes)?)
 }
 
+/// Runs `write` on a unique temporary path beside `path`, then renames it
+/// onto `path`; the temporary is removed when anything fails. For files
+/// another library or program writes by name.
+pub fn write_through(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let tmp = inference::files::temp_path(path);
+    if let Err(e) = write(&tmp) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(e);
+    }
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        anyhow::anyhow!("{}: {e}", path.display())
+    })
+}
+
 /// Writes `value` as pretty JSON to `path` atomically.
 pub fn write_json(path: &Path, value: &impl serde::Serialize) -> Result<()> {
     let json = serde_json::to_vec_pretty(value)

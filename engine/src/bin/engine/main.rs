@@ -19,6 +19,7 @@ fn main() -> ExitCode {
         Some(Command::Encode(args)) => (cmd::encode::run(args), false),
         Some(Command::CodecReport(args)) => (cmd::codec_report::run(args), args.validate),
         Some(Command::Compile(args)) => (cmd::compile::run(args), args.validate),
+        Some(Command::Export(args)) => (cmd::export::run(args), false),
     };
     let mut code = ExitCode::SUCCESS;
     match result {

@@ -47,6 +47,10 @@ pub enum Command {
     /// views on the orbit, between samples and above the orbit plane;
     /// writes eval.json and tradeoff.png.
     Eval(EvalArgs),
+    /// Write every sample's inferred maps as KTX2 files other engines load
+    /// (RGBA float32; cube maps with all their MIP levels) and maps.json
+    /// (each sample's viewpoint, each map's EM geometry).
+    Export(ExportArgs),
     /// Ray-trace the gold-standard layers of one parameter sample, a free view or all samples
     /// (CPU, no Vulkan): one multi-layer EXR and a tone-mapped PNG per image.
     Trace(TraceArgs),
@@ -206,6 +210,20 @@ pub struct EncodeArgs {
 }
 
 #[derive(Args, Debug, Clone)]
+pub struct ExportArgs {
+    /// Folder for the KTX2 files and maps.json (made if missing; refused
+    /// when it holds files the engine did not write).
+    #[arg(long)]
+    pub ktx2: PathBuf,
+    /// A built-in scene's name (teapot) or the path of a .toml scene file.
+    #[arg(long, default_value = "teapot")]
+    pub scene: String,
+    /// Where the maps were inferred [default: out/<scene>/infer, where the main job puts them].
+    #[arg(long)]
+    pub infer_dir: Option<PathBuf>,
+}
+
+#[derive(Args, Debug, Clone)]
 pub struct CodecReportArgs {
     /// The container to measure.
     pub file: PathBuf,
@@ -284,6 +302,10 @@ pub struct PlayArgs {
     /// Write no frames (only perf.json): for benchmarks.
     #[arg(long)]
     pub no_capture: bool,
+    /// Write no video of the path beside the frames (an H.264 MP4 when
+    /// ffmpeg is on PATH, else an animated PNG).
+    #[arg(long)]
+    pub no_video: bool,
     /// Samples per pixel of `--mode trace` frames.
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub trace_spp: u32,
@@ -384,6 +406,7 @@ impl PlayArgs {
             warmup: self.warmup,
             capture: !self.no_capture,
             exr: self.exr,
+            video: !self.no_video,
             trace_spp: self.trace_spp,
         }
     }

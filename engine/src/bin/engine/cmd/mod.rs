@@ -6,6 +6,7 @@ pub mod codec_report;
 pub mod compile;
 pub mod encode;
 pub mod eval;
+pub mod export;
 pub mod infer;
 pub mod play;
 pub mod trace;

@@ -4,5 +4,11 @@ use crate::cli::PlayArgs;
 use anyhow::Result;
 
 pub fn run(args: &PlayArgs) -> Result<String> {
-    Ok(engine::play::play(&args.place(), &args.options())?.table())
+    let played = engine::play::play(&args.place(), &args.options())?;
+    let mut text = played.report.table();
+    if let Some(video) = played.video {
+        text += &video.describe();
+        text.push('\n');
+    }
+    Ok(text)
 }
