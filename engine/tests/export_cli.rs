@@ -8,7 +8,7 @@
 mod common;
 
 use common::tiny_scene;
-use engine::maps::{MapLayer, map_path, map_specs};
+use engine::maps::{MapLayer, MapSpec, map_path, map_specs};
 use inference::infer::maps::read_map;
 use inference::scene::Scene;
 use std::path::{Path, PathBuf};
@@ -207,47 +207,11 @@ fn assert_export_round_trips(dir: &Path, scene_path: &Path, infer: &Path) {
         );
         for spec in map_specs(&scene) {
             let file = sample["files"][spec.name()].as_str().expect("file name");
-            let bytes = std::fs::read(ktx.join(file)).expect("KTX2 file");
-            let reader = ktx2::Reader::new(&bytes[..]).expect("a valid KTX2 file");
-            let layout = spec.layout();
-            let h = reader.header();
-            assert_eq!(h.format, Some(ktx2::Format::R32G32B32A32_SFLOAT));
-            assert_eq!((h.pixel_width, h.pixel_height), (16, 16));
-            assert_eq!(
-                (h.face_count, h.level_count),
-                (layout.faces(), layout.levels())
-            );
-            assert_eq!(
-                reader.is_alpha_premultiplied(),
-                Some(spec.layer == MapLayer::Local)
-            );
-            let channels = spec.layer.channels();
-            let map = read_map(
+            assert_ktx2_equals_map(
+                &ktx.join(file),
+                &spec,
                 &map_path(infer, k, &spec.object, spec.layer),
-                &layout,
-                channels,
-            )
-            .expect("inferred map");
-            for (level, data) in reader.levels().enumerate() {
-                let start = layout.block_offset(0, level as u32);
-                let texels: Vec<u32> = data
-                    .data
-                    .chunks_exact(4)
-                    .map(|b| u32::from_le_bytes(b.try_into().expect("4 bytes")))
-                    .collect();
-                let (w, hh) = layout.level_size(level as u32);
-                assert_eq!(texels.len(), (w * hh * layout.faces() * 4) as usize);
-                for (i, texel) in texels.chunks_exact(4).enumerate() {
-                    for (c, &bits) in texel.iter().enumerate() {
-                        let want = map.get(c).map_or(1.0, |m| m[start + i]);
-                        assert_eq!(
-                            bits,
-                            want.to_bits(),
-                            "{file} level {level} texel {i} channel {c}"
-                        );
-                    }
-                }
-            }
+            );
         }
     }
     let geometry = |name: &str| {
@@ -286,4 +250,46 @@ fn assert_export_round_trips(dir: &Path, scene_path: &Path, infer: &Path) {
         1,
         "nothing written"
     );
+}
+
+/// Every texel of the KTX2 file at `path` equals, bit for bit, the inferred
+/// map `exr` of `spec` (RGB maps with A = 1).
+fn assert_ktx2_equals_map(path: &Path, spec: &MapSpec, exr: &Path) {
+    let bytes = std::fs::read(path).expect("KTX2 file");
+    let reader = ktx2::Reader::new(&bytes[..]).expect("a valid KTX2 file");
+    let layout = spec.layout();
+    let h = reader.header();
+    assert_eq!(h.format, Some(ktx2::Format::R32G32B32A32_SFLOAT));
+    assert_eq!((h.pixel_width, h.pixel_height), (16, 16));
+    assert_eq!(
+        (h.face_count, h.level_count),
+        (layout.faces(), layout.levels())
+    );
+    assert_eq!(
+        reader.is_alpha_premultiplied(),
+        Some(spec.layer == MapLayer::Local)
+    );
+    let channels = spec.layer.channels();
+    let map = read_map(exr, &layout, channels).expect("inferred map");
+    for (level, data) in reader.levels().enumerate() {
+        let start = layout.block_offset(0, level as u32);
+        let texels: Vec<u32> = data
+            .data
+            .chunks_exact(4)
+            .map(|b| u32::from_le_bytes(b.try_into().expect("4 bytes")))
+            .collect();
+        let (w, hh) = layout.level_size(level as u32);
+        assert_eq!(texels.len(), (w * hh * layout.faces() * 4) as usize);
+        for (i, texel) in texels.chunks_exact(4).enumerate() {
+            for (c, &bits) in texel.iter().enumerate() {
+                let want = map.get(c).map_or(1.0, |m| m[start + i]);
+                assert_eq!(
+                    bits,
+                    want.to_bits(),
+                    "{} level {level} texel {i} channel {c}",
+                    path.display()
+                );
+            }
+        }
+    }
 }

@@ -8,7 +8,9 @@ use engine::pem::settings::Compositing;
 use std::path::PathBuf;
 
 mod compile;
+mod export;
 pub use compile::CompileArgs;
+pub use export::ExportArgs;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -207,20 +209,6 @@ pub struct EncodeArgs {
     /// The container file to write.
     #[arg(long)]
     pub out: PathBuf,
-}
-
-#[derive(Args, Debug, Clone)]
-pub struct ExportArgs {
-    /// Folder for the KTX2 files and maps.json (made if missing; refused
-    /// when it holds files the engine did not write).
-    #[arg(long)]
-    pub ktx2: PathBuf,
-    /// A built-in scene's name (teapot) or the path of a .toml scene file.
-    #[arg(long, default_value = "teapot")]
-    pub scene: String,
-    /// Where the maps were inferred [default: out/<scene>/infer, where the main job puts them].
-    #[arg(long)]
-    pub infer_dir: Option<PathBuf>,
 }
 
 #[derive(Args, Debug, Clone)]
