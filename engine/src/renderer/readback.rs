@@ -9,6 +9,31 @@ use ash::vk;
 use glam::Vec3;
 use half::f16;
 
+/// Every byte of `image` (all levels and layers), copied back through a
+/// host-visible buffer by one read-back pass.
+fn read_back(
+    device: &crate::backend::Device,
+    executor: &mut crate::graph::Executor,
+    image: &crate::backend::Image,
+    label: &str,
+) -> GpuResult<Vec<u8>> {
+    let bytes = crate::backend::upload::image_bytes(image)?;
+    let buffer = Buffer::new(
+        device,
+        label,
+        bytes,
+        vk::BufferUsageFlags::TRANSFER_DST,
+        gpu_allocator::MemoryLocation::GpuToCpu,
+    )?;
+    let pass = ReadbackPass {
+        device,
+        image,
+        buffer: &buffer,
+    };
+    executor.run(&[&pass])?;
+    Ok(buffer.mapped()?[..bytes as usize].to_vec())
+}
+
 impl Renderer {
     /// The static EM of the `index`-th reflector (scene order): its cube
     /// size, its world-space EM origin and every texel of every MIP level as
@@ -17,43 +42,27 @@ impl Renderer {
         let Some(r) = self.reflectors.get(index) else {
             return Err(GpuError::Invalid(format!("no reflector {index}")));
         };
-        let bytes = crate::backend::upload::image_bytes(&r.cube.color)?;
-        let buffer = Buffer::new(
+        let bytes = read_back(
             &self.device,
+            &mut self.executor,
+            &r.cube.color,
             "static EM read-back",
-            bytes,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            gpu_allocator::MemoryLocation::GpuToCpu,
         )?;
-        let pass = ReadbackPass {
-            device: &self.device,
-            image: &r.cube.color,
-            buffer: &buffer,
-        };
-        self.executor.run(&[&pass])?;
-        let texels = rgba16f_to_f32(&buffer.mapped()?[..bytes as usize]);
+        let texels = rgba16f_to_f32(&bytes);
         Ok((r.cube.color.desc.width, r.cube.origin, texels))
     }
 
     /// Reflector pixels the last deferred PEM frame covered (counted on the
     /// G-buffer read back: the cosine's clear value marks the rest).
     pub fn covered_pixels(&mut self) -> GpuResult<u64> {
-        let image = &self.gbuffer.images[2];
-        let bytes = crate::backend::upload::image_bytes(image)?;
-        let buffer = Buffer::new(
+        let bytes = read_back(
             &self.device,
+            &mut self.executor,
+            &self.gbuffer.images[2],
             "g-buffer read-back",
-            bytes,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            gpu_allocator::MemoryLocation::GpuToCpu,
         )?;
-        let pass = ReadbackPass {
-            device: &self.device,
-            image,
-            buffer: &buffer,
-        };
-        self.executor.run(&[&pass])?;
-        let cos: &[f32] = bytemuck::cast_slice(&buffer.mapped()?[..bytes as usize]);
+        // A Vec<u8> need not be aligned for f32: collect, don't cast.
+        let cos: Vec<f32> = bytemuck::pod_collect_to_vec(&bytes);
         // Only the last G-buffer pass's area was cleared this frame.
         let bounds = self.reflectors.iter().map(|r| r.bounds);
         let full = vk::Rect2D {
