@@ -173,6 +173,16 @@ pub struct RunPlace {
     pub recompile: bool,
 }
 
+impl RunPlace {
+    /// The output folder: as given, else `out/<scene>` under the current
+    /// folder.
+    pub fn out_dir(&self, scene: &inference::scene::Scene) -> PathBuf {
+        self.out
+            .clone()
+            .unwrap_or_else(|| PathBuf::from("out").join(&scene.name))
+    }
+}
+
 /// The main job: what to draw along the default path, and what to keep.
 #[derive(Clone, Debug)]
 pub struct PlayOptions {

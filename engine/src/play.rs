@@ -32,10 +32,7 @@ impl Session {
     /// given), opens the device and sets the renderer up.
     pub fn open(place: &RunPlace) -> Result<Session> {
         let scene = Scene::load(&place.scene)?;
-        let out = place
-            .out
-            .clone()
-            .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
+        let out = place.out_dir(&scene);
         claim_dir(&out)?;
         let device = create_device(&place.device)?;
         let (width, height) = place.size;

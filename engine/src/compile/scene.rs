@@ -10,7 +10,7 @@ use crate::util::files::claim_dir;
 use anyhow::{Result, bail};
 use inference::scene::Scene;
 use std::fmt::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use std::time::Instant;
 
@@ -37,10 +37,7 @@ pub fn compile_scene(place: &RunPlace, part: Part, ship: Option<&Path>) -> Resul
             place.scene
         );
     }
-    let out = place
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
+    let out = place.out_dir(&scene);
     claim_dir(&out)?;
     let ctx = CompileContext {
         scene: &scene,
