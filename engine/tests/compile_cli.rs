@@ -5,10 +5,10 @@
 
 mod common;
 
-use common::tiny_scene;
+use common::{output_text as text, run_engine, tiny_scene};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 fn compile(scene: &Path, out: &Path, extra: &[&str]) -> Output {
     let mut args = vec![
@@ -22,18 +22,7 @@ fn compile(scene: &Path, out: &Path, extra: &[&str]) -> Output {
         "--validate",
     ];
     args.extend_from_slice(extra);
-    Command::new(env!("CARGO_BIN_EXE_engine"))
-        .args(&args)
-        .output()
-        .expect("run engine")
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "stdout:\n{}\nstderr:\n{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
+    run_engine(&args)
 }
 
 fn ok(o: Output) -> String {
@@ -138,10 +127,7 @@ fn bad_shards_fail_before_any_work() {
 /// `engine compile --scene teapot --ship assets/compiled/teapot`.
 #[test]
 fn the_shipped_compiled_scene_matches_its_inputs() {
-    let o = Command::new(env!("CARGO_BIN_EXE_engine"))
-        .args(["compile", "--scene", "teapot", "--check-shipped"])
-        .output()
-        .expect("run engine");
+    let o = run_engine(&["compile", "--scene", "teapot", "--check-shipped"]);
     let log = text(&o);
     assert!(o.status.success(), "{log}");
     assert!(log.contains("teapot.ptxc: fresh"), "{log}");

@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::tiny_scene;
+use common::{output_text as log, tiny_scene};
 use engine::maps::{MapLayer, MapSpec, map_path, map_specs};
 use inference::infer::maps::read_map;
 use inference::scene::Scene;
@@ -21,14 +21,6 @@ fn engine(args: &[&str], path_env: Option<&str>) -> Output {
         cmd.env("PATH", p);
     }
     cmd.output().expect("run engine")
-}
-
-fn log(o: &Output) -> String {
-    format!(
-        "stdout:\n{}\nstderr:\n{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
 }
 
 fn s(p: &Path) -> &str {

@@ -98,3 +98,20 @@ pub fn tiny_scene(dir: &Path) -> PathBuf {
     std::fs::write(&path, text).expect("write scene");
     path
 }
+
+/// Runs the `engine` binary with `args`.
+pub fn run_engine(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_engine"))
+        .args(args)
+        .output()
+        .expect("run engine")
+}
+
+/// A run's stdout and stderr, for assertion messages and log checks.
+pub fn output_text(o: &std::process::Output) -> String {
+    format!(
+        "stdout:\n{}\nstderr:\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
