@@ -92,6 +92,33 @@ pub fn is_degenerate([a, b, c]: [Vec3; 3]) -> bool {
     !well_shaped
 }
 
+/// Normalises a file's normal, but leaves already-unit normals bit-exact (so write → load round-trips);
+/// zero stays zero and is filled in from the faces later.
+pub(crate) fn unit(n: Vec3) -> Vec3 {
+    if (n.length_squared() - 1.0).abs() < 1e-6 {
+        n
+    } else {
+        n.normalize_or_zero()
+    }
+}
+
+/// Replaces zero normals with the area-weighted average of adjacent face normals.
+pub(crate) fn fill_missing_normals(mesh: &mut Mesh) {
+    let mut sum = vec![Vec3::ZERO; mesh.positions.len()];
+    for tri in mesh.indices.chunks_exact(3) {
+        let [a, b, c] = [0, 1, 2].map(|k| mesh.positions[tri[k] as usize]);
+        let n = (b - a).cross(c - a); // length = twice the area: area weighting for free
+        for &i in tri {
+            sum[i as usize] += n;
+        }
+    }
+    for (n, s) in mesh.normals.iter_mut().zip(sum) {
+        if *n == Vec3::ZERO {
+            *n = s.normalize_or(Vec3::Y);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
