@@ -1,4 +1,4 @@
-//! The one error type for scene, mesh and OBJ loading.
+//! The one error type for scene, mesh, OBJ and glTF loading.
 
 use std::path::PathBuf;
 
@@ -35,6 +35,13 @@ pub enum SceneError {
         location: String,
         message: String,
     },
+    /// A bad glTF file; `location` is e.g. `buffer 0` or `mesh 2 "body", primitive 0`.
+    #[error("{}: {location}: {message}", path.display())]
+    Gltf {
+        path: PathBuf,
+        location: String,
+        message: String,
+    },
     /// An error inside a file the scene refers to, e.g. a mesh.
     #[error("{}: {field}: {cause}", path.display())]
     Nested {
@@ -62,6 +69,18 @@ impl SceneError {
         message: impl Into<String>,
     ) -> Self {
         SceneError::Obj {
+            path: path.into(),
+            location: location.into(),
+            message: message.into(),
+        }
+    }
+
+    pub(crate) fn gltf(
+        path: impl Into<PathBuf>,
+        location: impl Into<String>,
+        message: impl Into<String>,
+    ) -> Self {
+        SceneError::Gltf {
             path: path.into(),
             location: location.into(),
             message: message.into(),

@@ -5,6 +5,7 @@ pub mod camera;
 pub mod error;
 mod file;
 pub mod glass;
+pub mod gltf;
 pub mod grid;
 pub mod light;
 mod load;
