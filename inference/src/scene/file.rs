@@ -125,9 +125,10 @@ pub struct ObjectFile {
     pub glass: Option<GlassFile>,
 }
 
-/// Either `{ generator = "newell_teapot", segments = 25, part = "whole" }` or
-/// `{ obj = "path/relative/to/the/scene/file.obj" }`; checked after parsing so the error
-/// can say which keys clash.
+/// One of `{ generator = "newell_teapot", segments = 25, part = "whole" }`,
+/// `{ file = "path/relative/to/the/scene/file.glb" }` (.obj, .gltf or .glb) or
+/// `{ obj = "….obj" }` (the older spelling); checked after parsing so the
+/// error can say which keys clash.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeshFile {
@@ -135,6 +136,7 @@ pub struct MeshFile {
     pub segments: Option<u32>,
     pub part: Option<TeapotPart>,
     pub obj: Option<String>,
+    pub file: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -342,6 +342,14 @@ fn bad_objects_are_rejected() {
             "objects[0].em.layers",
         ),
         (
+            TETRA_OBJECT.replace("obj = ", "file = \"tetra.obj\", obj = "),
+            "objects[0].mesh: expected exactly one of",
+        ),
+        (
+            TETRA_OBJECT.replace("obj = \"tetra.obj\"", "file = \"tetra.ply\""),
+            "objects[0].mesh.file: \"tetra.ply\": unknown mesh format",
+        ),
+        (
             TETRA_OBJECT.replace("\"tetra\"\nmesh", "\"floor\"\nmesh"),
             "object name \"floor\" used twice",
         ),
@@ -368,6 +376,37 @@ fn broken_mesh_file_is_reported_through_the_scene() {
     assert!(
         e.contains("x.toml: objects[0].mesh: ") && e.contains("missing.obj"),
         "{e}"
+    );
+}
+
+#[test]
+fn mesh_files_dispatch_on_their_extension() {
+    // `file` reads OBJ by its extension, in any case; a glTF file as glTF.
+    let file = TETRA_OBJECT.replace("obj = \"tetra.obj\"", "file = \"tetra.OBJ\"");
+    let e = error_of("", &file);
+    assert!(
+        e.contains("tetra.OBJ: file: not found (expected an OBJ"),
+        "{e}"
+    );
+    let glb = TETRA_OBJECT.replace("obj = \"tetra.obj\"", "file = \"tetra.glb\"");
+    let e = error_of("", &glb);
+    assert!(
+        e.contains("objects[0].mesh: ")
+            && e.contains("tetra.glb: file: not found (expected a glTF"),
+        "{e}"
+    );
+    let from_file = load(&format!(
+        "{BASE}{}",
+        TETRA_OBJECT.replace("obj = ", "file = ")
+    ))
+    .expect("loads");
+    assert_eq!(
+        from_file
+            .object("tetra")
+            .expect("tetra")
+            .mesh
+            .triangle_count(),
+        4
     );
 }
 

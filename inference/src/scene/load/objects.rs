@@ -1,6 +1,6 @@
-//! Scene objects: mesh source (generator or OBJ), transform, material, EM settings.
+//! Scene objects: mesh source (generator, OBJ or glTF file), transform, material, EM settings.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use glam::{Affine3A, Quat, Vec3};
 
@@ -8,6 +8,7 @@ use super::Loader;
 use crate::scene::Object;
 use crate::scene::error::SceneError;
 use crate::scene::file::{EmFile, MeshFile, ObjectFile};
+use crate::scene::gltf::load_gltf;
 use crate::scene::material::EmSettings;
 use crate::scene::mesh::Mesh;
 use crate::scene::obj::load_obj;
@@ -63,8 +64,8 @@ impl Loader<'_> {
             field: field.to_owned(),
             cause: Box::new(source),
         };
-        let obj_path: PathBuf = match (&m.generator, &m.obj) {
-            (Some(g), None) => {
+        let (name, strict) = match (&m.generator, &m.obj, &m.file) {
+            (Some(g), None, None) => {
                 if g != "newell_teapot" {
                     return Err(self.err(
                         format!("{field}.generator"),
@@ -81,23 +82,36 @@ impl Loader<'_> {
                 let part = m.part.unwrap_or(TeapotPart::Whole);
                 return Ok(teapot::tessellate(segments, part).map_err(nested)?.mesh);
             }
-            (None, Some(obj)) => {
-                if m.segments.is_some() || m.part.is_some() {
-                    return Err(self.err(
-                        field,
-                        "`segments` and `part` belong to a generator, not to `obj`",
-                    ));
-                }
-                self.path.parent().unwrap_or(Path::new(".")).join(obj)
-            }
+            (None, Some(obj), None) => (obj, false),
+            (None, None, Some(file)) => (file, true),
             _ => {
                 return Err(self.err(
                     field,
-                    "expected exactly one of `generator = \"newell_teapot\"` or `obj = \"path.obj\"`",
+                    "expected exactly one of `generator = \"newell_teapot\"`, \
+                     `file = \"path.obj|.gltf|.glb\"` or `obj = \"path.obj\"`",
                 ));
             }
         };
-        load_obj(&obj_path).map_err(nested)
+        if m.segments.is_some() || m.part.is_some() {
+            return Err(self.err(
+                field,
+                "`segments` and `part` belong to a generator, not to a mesh file",
+            ));
+        }
+        let path = self.path.parent().unwrap_or(Path::new(".")).join(name);
+        // By extension; `obj` keeps reading anything else as OBJ, as it always did.
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase());
+        match ext.as_deref() {
+            Some("gltf" | "glb") => load_gltf(&path).map_err(nested),
+            Some("obj") => load_obj(&path).map_err(nested),
+            _ if !strict => load_obj(&path).map_err(nested),
+            _ => Err(self.err(
+                format!("{field}.file"),
+                format!("\"{name}\": unknown mesh format (expected a .obj, .gltf or .glb file)"),
+            )),
+        }
     }
     fn em(&self, field: &str, em: &EmFile) -> Result<EmSettings, SceneError> {
         if !(em.resolution.is_power_of_two() && EM_RESOLUTIONS.contains(&em.resolution)) {
