@@ -83,6 +83,7 @@ fn assert_codec_report(report: &serde_json::Value, ffmpeg: bool) {
     );
     assert!(report["bytes"].as_u64().is_some_and(|b| b > 0));
     assert!(report["decode_ms_median"].as_f64().is_some_and(|t| t > 0.0));
+    assert_playback_timing(report, ffmpeg);
     assert!(report["baselines"].is_array());
     assert!(
         report["frames_vs_uncompressed_psnr_db"]
@@ -113,6 +114,35 @@ fn assert_codec_report(report: &serde_json::Value, ffmpeg: bool) {
     } else {
         assert!(!names.contains(&"mpeg-view"), "{names:?}");
         assert!(notes.contains("ffmpeg not on PATH"), "{notes}");
+    }
+}
+
+/// Decode while the device renders (p50 ≤ p95) and random access: the
+/// pyramid always (3 samples share one block per texture here, so it reads
+/// the whole file; the codec's tests check partial reads), the x264
+/// baseline with ffmpeg.
+fn assert_playback_timing(report: &serde_json::Value, ffmpeg: bool) {
+    let p50 = report["decode_ms_p50_under_load"]
+        .as_f64()
+        .expect("p50 under load");
+    let p95 = report["decode_ms_p95_under_load"]
+        .as_f64()
+        .expect("p95 under load");
+    assert!(p50 > 0.0 && p50 <= p95, "{p50} {p95}");
+    let access = report["random_access"].as_array().expect("random_access");
+    let pyramid = access
+        .iter()
+        .find(|a| a["name"] == "pyramid")
+        .expect("pyramid");
+    assert!(pyramid["ms"].as_f64().is_some_and(|t| t > 0.0), "{pyramid}");
+    let read = pyramid["bytes_read"].as_u64().expect("bytes_read");
+    let bytes = report["bytes"].as_u64().expect("bytes");
+    assert!(read > 0 && read <= bytes, "{read} of {bytes}");
+    assert_eq!(pyramid["samples"], 3);
+    let video = access.iter().find(|a| a["name"] == "mpeg-texture");
+    assert_eq!(video.is_some(), ffmpeg, "{access:?}");
+    if let Some(v) = video {
+        assert!(v["bytes_read"].as_u64().is_some_and(|b| b > 0), "{v}");
     }
 }
 

@@ -127,7 +127,7 @@ pub fn ffmpeg_round_trip_with(
     ))
 }
 
-fn err(what: String) -> CodecError {
+pub(super) fn err(what: String) -> CodecError {
     CodecError::Baseline {
         name: "ffmpeg",
         what,
@@ -137,7 +137,7 @@ fn err(what: String) -> CodecError {
 /// Pipes `rgb48le` frames into ffmpeg, writing `mp4` (from within `dir`);
 /// returns the stream's bytes.
 #[allow(clippy::too_many_arguments)]
-fn encode_video(
+pub(super) fn encode_video(
     codec: VideoCodec,
     frames: &[Vec<u8>],
     w: u32,

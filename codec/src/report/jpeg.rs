@@ -111,6 +111,7 @@ pub fn jpeg_baselines(
                 }
             )),
             pixels: None,
+            crf: None,
         });
     }
     Ok(out)

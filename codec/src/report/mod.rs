@@ -24,16 +24,23 @@
 //! report measures the textures.
 
 mod atlas;
+mod decode_times;
 mod ffmpeg;
 mod jpeg;
 mod mpeg_texture;
+mod random_access;
 
+pub use decode_times::{path_decode_times, quantile};
 pub use ffmpeg::{
     VideoCodec, ffmpeg_available, ffmpeg_round_trip, ffmpeg_round_trip_with, smallest_fitting_crf,
 };
 pub use jpeg::{jpeg_baseline, jpeg_baselines};
 pub use mpeg_texture::{
-    CrfMemo, mpeg_texture_baselines, mpeg_texture_baselines_memo, mpeg_texture_baselines_with,
+    CrfMemo, GOP, mpeg_texture_baselines, mpeg_texture_baselines_memo, mpeg_texture_baselines_with,
+};
+pub use random_access::{
+    Packet, RandomAccess, frames_to_show, parse_packets, pyramid_random_access, spread_samples,
+    video_random_access,
 };
 
 use std::time::Instant;
@@ -57,6 +64,9 @@ pub struct Baseline {
     /// Which pixels the PSNR pools, for baselines measured on frames.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pixels: Option<String>,
+    /// The video encoder's constant rate factor, for video baselines.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub crf: Option<u32>,
 }
 
 /// One point of a ratio-against-PSNR curve.
@@ -125,6 +135,14 @@ pub struct CodecReport {
     /// cache lifetimes (coarse levels mostly cached, the leaf level decoded).
     pub decode_ms_median: f64,
     pub decodes_timed: usize,
+    /// The same decodes on a worker while the engine renders on the same
+    /// cores (the playback's situation): median and 95th percentile
+    /// (engine; `None` here or without a device).
+    pub decode_ms_p50_under_load: Option<f64>,
+    pub decode_ms_p95_under_load: Option<f64>,
+    /// Time and bytes to show one arbitrary sample from cold, per codec
+    /// (engine: it knows the container's file; empty here).
+    pub random_access: Vec<RandomAccess>,
     pub textures: Vec<TexturePsnr>,
     pub baselines: Vec<Baseline>,
     pub notes: Vec<String>,
@@ -223,6 +241,9 @@ pub fn report(c: &Container, reference: &EncodeInput, opts: &ReportOptions) -> R
         raw_bytes: raw,
         decode_ms_median: median,
         decodes_timed: times.len(),
+        decode_ms_p50_under_load: None,
+        decode_ms_p95_under_load: None,
+        random_access: Vec::new(),
         textures,
         baselines,
         notes,

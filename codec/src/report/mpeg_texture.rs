@@ -3,10 +3,10 @@
 //! codec's bytes.
 
 use super::Baseline;
-use super::atlas::{atlas, from_atlas16, texture_peak, widen};
+use super::atlas::{QRange, atlas, from_atlas16, texture_peak, widen};
 use super::ffmpeg::{VideoCodec, ffmpeg_round_trip_with, smallest_fitting_crf};
 use crate::error::Result;
-use crate::input::EncodeInput;
+use crate::input::{EncodeInput, ParamTexture};
 use crate::quality::PsnrAccum;
 
 /// x264 over each texture's samples in parameter order (rows of a 2D grid
@@ -53,27 +53,7 @@ pub fn mpeg_texture_baselines_memo(
     progress: &mut dyn FnMut(String),
 ) -> Result<Vec<Baseline>> {
     let raw_total = reference.raw_bytes();
-    let mut streams = Vec::new();
-    for t in &reference.textures {
-        let peak = texture_peak(t);
-        let mut order = Vec::new();
-        for s1 in 0..t.grid.n1 {
-            for k in 0..t.grid.n0 {
-                let s0 = if s1 % 2 == 0 { k } else { t.grid.n0 - 1 - k };
-                order.push(t.grid.index([s0, s1])?);
-            }
-        }
-        let mut frames = Vec::new();
-        let (mut w, mut h) = (0, 0);
-        for &s in &order {
-            let (aw, ah, rgb, _) = atlas(t, s, peak);
-            // 16-bit input: the 8-bit atlas would cap the baseline near 59 dB.
-            let rgb = widen(t, s, peak, &rgb);
-            (w, h) = (aw, ah);
-            frames.push(rgb);
-        }
-        streams.push((t, peak, order, frames, w, h));
-    }
+    let streams = video_streams(reference)?;
     let name = match codec {
         VideoCodec::X264 => "mpeg-texture",
         VideoCodec::X265 => "mpeg-texture-x265",
@@ -84,8 +64,16 @@ pub fn mpeg_texture_baselines_memo(
         }
         let mut bytes = 0;
         let mut acc = PsnrAccum::default();
-        for (t, peak, order, frames, w, h) in &streams {
-            let (decoded, b) = ffmpeg_round_trip_with(codec, frames, *w, *h, crf, 8)?;
+        for VideoStream {
+            texture: t,
+            peak,
+            order,
+            frames,
+            w,
+            h,
+        } in &streams
+        {
+            let (decoded, b) = ffmpeg_round_trip_with(codec, frames, *w, *h, crf, GOP)?;
             bytes += b;
             let mut out = vec![0.0f32; t.layout.texels() * 4];
             for (&s, f) in order.iter().zip(&decoded) {
@@ -121,7 +109,56 @@ pub fn mpeg_texture_baselines_memo(
                 }
             )),
             pixels: None,
+            crf: Some(best_crf),
         });
     }
     Ok(out)
+}
+
+/// The I-frame period of the video baselines: the pyramid's parameter
+/// blocks hold 8 samples, so both decode at most one 8-sample unit.
+pub const GOP: u32 = 8;
+
+/// One texture's samples as video frames: 16-bit RGB atlases in parameter
+/// order (rows of a 2D grid in zig-zag, so neighbours stay neighbours).
+pub(super) struct VideoStream<'a> {
+    pub texture: &'a ParamTexture,
+    pub peak: QRange,
+    /// Sample index (the grid's linear index) of each frame.
+    pub order: Vec<usize>,
+    pub frames: Vec<Vec<u8>>,
+    pub w: u32,
+    pub h: u32,
+}
+
+/// Every texture of `reference` as a [`VideoStream`].
+pub(super) fn video_streams(reference: &EncodeInput) -> Result<Vec<VideoStream<'_>>> {
+    let mut streams = Vec::new();
+    for t in &reference.textures {
+        let peak = texture_peak(t);
+        let mut order = Vec::new();
+        for s1 in 0..t.grid.n1 {
+            for k in 0..t.grid.n0 {
+                let s0 = if s1 % 2 == 0 { k } else { t.grid.n0 - 1 - k };
+                order.push(t.grid.index([s0, s1])?);
+            }
+        }
+        let mut frames = Vec::new();
+        let (mut w, mut h) = (0, 0);
+        for &s in &order {
+            let (aw, ah, rgb, _) = atlas(t, s, peak);
+            // 16-bit input: the 8-bit atlas would cap the baseline near 59 dB.
+            frames.push(widen(t, s, peak, &rgb));
+            (w, h) = (aw, ah);
+        }
+        streams.push(VideoStream {
+            texture: t,
+            peak,
+            order,
+            frames,
+            w,
+            h,
+        });
+    }
+    Ok(streams)
 }

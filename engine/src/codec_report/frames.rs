@@ -37,6 +37,8 @@ pub(super) struct FrameItem {
 pub(super) struct FrameBench {
     probe: crate::probe::VulkanProbe,
     pub(super) items: Vec<FrameItem>,
+    /// The first item's decoded map, for [`FrameBench::render_load`].
+    load_map: Option<Vec<[f32; 4]>>,
 }
 
 /// How [`FrameBench`] pools pixels, for the JSON.
@@ -105,7 +107,11 @@ impl FrameBench {
                 });
             }
         }
-        Ok((!items.is_empty()).then_some(Self { probe, items }))
+        Ok((!items.is_empty()).then_some(Self {
+            probe,
+            items,
+            load_map: None,
+        }))
     }
 
     /// Median PSNRs of the container's decoded maps rendered, over the
@@ -135,6 +141,34 @@ impl FrameBench {
             vs_raw.push(psnr_against(&it.raw_render));
         }
         Ok((median(&db), median(&vs_raw)))
+    }
+
+    /// Renders frame `i` of a loop over the views of the first item's
+    /// reflector with its decoded map (decoded once, on the first call):
+    /// device work for timing decodes under load.
+    pub(super) fn render_load(&mut self, container: &codec::Container, i: usize) -> Result<()> {
+        use inference::probe::ProbeRenderer;
+        let first = &self.items[0];
+        if self.load_map.is_none() {
+            let mut decoded = vec![0.0f32; first.layout.len() * 4];
+            codec::decode_leaf_all(container, first.index, 0, [first.k, 0], &mut decoded)?;
+            self.load_map = Some(
+                decoded
+                    .chunks_exact(4)
+                    .map(|c| [c[0], c[1], c[2], 1.0])
+                    .collect(),
+            );
+        }
+        let same: Vec<&FrameItem> = self
+            .items
+            .iter()
+            .filter(|it| it.index == first.index)
+            .collect();
+        let it = same[i % same.len()];
+        if let Some(map) = &self.load_map {
+            self.probe.render(&it.geometry, &it.layout, map)?;
+        }
+        Ok(())
     }
 
     pub(super) fn raw_db(&self) -> f64 {

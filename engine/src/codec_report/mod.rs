@@ -2,6 +2,7 @@
 //! PSNR, decode time, and baselines at the same bytes (JPEG, MPEG-texture,
 //! MPEG-view), with ratio-against-PSNR curves on request.
 
+mod access;
 mod curves;
 mod frames;
 mod view_frames;
@@ -60,7 +61,12 @@ pub fn codec_report(scene: &Scene, req: &CodecReportRequest) -> Result<String> {
     say("rendered frames".into());
     let mut bench = FrameBench::new(req, scene)?;
     add_rendered_frames(&mut report, bench.as_mut(), &container)?;
+    if let Some(b) = bench.as_mut() {
+        say("decode under load".into());
+        access::add_decode_under_load(&mut report, b, &container)?;
+    }
     let ffmpeg = codec::report::ffmpeg_available();
+    access::add_random_access(&mut report, &req.file, &input, ffmpeg, &say)?;
     let mut views = add_view_baselines(
         scene,
         req,
@@ -181,6 +187,18 @@ fn summary(req: &CodecReportRequest, report: &codec::report::CodecReport) -> Str
         .find(|n| n.starts_with("rendered frames"))
     {
         text += &format!("  {n}\n");
+    }
+    if let (Some(p50), Some(p95)) = (
+        report.decode_ms_p50_under_load,
+        report.decode_ms_p95_under_load,
+    ) {
+        text += &format!("  decode while rendering: p50 {p50:.2} ms, p95 {p95:.2} ms per leaf\n");
+    }
+    for a in &report.random_access {
+        text += &format!(
+            "  random access {:<17} {:.2} ms, {} bytes read (medians over {} samples)\n",
+            a.name, a.ms, a.bytes_read, a.samples
+        );
     }
     for b in &report.baselines {
         text += &format!(

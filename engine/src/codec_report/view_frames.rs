@@ -172,6 +172,7 @@ pub(super) fn mpeg_view_baselines(
                 }
             )),
             pixels: Some(FRAME_PIXELS.into()),
+            crf: Some(crf),
         });
     }
     Ok(out)
