@@ -21,7 +21,7 @@ fn a_cold_random_access_reads_the_header_and_one_block_per_texture() {
     let c = Container::open(&path).unwrap();
     let header = c.bytes_read();
     let samples = spread_samples(40, 6);
-    let access = pyramid_random_access(&path, &samples).unwrap();
+    let access = pyramid_random_access(&path, &samples, 1).unwrap();
     assert_eq!(access.samples, samples.len());
     assert!(access.ms > 0.0);
     // Every access reads the header and exactly its blocks: one per texture.
@@ -42,6 +42,10 @@ fn a_cold_random_access_reads_the_header_and_one_block_per_texture() {
     sorted.sort_unstable();
     assert_eq!(access.bytes_read, sorted[sorted.len() / 2]);
     assert!(access.bytes_read < c.file_len() / 2, "{access:?}");
+    // Dealt over threads: the same reads.
+    let parallel = pyramid_random_access(&path, &samples, 3).unwrap();
+    assert_eq!(parallel.bytes_read, access.bytes_read);
+    assert_eq!(parallel.name, "pyramid, 3 threads");
 }
 
 #[test]

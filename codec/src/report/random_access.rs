@@ -41,10 +41,16 @@ pub fn spread_samples(n: usize, count: usize) -> Vec<usize> {
 }
 
 /// The pyramid: for each sample a fresh [`Container::open`] (header and
-/// index read) and a fresh [`DecodeCache`], then every texture's leaf at
-/// that sample decoded (all faces and MIPs, f16) — what a player jumping
-/// there must do. The file's pages may sit in the OS cache.
-pub fn pyramid_random_access(path: &Path, samples: &[usize]) -> Result<RandomAccess> {
+/// index read) and a fresh [`DecodeCache`] per thread, then every
+/// texture's leaf at that sample decoded (all faces and MIPs, f16), the
+/// textures dealt over `threads` threads — what a player jumping there
+/// must do. The file's pages may sit in the OS cache.
+pub fn pyramid_random_access(
+    path: &Path,
+    samples: &[usize],
+    threads: usize,
+) -> Result<RandomAccess> {
+    let threads = threads.max(1);
     let probe = Container::open(path)?;
     let mut outs: Vec<Vec<half::f16>> = probe
         .textures()
@@ -55,25 +61,59 @@ pub fn pyramid_random_access(path: &Path, samples: &[usize]) -> Result<RandomAcc
     for &s in samples {
         let start = Instant::now();
         let c = Container::open(path)?;
-        let mut cache = DecodeCache::default();
-        for (t, out) in c.textures().iter().zip(&mut outs) {
-            let n0 = t.grid.n0 as usize;
-            if s >= t.grid.len() {
-                continue;
-            }
-            let sample = [(s % n0) as u32, (s / n0) as u32];
-            cache.decode_leaf_all(&c, t.id.object, t.id.layer, sample, out)?;
+        let textures: Vec<_> = c.textures().iter().zip(&mut outs).collect();
+        let per_thread = textures.len().div_ceil(threads).max(1);
+        let mut chunks: Vec<Vec<_>> = Vec::new();
+        let mut it = textures.into_iter().peekable();
+        while it.peek().is_some() {
+            chunks.push(it.by_ref().take(per_thread).collect());
         }
+        std::thread::scope(|scope| -> Result<()> {
+            let c = &c;
+            let workers: Vec<_> = chunks
+                .into_iter()
+                .map(|chunk| scope.spawn(move || decode_sample(c, chunk, s)))
+                .collect();
+            for w in workers {
+                w.join()
+                    .map_err(|_| err("a decode thread panicked".into()))??;
+            }
+            Ok(())
+        })?;
         times.push(start.elapsed().as_secs_f64() * 1e3);
         bytes.push(c.bytes_read());
     }
     Ok(RandomAccess {
-        name: "pyramid".into(),
+        name: if threads == 1 {
+            "pyramid".into()
+        } else {
+            format!("pyramid, {threads} threads")
+        },
         ms: median(&mut times),
         bytes_read: median_u64(&mut bytes),
         samples: samples.len(),
-        note: "fresh open (header, index) and fresh decode cache per sample; every texture's leaf, all faces and MIPs, to f16; one thread".into(),
+        note: format!(
+            "fresh open (header, index) and fresh decode caches per sample; every texture's leaf, all faces and MIPs, to f16; textures dealt over {threads} thread(s)"
+        ),
     })
+}
+
+/// Decodes sample `s` of each texture in `chunk` into its buffer.
+fn decode_sample(
+    c: &Container,
+    chunk: Vec<(&crate::container::TextureInfo, &mut Vec<half::f16>)>,
+    s: usize,
+) -> Result<()> {
+    let mut cache = DecodeCache::default();
+    for (t, out) in chunk {
+        if s >= t.grid.len() {
+            continue;
+        }
+        let n0 = t.grid.n0 as usize;
+        let sample = [(s % n0) as u32, (s / n0) as u32];
+        cache.decode_leaf_all(c, t.id.object, t.id.layer, sample, out)?;
+    }
+    Ok(())
 }
 
 /// A video along the parameter path (the `mpeg-texture` streams, one per

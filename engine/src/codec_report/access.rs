@@ -67,10 +67,15 @@ pub(super) fn add_random_access(
         .unwrap_or(0);
     let samples = codec::report::spread_samples(n, ACCESS_SAMPLES);
     say(format!("random access: {} samples", samples.len()));
-    report.random_access.push(
-        codec::report::pyramid_random_access(file, &samples)
-            .with_context(|| format!("random access in {}", file.display()))?,
-    );
+    // One thread as playback decodes; all cores as a seek may (the video
+    // decoder uses its default threads).
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    for threads in [1, cores].into_iter().take(if cores > 1 { 2 } else { 1 }) {
+        report.random_access.push(
+            codec::report::pyramid_random_access(file, &samples, threads)
+                .with_context(|| format!("random access in {}", file.display()))?,
+        );
+    }
     let crf = report
         .baselines
         .iter()
