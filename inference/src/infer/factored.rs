@@ -200,40 +200,7 @@ pub fn infer_factored(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::probe::{Lookup, ProbeError};
-
-    /// View `offset` shows texels offset..offset+8 of a 16-wide texture row,
-    /// one texel per pixel (magnified exactly: pixel centre = texel centre).
-    struct Device;
-    impl ProbeRenderer for Device {
-        fn render(
-            &mut self,
-            g: &ProbeGeometry,
-            l: &TextureLayout,
-            t: &[[f32; 4]],
-        ) -> Result<Vec<[f32; 4]>, ProbeError> {
-            let offset = g.key as u32;
-            Ok((0..g.width * g.height)
-                .map(|p| {
-                    let (x, y) = (p % g.width, p / g.width);
-                    let v = t[l.index(0, 0, x + offset, y)];
-                    [v[0], v[1], v[2], 1.0]
-                })
-                .collect())
-        }
-    }
-
-    fn geometry(offset: u64) -> ProbeGeometry {
-        ProbeGeometry {
-            key: offset,
-            positions: vec![],
-            indices: vec![],
-            lookup: Lookup::Uv(vec![]),
-            view_proj: glam::Mat4::IDENTITY,
-            width: 8,
-            height: 4,
-        }
-    }
+    use crate::infer::shift_device::{ShiftDevice as Device, shifted_view as geometry};
 
     #[test]
     fn a_light_map_under_a_known_albedo_is_recovered_from_two_views() {

@@ -6,6 +6,8 @@ pub mod factored;
 pub mod forward;
 pub mod layer;
 pub mod maps;
+#[cfg(test)]
+mod shift_device;
 pub mod stacked;
 #[cfg(test)]
 mod tests;
