@@ -21,6 +21,11 @@ pub struct SceneFile {
     pub room: RoomFile,
     #[serde(default)]
     pub lights: Vec<LightFile>,
+    /// Optional; absent in the shipped scenes.
+    #[serde(default)]
+    pub directional_lights: Vec<DirectionalLightFile>,
+    #[serde(default)]
+    pub point_lights: Vec<PointLightFile>,
     /// Sorted by name; a material's index in `Scene::materials` follows this order.
     pub materials: BTreeMap<String, MaterialFile>,
     #[serde(default)]
@@ -74,6 +79,24 @@ pub struct LightFile {
     pub edge_u: V3,
     pub edge_v: V3,
     pub radiance: V3,
+}
+
+/// `[[directional_lights]]`: `to_light` points toward the light (normalised on load).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DirectionalLightFile {
+    pub name: String,
+    pub to_light: V3,
+    pub irradiance: V3,
+}
+
+/// `[[point_lights]]`: an isotropic point light inside the room.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PointLightFile {
+    pub name: String,
+    pub position: V3,
+    pub intensity: V3,
 }
 
 #[derive(Debug, Deserialize)]

@@ -1,4 +1,6 @@
-//! Rectangular area light.
+//! Lights: the rectangular area light of every shipped scene, and the
+//! optional directional and point lights (`[[directional_lights]]`,
+//! `[[point_lights]]`) that the relighting work moves around.
 
 use glam::{Vec2, Vec3};
 
@@ -45,6 +47,33 @@ impl AreaLight {
         ]
     }
 }
+
+/// Parallel light from direction `to_light` (unit, pointing *toward* the light),
+/// delivering `irradiance` (W·m⁻² per channel) to a surface facing it.
+///
+/// The room is a closed box, so a directional light reaches inside the way sun
+/// reaches a room with open walls: the room's own box (objects `floor`, `walls`,
+/// `ceiling`, see [`ROOM_OBJECTS`]) does not shadow it, every other object does.
+/// Each room face is lit only on the side facing the light (the floor from above,
+/// a wall from inside when the light comes from beyond the opposite wall).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DirectionalLight {
+    pub name: String,
+    pub to_light: Vec3,
+    pub irradiance: Vec3,
+}
+
+/// An isotropic point light at `position` with `intensity` (W·sr⁻¹ per channel):
+/// a surface at distance d facing it receives `intensity / d²`. Everything shadows it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointLight {
+    pub name: String,
+    pub position: Vec3,
+    pub intensity: Vec3,
+}
+
+/// The room's box objects, transparent to directional light.
+pub const ROOM_OBJECTS: [&str; 3] = ["floor", "walls", "ceiling"];
 
 #[cfg(test)]
 mod tests {

@@ -30,7 +30,7 @@ pub use camera::{Camera, Orbit};
 pub use error::SceneError;
 pub use glass::GlassSettings;
 pub use grid::{SampleBlend, ViewGrid};
-pub use light::AreaLight;
+pub use light::{AreaLight, DirectionalLight, PointLight};
 pub use material::{EM_RESOLUTIONS, EmLayer, EmSettings, Material};
 pub use mesh::Mesh;
 pub use shipped::{SHIPPED, shipped};
@@ -46,6 +46,10 @@ pub struct Scene {
     pub camera: Camera,
     pub orbit: Orbit,
     pub lights: Vec<AreaLight>,
+    /// Optional parallel lights (`[[directional_lights]]`); none in the shipped scenes.
+    pub directional_lights: Vec<DirectionalLight>,
+    /// Optional point lights (`[[point_lights]]`); none in the shipped scenes.
+    pub point_lights: Vec<PointLight>,
     /// Declared materials sorted by name, then one emissive material per light.
     pub materials: Vec<Material>,
     /// Name of each entry of `materials` (a light's material carries the light's name).

@@ -460,3 +460,37 @@ fn ring_layouts_change_the_orbit_key_and_1d_orbits_keep_theirs() {
     lines.orbit.samples = 50;
     assert_eq!(key(&lines).changes(&key(&rings)), ["orbit"]);
 }
+
+#[test]
+fn directional_and_point_lights_are_optional_and_checked() {
+    let base = load(BASE).expect("base scene");
+    assert!(base.directional_lights.is_empty() && base.point_lights.is_empty());
+    let with = format!(
+        "{BASE}\n[[directional_lights]]\nname = \"sun\"\nto_light = [0.0, 2.0, 0.0]\n\
+         irradiance = [3.0, 2.0, 1.0]\n\n[[point_lights]]\nname = \"bulb\"\n\
+         position = [0.5, 2.0, 0.0]\nintensity = [5.0, 5.0, 5.0]\n"
+    );
+    let s = load(&with).expect("scene with extra lights");
+    assert_eq!(s.directional_lights.len(), 1);
+    assert_eq!(s.directional_lights[0].to_light, Vec3::Y, "normalised");
+    assert_eq!(s.directional_lights[0].irradiance, Vec3::new(3.0, 2.0, 1.0));
+    assert_eq!(s.point_lights[0].position, Vec3::new(0.5, 2.0, 0.0));
+    // They add no objects or materials: the rasterised scene is unchanged.
+    assert_eq!(s.objects.len(), base.objects.len());
+    assert_eq!(s.materials.len(), base.materials.len());
+    let zero = error_of(
+        "",
+        "[[directional_lights]]\nname = \"sun\"\nto_light = [0.0, 0.0, 0.0]\nirradiance = [1.0, 1.0, 1.0]",
+    );
+    assert!(zero.contains("directional_lights[0].to_light"), "{zero}");
+    let outside = error_of(
+        "",
+        "[[point_lights]]\nname = \"b\"\nposition = [0.0, 9.0, 0.0]\nintensity = [1.0, 1.0, 1.0]",
+    );
+    assert!(outside.contains("point_lights[0].position"), "{outside}");
+    let negative = error_of(
+        "",
+        "[[point_lights]]\nname = \"b\"\nposition = [0.0, 1.0, 0.0]\nintensity = [-1.0, 1.0, 1.0]",
+    );
+    assert!(negative.contains("point_lights[0].intensity"), "{negative}");
+}

@@ -175,6 +175,31 @@ impl SceneBvh {
     }
 }
 
+impl SceneBvh {
+    /// As [`SceneBvh::occluded`], counting only objects `blocks` accepts (directional
+    /// light, which the room's box lets through).
+    pub fn occluded_where(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        tmin: f32,
+        tmax: f32,
+        blocks: impl Fn(u32) -> bool,
+    ) -> bool {
+        let Some(bvh) = self.bvh.as_ref() else {
+            return false;
+        };
+        let ray = make_ray(origin, dir, tmin, tmax);
+        !bvh.ray_traverse_miss(ray, |r, id| {
+            if blocks(self.prims[id].object) {
+                self.tris[id].intersect(r)
+            } else {
+                f32::INFINITY
+            }
+        })
+    }
+}
+
 /// obvhs 0.4's traversal misses every node for a direction with a −0.0 component (e.g.
 /// `-Vec3::Y`): its octant test and its inverse direction disagree. Adding +0.0 turns −0.0
 /// into +0.0 and leaves every other value unchanged.

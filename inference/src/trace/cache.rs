@@ -61,6 +61,20 @@ pub fn scene_key(scene: &Scene) -> Key {
                         .into_iter()
                         .for_each(|v| h.v3(v));
                 }
+                // Optional lights add bytes only when present: scenes without
+                // them keep their keys.
+                for l in &scene.directional_lights {
+                    h.str("directional");
+                    h.str(&l.name);
+                    h.v3(l.to_light);
+                    h.v3(l.irradiance);
+                }
+                for l in &scene.point_lights {
+                    h.str("point");
+                    h.str(&l.name);
+                    h.v3(l.position);
+                    h.v3(l.intensity);
+                }
             }),
         )
         .with("materials", hash(|h| materials(h, scene)))

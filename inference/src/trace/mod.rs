@@ -52,6 +52,8 @@ pub mod transport;
 #[cfg(test)]
 mod caustic_tests;
 #[cfg(test)]
+mod light_tests;
+#[cfg(test)]
 mod material_tests;
 #[cfg(test)]
 mod tests;

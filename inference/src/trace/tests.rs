@@ -74,6 +74,8 @@ pub(super) fn scene(objects: Vec<(&str, Mesh, Material)>) -> Scene {
             ring_step_deg: 10.0,
         },
         lights: vec![],
+        directional_lights: vec![],
+        point_lights: vec![],
         materials: vec![],
         material_names: vec![],
         objects: vec![],

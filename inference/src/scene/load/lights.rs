@@ -6,8 +6,8 @@ use glam::Vec3;
 use super::{Loader, SceneParts};
 use crate::scene::Object;
 use crate::scene::error::SceneError;
-use crate::scene::file::LightFile;
-use crate::scene::light::AreaLight;
+use crate::scene::file::{LightFile, SceneFile};
+use crate::scene::light::{AreaLight, DirectionalLight, PointLight};
 use crate::scene::material::Material;
 
 impl Loader<'_> {
@@ -77,5 +77,48 @@ impl Loader<'_> {
             return Err(self.err(field("center"), "light centre is outside the room"));
         }
         Ok(light)
+    }
+
+    /// The optional directional and point lights: named, finite, non-negative
+    /// power, a non-zero direction (normalised), point lights inside the room.
+    pub(super) fn extra_lights(
+        &self,
+        file: &SceneFile,
+        (min, max): (Vec3, Vec3),
+    ) -> Result<(Vec<DirectionalLight>, Vec<PointLight>), SceneError> {
+        let named = |field: String, name: &str| {
+            if name.trim().is_empty() {
+                Err(self.err(field, "empty (expected a light name)"))
+            } else {
+                Ok(name.to_owned())
+            }
+        };
+        let mut directional = Vec::new();
+        for (i, l) in file.directional_lights.iter().enumerate() {
+            let field = |f: &str| format!("directional_lights[{i}].{f}");
+            let to_light = self.vec3(&field("to_light"), l.to_light)?;
+            if to_light.length_squared() < 1e-12 {
+                return Err(self.err(field("to_light"), "zero vector (expected a direction)"));
+            }
+            directional.push(DirectionalLight {
+                name: named(field("name"), &l.name)?,
+                to_light: to_light.normalize(),
+                irradiance: self.vec3_in(&field("irradiance"), l.irradiance, 0.0, f32::MAX)?,
+            });
+        }
+        let mut points = Vec::new();
+        for (i, l) in file.point_lights.iter().enumerate() {
+            let field = |f: &str| format!("point_lights[{i}].{f}");
+            let position = self.vec3(&field("position"), l.position)?;
+            if position.cmplt(min).any() || position.cmpgt(max).any() {
+                return Err(self.err(field("position"), "point light is outside the room"));
+            }
+            points.push(PointLight {
+                name: named(field("name"), &l.name)?,
+                position,
+                intensity: self.vec3_in(&field("intensity"), l.intensity, 0.0, f32::MAX)?,
+            });
+        }
+        Ok((directional, points))
     }
 }

@@ -72,6 +72,7 @@ impl Loader<'_> {
         }
         self.check_unique_names(&parts.objects)?;
         self.check_one_glass(&file.objects)?;
+        let (directional_lights, point_lights) = self.extra_lights(&file, room)?;
 
         Ok(Scene {
             name,
@@ -79,6 +80,8 @@ impl Loader<'_> {
             camera,
             orbit,
             lights: parts.lights,
+            directional_lights,
+            point_lights,
             materials: parts.materials,
             material_names: parts.material_names,
             objects: parts.objects,

@@ -19,6 +19,7 @@
 //!
 //! Surfaces are two-sided except emitters, which emit on their front (winding) side only.
 
+mod analytic;
 mod camera_ray;
 
 use glam::{Vec2, Vec3};
@@ -89,6 +90,8 @@ pub struct Integrator<'a> {
     pub(super) transport: Transport,
     /// The caustic photon map read at diffuse hits (`Caustics::Photons`).
     photons: Option<&'a PhotonMap>,
+    /// Per object: true for the room's box (transparent to directional light).
+    room: Vec<bool>,
 }
 
 impl<'a> Integrator<'a> {
@@ -98,6 +101,7 @@ impl<'a> Integrator<'a> {
             bvh,
             transport,
             photons: None,
+            room: analytic::room_mask(scene),
         }
     }
 
@@ -160,8 +164,19 @@ impl<'a> Integrator<'a> {
         }
     }
 
-    /// One area-light sample: radiance reflected by a white Lambertian surface (albedo 1).
+    /// One area-light sample plus the exact directional and point lights: radiance
+    /// reflected by a white Lambertian surface (albedo 1).
     fn direct(&self, s: &Surface, rng: &mut Rng, rays: &mut u64) -> Vec3 {
+        let area = self.area_direct(s, rng, rays);
+        if self.scene.directional_lights.is_empty() && self.scene.point_lights.is_empty() {
+            // Scenes without them trace exactly as before (same sums, same rays).
+            return area;
+        }
+        area + self.analytic_direct(s, rays)
+    }
+
+    /// One area-light sample (zero without area lights).
+    fn area_direct(&self, s: &Surface, rng: &mut Rng, rays: &mut u64) -> Vec3 {
         let lights = &self.scene.lights;
         let n = lights.len();
         let pick = ((rng.next_f32() * n as f32) as usize).min(n.saturating_sub(1));
