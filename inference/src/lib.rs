@@ -13,6 +13,7 @@ pub mod infer;
 pub mod key;
 pub mod lightmap;
 pub mod probe;
+pub mod relight;
 pub mod scene;
 pub mod solve;
 pub mod teapot;
