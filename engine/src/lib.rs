@@ -29,6 +29,7 @@ pub mod pem;
 pub mod perf;
 pub mod play;
 pub mod probe;
+pub mod relight;
 pub mod renderer;
 pub mod shader_interface;
 pub mod util;

@@ -7,6 +7,7 @@ pub mod pem;
 pub mod pem_deferred;
 pub mod probe;
 pub mod readback;
+pub mod relight;
 pub mod room;
 pub mod room_maps;
 pub mod target;

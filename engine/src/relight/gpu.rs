@@ -1,0 +1,240 @@
+//! The relightable panorama on the device: `k` signed SH maps as one 2D-array
+//! image (layer i = C_i), the position panorama for point lights, the relit
+//! target, and the pass that fills it for one light per frame.
+
+use crate::backend::upload::upload_image;
+use crate::backend::{
+    Buffer, DepthTest, Device, GpuError, GpuResult, Image, ImageDesc, Pipeline, PipelineDesc,
+    Sampler, StencilTest,
+};
+use crate::graph::{Executor, Usage};
+use crate::passes::readback::ReadbackPass;
+use crate::passes::relight::RelightPass;
+use crate::shader_interface::{RelightPush, spirv};
+use ash::vk;
+use glam::{Vec3, Vec4};
+use half::f16;
+use inference::relight::sh::{self, MAX_K};
+use inference::relight::{Panorama, ShMaps};
+
+/// The light of one frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum GpuLight {
+    Directional { to_light: Vec3, irradiance: Vec3 },
+    Point { position: Vec3, intensity: Vec3 },
+}
+
+/// How the SH maps are stored on the device (both signed floats).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MapPrecision {
+    /// RGBA16F: half the bytes each frame reads (the default).
+    Half,
+    /// RGBA32F: the CPU reference to float rounding.
+    Float,
+}
+
+pub struct RelightGpu {
+    device: Device,
+    pipeline: Pipeline,
+    _sampler: Sampler,
+    maps: Image,
+    positions: Image,
+    pub target: Image,
+    set: vk::DescriptorSet,
+    readback: Buffer,
+    pub k: usize,
+    pub panorama: Panorama,
+}
+
+const TARGET_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+
+impl RelightGpu {
+    /// Uploads the first `k` maps of `maps` and the per-texel `positions`.
+    pub fn new(
+        device: &Device,
+        executor: &mut Executor,
+        maps: &ShMaps,
+        k: usize,
+        positions: &[Vec3],
+        precision: MapPrecision,
+    ) -> GpuResult<Self> {
+        let p = maps.panorama;
+        if sh::bands(k).is_none() || k > maps.k || positions.len() != p.texels() {
+            return Err(GpuError::Invalid(format!(
+                "relight: k = {k} (expected a square ≤ {} and ≤ the {} maps given), {} positions \
+                 for {} texels",
+                MAX_K,
+                maps.k,
+                positions.len(),
+                p.texels()
+            )));
+        }
+        let (format, texel): (vk::Format, fn(f32) -> Vec<u8>) = match precision {
+            MapPrecision::Half => (vk::Format::R16G16B16A16_SFLOAT, |x| {
+                f16::from_f32(x).to_le_bytes().to_vec()
+            }),
+            MapPrecision::Float => (vk::Format::R32G32B32A32_SFLOAT, |x| {
+                x.to_le_bytes().to_vec()
+            }),
+        };
+        let sampled = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
+        let map_image = Image::new(
+            device,
+            "relight sh maps",
+            ImageDesc::new_2d_array(format, p.width, p.height, k as u32).usage(sampled),
+        )?;
+        let mut bytes = Vec::new();
+        for i in 0..k {
+            for c in maps.plane(i).chunks_exact(3) {
+                for x in [c[0], c[1], c[2], 0.0] {
+                    bytes.extend(texel(x));
+                }
+            }
+        }
+        upload_image(device, executor.commands(), &map_image, &bytes)?;
+        executor.states.assume(&map_image, Usage::Sampled);
+        let position_image = Image::new(
+            device,
+            "relight positions",
+            ImageDesc::new_2d(vk::Format::R32G32B32A32_SFLOAT, p.width, p.height).usage(sampled),
+        )?;
+        let bytes: Vec<u8> = positions
+            .iter()
+            .flat_map(|v| [v.x, v.y, v.z, 1.0])
+            .flat_map(f32::to_le_bytes)
+            .collect();
+        upload_image(device, executor.commands(), &position_image, &bytes)?;
+        executor.states.assume(&position_image, Usage::Sampled);
+        let target = Image::new(
+            device,
+            "relit panorama",
+            ImageDesc::new_2d(TARGET_FORMAT, p.width, p.height)
+                .usage(vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC),
+        )?;
+        let pipeline = relight_pipeline(device)?;
+        let sampler = Sampler::new(
+            device,
+            vk::SamplerAddressMode::CLAMP_TO_EDGE,
+            crate::backend::Filtering::Nearest,
+        )?;
+        let set = pipeline.descriptor_set(&[
+            crate::backend::Binding::Image(map_image.view, sampler.raw),
+            crate::backend::Binding::Image(position_image.view, sampler.raw),
+        ])?;
+        let readback = Buffer::new(
+            device,
+            "relit read-back",
+            p.texels() as u64 * 16,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            gpu_allocator::MemoryLocation::GpuToCpu,
+        )?;
+        Ok(Self {
+            device: device.clone(),
+            pipeline,
+            _sampler: sampler,
+            maps: map_image,
+            positions: position_image,
+            target,
+            set,
+            readback,
+            k,
+            panorama: p,
+        })
+    }
+
+    /// The push constants for `light`: scalar weights `Y_i(L₀)` for a
+    /// directional light, the position for a point light.
+    pub fn push(&self, light: GpuLight) -> RelightPush {
+        let mut push = RelightPush::default();
+        let k = self.k as f32;
+        match light {
+            GpuLight::Directional {
+                to_light,
+                irradiance,
+            } => {
+                let mut y = [0.0f32; MAX_K];
+                sh::eval(to_light, &mut y[..self.k]);
+                for (w, c) in push.weights.iter_mut().zip(y.chunks_exact(4)) {
+                    *w = Vec4::from_slice(c);
+                }
+                push.light = Vec4::new(0.0, 0.0, 0.0, y[24]);
+                push.power = irradiance.extend(k);
+            }
+            GpuLight::Point {
+                position,
+                intensity,
+            } => {
+                push.light = position.extend(0.0);
+                push.power = intensity.extend(-k);
+            }
+        }
+        push
+    }
+
+    /// Bytes of the SH maps on the device.
+    pub fn map_bytes(&self) -> GpuResult<u64> {
+        crate::backend::upload::image_bytes(&self.maps)
+    }
+
+    /// The frame's pass for `light`.
+    pub fn pass(&self, light: GpuLight) -> RelightPass<'_> {
+        RelightPass {
+            device: &self.device,
+            pipeline: &self.pipeline,
+            set: self.set,
+            maps: &self.maps,
+            positions: &self.positions,
+            target: &self.target,
+            push: self.push(light),
+        }
+    }
+
+    /// Relights once; the pass's GPU time in milliseconds.
+    pub fn render(&self, executor: &mut Executor, light: GpuLight) -> GpuResult<f64> {
+        let timings = executor.run(&[&self.pass(light)])?;
+        Ok(timings.first().map_or(0.0, |t| t.sample.gpu_ms))
+    }
+
+    /// Relights once and reads the panorama back (row-major RGB).
+    pub fn render_and_read(
+        &self,
+        executor: &mut Executor,
+        light: GpuLight,
+    ) -> GpuResult<Vec<Vec3>> {
+        let readback = ReadbackPass {
+            device: &self.device,
+            image: &self.target,
+            buffer: &self.readback,
+        };
+        executor.run(&[&self.pass(light), &readback])?;
+        let bytes = self.readback.mapped()?;
+        Ok(bytes[..self.panorama.texels() * 16]
+            .chunks_exact(16)
+            .map(|t| {
+                let f = |i: usize| f32::from_le_bytes([t[i], t[i + 1], t[i + 2], t[i + 3]]);
+                Vec3::new(f(0), f(4), f(8))
+            })
+            .collect())
+    }
+}
+
+fn relight_pipeline(device: &Device) -> GpuResult<Pipeline> {
+    Pipeline::new(
+        device,
+        &PipelineDesc {
+            name: "relight",
+            vertex_spirv: spirv::PEM_COMPOSITE_VERT,
+            fragment_spirv: spirv::RELIGHT_FRAG,
+            vertex_bindings: &[],
+            vertex_attributes: &[],
+            color_formats: &[TARGET_FORMAT],
+            depth_format: vk::Format::UNDEFINED,
+            cull_mode: vk::CullModeFlags::NONE,
+            push_constant_size: size_of::<RelightPush>() as u32,
+            bindings: &[vk::DescriptorType::COMBINED_IMAGE_SAMPLER; 2],
+            blend_by_alpha: false,
+            depth: DepthTest::Off,
+            stencil: StencilTest::Off,
+        },
+    )
+}

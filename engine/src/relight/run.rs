@@ -1,0 +1,243 @@
+//! `engine relight`: the relightable panorama compiled (or read from the
+//! cache), relit on the GPU at held-out light directions for k = 9, 16, 25,
+//! scored against the tracer, timed, and written as PNG/EXR.
+
+use anyhow::{Context, Result};
+use glam::Vec3;
+use inference::relight::grid::direction;
+use inference::relight::sh::ORDERS;
+use inference::relight::{HELD_OUT_DEG, MovingLight, RelightScene};
+use inference::scene::Scene;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use super::cache::{GridSettings, relightable};
+use super::gpu::{GpuLight, MapPrecision, RelightGpu};
+use crate::backend::{DeviceOptions, create_device};
+use crate::eval::metrics::masked_psnr;
+use crate::graph::Executor;
+use crate::util::stats::median;
+
+/// Irradiance of the held-out lights in the written images (W·m⁻²; the
+/// scores do not depend on it).
+const SHOWN_IRRADIANCE: f32 = 3.0;
+/// Intensity of the moving point light (W·sr⁻¹).
+const POINT_INTENSITY: f32 = 8.0;
+
+pub struct RelightOptions {
+    pub settings: GridSettings,
+    pub out: PathBuf,
+    /// Timed frames per measurement (after 5 warm-up frames).
+    pub frames: u32,
+    pub device: DeviceOptions,
+    pub precision: MapPrecision,
+    pub progress: bool,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct RelightRow {
+    pub k: usize,
+    /// Median linear PSNR (peak = the traced panorama's maximum) over the
+    /// held-out directions.
+    pub psnr_db: f64,
+    /// Median GPU time (timestamps) of one directional relight, ms.
+    pub ms: f64,
+    /// Median wall time of one directional frame (record, submit, wait), ms.
+    pub wall_ms: f64,
+    /// Median GPU time of one point-light relight, ms.
+    pub point_ms: f64,
+    pub point_wall_ms: f64,
+    /// Linear PSNR of the point-light relight against the tracer.
+    pub point_psnr_db: f64,
+    /// Bytes of the SH maps on the device.
+    pub bytes: u64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct RelightReport {
+    /// Frames per second relighting the panorama at k = 16, wall clock.
+    pub directional_fps: f64,
+    pub point_fps: f64,
+    pub rows: Vec<RelightRow>,
+    pub width: u32,
+    pub height: u32,
+    pub grid: [u32; 2],
+    pub spp: u32,
+    pub bounces: u32,
+    pub held_out_deg: Vec<[f32; 2]>,
+    pub point_light: [f32; 3],
+    pub cached: bool,
+    pub trace_s: f64,
+    pub maps: PathBuf,
+}
+
+/// Where the moving point light sits for the traced comparison: above and
+/// beside the reflector.
+fn point_light(origin: Vec3) -> Vec3 {
+    origin + Vec3::new(0.9, 1.6, -0.7)
+}
+
+pub fn run(scene: &Scene, options: &RelightOptions) -> Result<RelightReport> {
+    let r = relightable(scene, &options.settings, &options.out, options.progress)?;
+    let dir = options.out.join("relight");
+    let trace = &options.settings.trace;
+    let mut relit_scene = RelightScene::new(scene);
+    let held_out: Vec<Vec3> = HELD_OUT_DEG.iter().map(|&(e, a)| direction(e, a)).collect();
+    let traced: Vec<Vec<Vec3>> = held_out
+        .iter()
+        .map(|d| relit_scene.trace(MovingLight::Directional(*d), trace))
+        .collect();
+    let point = point_light(relit_scene.origin);
+    let intensity = Vec3::splat(POINT_INTENSITY);
+    let traced_point = relit_scene.trace(
+        MovingLight::Point {
+            position: point,
+            intensity,
+        },
+        trace,
+    );
+    for (j, t) in traced.iter().enumerate() {
+        write_images(
+            &dir,
+            &format!("traced_dir{j}"),
+            r.maps.panorama,
+            t,
+            SHOWN_IRRADIANCE,
+        )?;
+    }
+    write_images(&dir, "traced_point", r.maps.panorama, &traced_point, 1.0)?;
+
+    let device = create_device(&options.device)?;
+    let mut executor = Executor::new(&device)?;
+    let mut rows = Vec::new();
+    for k in ORDERS {
+        let gpu = RelightGpu::new(
+            &device,
+            &mut executor,
+            &r.maps,
+            k,
+            &r.positions,
+            options.precision,
+        )?;
+        let mut psnrs = Vec::new();
+        for (j, (d, t)) in held_out.iter().zip(&traced).enumerate() {
+            let light = GpuLight::Directional {
+                to_light: *d,
+                irradiance: Vec3::ONE,
+            };
+            let relit = gpu.render_and_read(&mut executor, light)?;
+            psnrs.push(psnr(t, &relit)?);
+            write_images(
+                &dir,
+                &format!("relit_k{k}_dir{j}"),
+                r.maps.panorama,
+                &relit,
+                SHOWN_IRRADIANCE,
+            )?;
+        }
+        let light = GpuLight::Point {
+            position: point,
+            intensity,
+        };
+        let relit_point = gpu.render_and_read(&mut executor, light)?;
+        write_images(
+            &dir,
+            &format!("relit_k{k}_point"),
+            r.maps.panorama,
+            &relit_point,
+            1.0,
+        )?;
+        let sun = |f: f32| GpuLight::Directional {
+            to_light: direction(20.0 + 40.0 * f, 360.0 * f),
+            irradiance: Vec3::ONE,
+        };
+        let origin = relit_scene.origin;
+        let bulb = |f: f32| {
+            let a = std::f32::consts::TAU * f;
+            GpuLight::Point {
+                position: origin + Vec3::new(2.0 * a.cos(), 1.5, 2.0 * a.sin()),
+                intensity,
+            }
+        };
+        let (ms, wall_ms) = time(&gpu, &mut executor, options.frames, sun)?;
+        let (point_ms, point_wall_ms) = time(&gpu, &mut executor, options.frames, bulb)?;
+        rows.push(RelightRow {
+            k,
+            psnr_db: median(&psnrs),
+            ms,
+            wall_ms,
+            point_ms,
+            point_wall_ms,
+            point_psnr_db: psnr(&traced_point, &relit_point)?,
+            bytes: gpu.map_bytes()?,
+        });
+    }
+    let k16 = rows.iter().find(|row| row.k == 16);
+    Ok(RelightReport {
+        directional_fps: k16.map_or(0.0, |row| 1000.0 / row.wall_ms),
+        point_fps: k16.map_or(0.0, |row| 1000.0 / row.point_wall_ms),
+        rows,
+        width: trace.panorama.width,
+        height: trace.panorama.height,
+        grid: [options.settings.grid.0, options.settings.grid.1],
+        spp: trace.spp,
+        bounces: trace.bounces,
+        held_out_deg: HELD_OUT_DEG.iter().map(|&(e, a)| [e, a]).collect(),
+        point_light: point.to_array(),
+        cached: r.cached,
+        trace_s: r.trace_s,
+        maps: r.path.clone(),
+    })
+}
+
+/// Median GPU and wall milliseconds of `frames` relights (light `at(f)`,
+/// f in [0, 1)) after five warm-up frames.
+fn time(
+    gpu: &RelightGpu,
+    executor: &mut Executor,
+    frames: u32,
+    at: impl Fn(f32) -> GpuLight,
+) -> Result<(f64, f64)> {
+    for i in 0..5 {
+        gpu.render(executor, at(i as f32 / 5.0))?;
+    }
+    let (mut gpu_ms, mut wall_ms) = (Vec::new(), Vec::new());
+    for i in 0..frames.max(1) {
+        let start = Instant::now();
+        gpu_ms.push(gpu.render(executor, at(i as f32 / frames.max(1) as f32))?);
+        wall_ms.push(start.elapsed().as_secs_f64() * 1e3);
+    }
+    Ok((median(&gpu_ms), median(&wall_ms)))
+}
+
+/// Linear PSNR over the whole panorama (`eval::metrics::masked_psnr`).
+pub fn psnr(reference: &[Vec3], test: &[Vec3]) -> Result<f64> {
+    let rgba = |v: &[Vec3]| {
+        v.iter()
+            .map(|p| p.extend(1.0).to_array())
+            .collect::<Vec<_>>()
+    };
+    let mask = vec![true; reference.len()];
+    Ok(masked_psnr(&rgba(reference), &rgba(test), &mask)?.unwrap_or(0.0))
+}
+
+fn write_images(
+    dir: &Path,
+    stem: &str,
+    p: inference::relight::Panorama,
+    v: &[Vec3],
+    scale: f32,
+) -> Result<()> {
+    let pixels: Vec<[f32; 4]> = v
+        .iter()
+        .map(|c| (*c * scale).extend(1.0).to_array())
+        .collect();
+    let png = dir.join(format!("{stem}.png"));
+    let exr = dir.join(format!("{stem}.exr"));
+    crate::capture::write_png(&png, p.width, p.height, &pixels)
+        .with_context(|| png.display().to_string())?;
+    crate::capture::write_exr(&exr, p.width, p.height, &pixels)
+        .with_context(|| exr.display().to_string())?;
+    Ok(())
+}

@@ -1,0 +1,137 @@
+//! The GPU relight pass against the CPU reference (`inference::relight`), with
+//! the validation layer on; and the cached light grid.
+
+mod common;
+
+use common::*;
+use engine::graph::Executor;
+use engine::relight::{GpuLight, GridSettings, MapPrecision, RelightGpu, relightable};
+use glam::Vec3;
+use inference::relight::grid::direction;
+use inference::relight::{Panorama, PanoramaSettings};
+use inference::scene::Scene;
+
+fn settings() -> GridSettings {
+    GridSettings {
+        trace: PanoramaSettings {
+            panorama: Panorama {
+                width: 32,
+                height: 8,
+            },
+            spp: 1,
+            seed: 0,
+            bounces: 0,
+        },
+        grid: (5, 9),
+    }
+}
+
+fn max_abs(a: &[Vec3], b: &[Vec3]) -> f32 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (*x - *y).abs().max_element())
+        .fold(0.0, f32::max)
+}
+
+fn peak(a: &[Vec3]) -> f32 {
+    a.iter().map(|v| v.max_element()).fold(0.0, f32::max)
+}
+
+#[test]
+fn gpu_relight_matches_the_cpu_reference_for_directional_and_point_lights() {
+    let scene = Scene::load("teapot").expect("teapot");
+    let (maps, positions) = engine::relight::cache::trace_grid(&scene, &settings(), false);
+    let device = validated_device();
+    let mut executor = Executor::new(&device).expect("executor");
+    let to_light = direction(35.0, 17.0);
+    let irradiance = Vec3::new(1.0, 0.8, 0.6);
+    let bulb = Vec3::new(0.9, 2.0, -0.7);
+    let intensity = Vec3::splat(5.0);
+    for (k, precision, tolerance) in [
+        (9, MapPrecision::Float, 1e-4),
+        (16, MapPrecision::Float, 1e-4),
+        (25, MapPrecision::Float, 1e-4),
+        (16, MapPrecision::Half, 4e-3),
+    ] {
+        let gpu = RelightGpu::new(&device, &mut executor, &maps, k, &positions, precision)
+            .expect("upload");
+        let cpu = maps.relight_directional(k, to_light, irradiance);
+        assert!(peak(&cpu) > 0.01, "the light reaches the panorama");
+        let got = gpu
+            .render_and_read(
+                &mut executor,
+                GpuLight::Directional {
+                    to_light,
+                    irradiance,
+                },
+            )
+            .expect("relight");
+        let err = max_abs(&cpu, &got);
+        assert!(
+            err <= tolerance * peak(&cpu),
+            "k {k} {precision:?} directional: {err} (peak {})",
+            peak(&cpu)
+        );
+        let cpu = maps.relight_point(k, &positions, bulb, intensity);
+        let got = gpu
+            .render_and_read(
+                &mut executor,
+                GpuLight::Point {
+                    position: bulb,
+                    intensity,
+                },
+            )
+            .expect("relight");
+        let err = max_abs(&cpu, &got);
+        assert!(
+            err <= tolerance * peak(&cpu),
+            "k {k} {precision:?} point: {err} (peak {})",
+            peak(&cpu)
+        );
+    }
+    // k must be a square the maps hold.
+    assert!(
+        RelightGpu::new(
+            &device,
+            &mut executor,
+            &maps,
+            10,
+            &positions,
+            MapPrecision::Half
+        )
+        .is_err()
+    );
+    assert_no_validation_messages();
+}
+
+#[test]
+fn the_light_grid_is_cached_under_out_and_rebuilt_when_damaged() {
+    let scene = Scene::load("teapot").expect("teapot");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let first = relightable(&scene, &settings(), dir.path(), false).expect("traced");
+    assert!(!first.cached);
+    assert!(first.path.starts_with(dir.path().join("relight")));
+    assert!(
+        inference::key::read_record(&first.path).is_some(),
+        "a key record beside it"
+    );
+    let second = relightable(&scene, &settings(), dir.path(), false).expect("cached");
+    assert!(second.cached);
+    assert_eq!(second.maps, first.maps);
+    assert_eq!(second.positions, first.positions);
+    // Other settings: another file, traced.
+    let mut other = settings();
+    other.grid = (6, 12);
+    assert!(
+        !relightable(&scene, &other, dir.path(), false)
+            .expect("traced")
+            .cached
+    );
+    // A damaged file is rebuilt, not trusted.
+    let mut bytes = std::fs::read(&first.path).expect("read");
+    bytes[30] ^= 0xff;
+    std::fs::write(&first.path, &bytes).expect("damage");
+    let third = relightable(&scene, &settings(), dir.path(), false).expect("rebuilt");
+    assert!(!third.cached);
+    assert_eq!(third.maps, first.maps, "deterministic");
+}
