@@ -135,3 +135,59 @@ fn the_light_grid_is_cached_under_out_and_rebuilt_when_damaged() {
     assert!(!third.cached);
     assert_eq!(third.maps, first.maps, "deterministic");
 }
+
+#[test]
+fn engine_relight_writes_the_report_and_the_relit_panoramas() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out");
+    let json = dir.path().join("relight.json");
+    let args = [
+        "relight",
+        "--scene",
+        "teapot",
+        "--size",
+        "32x8",
+        "--grid",
+        "5x9",
+        "--spp",
+        "1",
+        "--bounces",
+        "0",
+        "--frames",
+        "3",
+        "--validate",
+    ];
+    let mut all: Vec<&str> = args.to_vec();
+    let (out_s, json_s) = (out.to_str().expect("utf-8"), json.to_str().expect("utf-8"));
+    all.extend(["--out", out_s, "--json", json_s]);
+    let o = run_engine(&all);
+    assert!(o.status.success(), "{}", output_text(&o));
+    assert!(output_text(&o).contains("validation messages: 0"));
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&json).expect("json")).expect("parse");
+    assert!(report["directional_fps"].as_f64().expect("fps") > 0.0);
+    assert!(report["point_fps"].as_f64().expect("fps") > 0.0);
+    let rows = report["rows"].as_array().expect("rows");
+    let ks: Vec<u64> = rows.iter().map(|r| r["k"].as_u64().expect("k")).collect();
+    assert_eq!(ks, [9, 16, 25]);
+    for r in rows {
+        let psnr = r["psnr_db"].as_f64().expect("psnr");
+        assert!(psnr.is_finite() && psnr > 5.0, "{r}");
+        assert!(r["ms"].as_f64().expect("ms") > 0.0);
+    }
+    for f in [
+        "relit_k16_dir0.png",
+        "relit_k16_dir0.exr",
+        "traced_dir0.png",
+        "relit_k16_point.exr",
+    ] {
+        assert!(out.join("relight").join(f).is_file(), "{f}");
+    }
+    // A second run reads the cached grid.
+    let o = run_engine(&all);
+    assert!(
+        o.status.success() && output_text(&o).contains("cached grid"),
+        "{}",
+        output_text(&o)
+    );
+}

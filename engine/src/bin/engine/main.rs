@@ -20,6 +20,7 @@ fn main() -> ExitCode {
         Some(Command::CodecReport(args)) => (cmd::codec_report::run(args), args.validate),
         Some(Command::Compile(args)) => (cmd::compile::run(args), args.validate),
         Some(Command::Export(args)) => (cmd::export::run(args), false),
+        Some(Command::Relight(args)) => (cmd::relight::run(args), args.validate),
     };
     let mut code = ExitCode::SUCCESS;
     match result {

@@ -9,8 +9,10 @@ use std::path::PathBuf;
 
 mod compile;
 mod export;
+mod relight;
 pub use compile::CompileArgs;
 pub use export::ExportArgs;
+pub use relight::RelightArgs;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -56,6 +58,11 @@ pub enum Command {
     /// Ray-trace the gold-standard layers of one parameter sample, a free view or all samples
     /// (CPU, no Vulkan): one multi-layer EXR and a tone-mapped PNG per image.
     Trace(TraceArgs),
+    /// Relight the room's cylindrical panorama with spherical harmonics: trace
+    /// it under a grid of light directions (cached), project onto k = 9, 16,
+    /// 25 SH maps, relight on the GPU, time it and score it against the
+    /// tracer at held-out light directions.
+    Relight(RelightArgs),
 }
 
 #[derive(Args, Debug, Clone)]

@@ -9,6 +9,7 @@ pub mod eval;
 pub mod export;
 pub mod infer;
 pub mod play;
+pub mod relight;
 pub mod trace;
 
 use inference::scene::Scene;

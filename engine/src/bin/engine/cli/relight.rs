@@ -1,0 +1,45 @@
+//! `engine relight`'s command line.
+
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args, Debug, Clone)]
+pub struct RelightArgs {
+    /// A built-in scene's name (teapot) or the path of a .toml scene file.
+    #[arg(long, default_value = "teapot")]
+    pub scene: String,
+    /// Panorama size as WIDTHxHEIGHT (cylindrical, square pixels at the horizon).
+    #[arg(long, default_value = "1024x256", value_parser = super::parse_size)]
+    pub size: (u32, u32),
+    /// Light grid: Gauss–Legendre rings x azimuths (≥ 5x9 for exact k = 25 projection).
+    #[arg(long, default_value = "8x16", value_parser = super::parse_size)]
+    pub grid: (u32, u32),
+    /// Samples per panorama texel for every traced light direction.
+    #[arg(long, default_value_t = 2)]
+    pub spp: u32,
+    /// Diffuse bounces after the first hit (indirect light).
+    #[arg(long, default_value_t = 1)]
+    pub bounces: u32,
+    /// Random seed of the traces.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Timed frames per measurement (after 5 warm-up frames).
+    #[arg(long, default_value_t = 100)]
+    pub frames: u32,
+    /// Store the SH maps as RGBA32F instead of RGBA16F.
+    #[arg(long)]
+    pub float_maps: bool,
+    /// Output folder (the cached grid and the images go to <out>/relight)
+    /// [default: out/<scene>].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Write the report here as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Turn the Khronos validation layer on.
+    #[arg(long)]
+    pub validate: bool,
+    /// Vulkan device to use (substring of its name) [default: lavapipe].
+    #[arg(long, env = "ENGINE_DEVICE")]
+    pub device: Option<String>,
+}
