@@ -154,7 +154,7 @@ pub struct CompositePush {
     pub info: Vec4,
 }
 
-/// `shaders/relight.frag` push constants (128 bytes, lavapipe's limit).
+/// `shaders/relight_common.glsl` push constants (128 bytes, lavapipe's limit).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct RelightPush {
@@ -162,8 +162,7 @@ pub struct RelightPush {
     pub weights: [Vec4; 6],
     /// xyz point-light position; w = `Y_24(L₀)` of a directional light.
     pub light: Vec4,
-    /// rgb irradiance (directional) or intensity (point); w = k for a
-    /// directional light, −k for a point light.
+    /// rgb irradiance (directional) or intensity (point); w = k.
     pub power: Vec4,
 }
 
@@ -215,7 +214,8 @@ pub mod spirv {
     pub const PEM_GBUFFER_FRAG: &[u8] = shader!("pem_gbuffer.frag");
     pub const PEM_COMPOSITE_VERT: &[u8] = shader!("pem_composite.vert");
     pub const PEM_COMPOSITE_FRAG: &[u8] = shader!("pem_composite.frag");
-    pub const RELIGHT_FRAG: &[u8] = shader!("relight.frag");
+    pub const RELIGHT_DIRECTIONAL_FRAG: &[u8] = shader!("relight_directional.frag");
+    pub const RELIGHT_POINT_FRAG: &[u8] = shader!("relight_point.frag");
     pub const GLASS_VERT: &[u8] = shader!("glass.vert");
     pub const GLASS_FRAG: &[u8] = shader!("glass.frag");
 }

@@ -54,6 +54,8 @@ pub enum StencilTest {
 pub enum Binding<'a> {
     Image(vk::ImageView, vk::Sampler),
     Uniform(&'a super::buffer::Buffer),
+    /// A read-only storage buffer (`std430`), for data a shader indexes freely.
+    Storage(&'a super::buffer::Buffer),
 }
 
 pub struct Pipeline {
@@ -193,13 +195,13 @@ impl Pipeline {
                     image_view,
                     image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
                 }],
-                Binding::Uniform(_) => [vk::DescriptorImageInfo::default()],
+                Binding::Uniform(_) | Binding::Storage(_) => [vk::DescriptorImageInfo::default()],
             })
             .collect();
         let buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = resources
             .iter()
             .map(|r| match *r {
-                Binding::Uniform(buffer) => [vk::DescriptorBufferInfo {
+                Binding::Uniform(buffer) | Binding::Storage(buffer) => [vk::DescriptorBufferInfo {
                     buffer: buffer.raw,
                     offset: 0,
                     range: vk::WHOLE_SIZE,
@@ -220,6 +222,9 @@ impl Pipeline {
                         .image_info(&image_infos[i]),
                     Binding::Uniform(_) => write
                         .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
+                        .buffer_info(&buffer_infos[i]),
+                    Binding::Storage(_) => write
+                        .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
                         .buffer_info(&buffer_infos[i]),
                 }
             })

@@ -1,6 +1,6 @@
 //! The relight pass: one full-screen triangle into a panorama-sized colour
 //! target, `Σ C_i Y_i(L)` per pixel from the signed SH maps
-//! (`shaders/relight.frag`). No depth: every pixel is written once.
+//! (`shaders/relight_directional.frag`, `relight_point.frag`). No depth: every pixel is written once.
 
 use crate::backend::{Device, GpuResult, Image, Pipeline};
 use crate::graph::{Access, Pass, Usage};
@@ -10,9 +10,9 @@ use ash::vk;
 pub struct RelightPass<'a> {
     pub device: &'a Device,
     pub pipeline: &'a Pipeline,
-    /// Binds `maps` (binding 0) and `positions` (binding 1).
+    /// Binds the SH maps' storage buffer (binding 0, written once by the
+    /// host before any frame) and `positions` (binding 1).
     pub set: vk::DescriptorSet,
-    pub maps: &'a Image,
     pub positions: &'a Image,
     pub target: &'a Image,
     pub push: RelightPush,
@@ -25,7 +25,6 @@ impl Pass for RelightPass<'_> {
     fn accesses(&self) -> Vec<Access<'_>> {
         vec![
             Access::level(self.target, 0, Usage::ColorTarget),
-            Access::whole(self.maps, Usage::Sampled),
             Access::whole(self.positions, Usage::Sampled),
         ]
     }

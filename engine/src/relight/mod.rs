@@ -9,5 +9,5 @@ pub mod gpu;
 pub mod run;
 
 pub use cache::{GridSettings, Relightable, relightable};
-pub use gpu::{GpuLight, MapPrecision, RelightGpu};
+pub use gpu::{GpuLight, RelightGpu};
 pub use run::{RelightOptions, RelightReport, RelightRow};

@@ -26,9 +26,6 @@ pub struct RelightArgs {
     /// Timed frames per measurement (after 5 warm-up frames).
     #[arg(long, default_value_t = 100)]
     pub frames: u32,
-    /// Store the SH maps as RGBA32F instead of RGBA16F.
-    #[arg(long)]
-    pub float_maps: bool,
     /// Output folder (the cached grid and the images go to <out>/relight)
     /// [default: out/<scene>].
     #[arg(long)]

@@ -4,7 +4,7 @@
 use super::default_dir;
 use crate::cli::{RelightArgs, device};
 use anyhow::{Result, bail};
-use engine::relight::{GridSettings, MapPrecision, RelightOptions, run::run as relight};
+use engine::relight::{GridSettings, RelightOptions, run::run as relight};
 use engine::util::files;
 use inference::relight::{Panorama, PanoramaSettings};
 use inference::scene::Scene;
@@ -40,11 +40,6 @@ pub fn run(args: &RelightArgs) -> Result<String> {
         out: default_dir(&args.out, &scene, ""),
         frames: args.frames,
         device: device(&args.device, args.validate),
-        precision: if args.float_maps {
-            MapPrecision::Float
-        } else {
-            MapPrecision::Half
-        },
         progress: true,
     };
     let report = relight(&scene, &options)?;
