@@ -61,37 +61,8 @@ impl RelightGpu {
                 p.texels()
             )));
         }
-        let sampled = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
-        // Texel-major RGBA16F (the shader's `pairs`): texel t, coefficient i
-        // at t·s + i, s = k rounded up to even (the padding stays zero).
-        let stride = k.div_ceil(2) * 2;
-        let mut halves = vec![f16::ZERO; p.texels() * stride * 4];
-        for i in 0..k {
-            for (t, c) in maps.plane(i).chunks_exact(3).enumerate() {
-                let at = (t * stride + i) * 4;
-                for (j, x) in c.iter().enumerate() {
-                    halves[at + j] = f16::from_f32(*x);
-                }
-            }
-        }
-        let map_buffer = Buffer::with_data(
-            device,
-            "relight sh maps",
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            &halves.iter().map(|h| h.to_bits()).collect::<Vec<u16>>(),
-        )?;
-        let position_image = Image::new(
-            device,
-            "relight positions",
-            ImageDesc::new_2d(vk::Format::R32G32B32A32_SFLOAT, p.width, p.height).usage(sampled),
-        )?;
-        let bytes: Vec<u8> = positions
-            .iter()
-            .flat_map(|v| [v.x, v.y, v.z, 1.0])
-            .flat_map(f32::to_le_bytes)
-            .collect();
-        upload_image(device, executor.commands(), &position_image, &bytes)?;
-        executor.states.assume(&position_image, Usage::Sampled);
+        let map_buffer = upload_maps(device, maps, k)?;
+        let position_image = upload_positions(device, executor, p, positions)?;
         let target = Image::new(
             device,
             "relit panorama",
@@ -213,6 +184,50 @@ impl RelightGpu {
             })
             .collect())
     }
+}
+
+/// The first `k` maps, texel-major RGBA16F (the shader's `pairs`): texel t,
+/// coefficient i at t·s + i, s = k rounded up to even (the padding stays zero).
+fn upload_maps(device: &Device, maps: &ShMaps, k: usize) -> GpuResult<Buffer> {
+    let stride = k.div_ceil(2) * 2;
+    let mut halves = vec![f16::ZERO; maps.panorama.texels() * stride * 4];
+    for i in 0..k {
+        for (t, c) in maps.plane(i).chunks_exact(3).enumerate() {
+            let at = (t * stride + i) * 4;
+            for (j, x) in c.iter().enumerate() {
+                halves[at + j] = f16::from_f32(*x);
+            }
+        }
+    }
+    Buffer::with_data(
+        device,
+        "relight sh maps",
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        &halves.iter().map(|h| h.to_bits()).collect::<Vec<u16>>(),
+    )
+}
+
+/// The position panorama as an RGBA32F image (xyz, w = 1).
+fn upload_positions(
+    device: &Device,
+    executor: &mut Executor,
+    p: Panorama,
+    positions: &[Vec3],
+) -> GpuResult<Image> {
+    let image = Image::new(
+        device,
+        "relight positions",
+        ImageDesc::new_2d(vk::Format::R32G32B32A32_SFLOAT, p.width, p.height)
+            .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
+    )?;
+    let bytes: Vec<u8> = positions
+        .iter()
+        .flat_map(|v| [v.x, v.y, v.z, 1.0])
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    upload_image(device, executor.commands(), &image, &bytes)?;
+    executor.states.assume(&image, Usage::Sampled);
+    Ok(image)
 }
 
 fn relight_pipeline(device: &Device, fragment: &[u8], name: &str) -> GpuResult<Pipeline> {

@@ -77,95 +77,58 @@ fn point_light(origin: Vec3) -> Vec3 {
     origin + Vec3::new(0.9, 1.6, -0.7)
 }
 
-pub fn run(scene: &Scene, options: &RelightOptions) -> Result<RelightReport> {
-    let r = relightable(scene, &options.settings, &options.out, options.progress)?;
-    let dir = options.out.join("relight");
+/// The tracer's panoramas the relit ones are scored against.
+struct References {
+    directions: Vec<Vec3>,
+    directional: Vec<Vec<Vec3>>,
+    point: Vec3,
+    point_traced: Vec<Vec3>,
+    /// The panorama's origin (the reflector's EM origin).
+    origin: Vec3,
+}
+
+/// Traces the held-out directions and the point light, writing each.
+fn references(scene: &Scene, options: &RelightOptions, dir: &Path) -> Result<References> {
     let trace = &options.settings.trace;
     let mut relit_scene = RelightScene::new(scene);
-    let held_out: Vec<Vec3> = HELD_OUT_DEG.iter().map(|&(e, a)| direction(e, a)).collect();
-    let traced: Vec<Vec<Vec3>> = held_out
+    let directions: Vec<Vec3> = HELD_OUT_DEG.iter().map(|&(e, a)| direction(e, a)).collect();
+    let directional: Vec<Vec<Vec3>> = directions
         .iter()
         .map(|d| relit_scene.trace(MovingLight::Directional(*d), trace))
         .collect();
     let point = point_light(relit_scene.origin);
-    let intensity = Vec3::splat(POINT_INTENSITY);
-    let traced_point = relit_scene.trace(
-        MovingLight::Point {
-            position: point,
-            intensity,
-        },
-        trace,
-    );
-    for (j, t) in traced.iter().enumerate() {
-        write_images(
-            &dir,
-            &format!("traced_dir{j}"),
-            r.maps.panorama,
-            t,
-            SHOWN_IRRADIANCE,
-        )?;
+    let light = MovingLight::Point {
+        position: point,
+        intensity: Vec3::splat(POINT_INTENSITY),
+    };
+    let point_traced = relit_scene.trace(light, trace);
+    let p = trace.panorama;
+    for (j, t) in directional.iter().enumerate() {
+        write_images(dir, &format!("traced_dir{j}"), p, t, SHOWN_IRRADIANCE)?;
     }
-    write_images(&dir, "traced_point", r.maps.panorama, &traced_point, 1.0)?;
+    write_images(dir, "traced_point", p, &point_traced, 1.0)?;
+    Ok(References {
+        directions,
+        directional,
+        point,
+        point_traced,
+        origin: relit_scene.origin,
+    })
+}
 
+pub fn run(scene: &Scene, options: &RelightOptions) -> Result<RelightReport> {
+    let r = relightable(scene, &options.settings, &options.out, options.progress)?;
+    let dir = options.out.join("relight");
+    let refs = references(scene, options, &dir)?;
     let device = create_device(&options.device)?;
     let mut executor = Executor::new(&device)?;
     let mut rows = Vec::new();
     for k in ORDERS {
         let gpu = RelightGpu::new(&device, &mut executor, &r.maps, k, &r.positions)?;
-        let mut psnrs = Vec::new();
-        for (j, (d, t)) in held_out.iter().zip(&traced).enumerate() {
-            let light = GpuLight::Directional {
-                to_light: *d,
-                irradiance: Vec3::ONE,
-            };
-            let relit = gpu.render_and_read(&mut executor, light)?;
-            psnrs.push(psnr(t, &relit)?);
-            write_images(
-                &dir,
-                &format!("relit_k{k}_dir{j}"),
-                r.maps.panorama,
-                &relit,
-                SHOWN_IRRADIANCE,
-            )?;
-        }
-        let light = GpuLight::Point {
-            position: point,
-            intensity,
-        };
-        let relit_point = gpu.render_and_read(&mut executor, light)?;
-        write_images(
-            &dir,
-            &format!("relit_k{k}_point"),
-            r.maps.panorama,
-            &relit_point,
-            1.0,
-        )?;
-        let sun = |f: f32| GpuLight::Directional {
-            to_light: direction(20.0 + 40.0 * f, 360.0 * f),
-            irradiance: Vec3::ONE,
-        };
-        let origin = relit_scene.origin;
-        let bulb = |f: f32| {
-            let a = std::f32::consts::TAU * f;
-            GpuLight::Point {
-                position: origin + Vec3::new(2.0 * a.cos(), 1.5, 2.0 * a.sin()),
-                intensity,
-            }
-        };
-        let (ms, wall_ms) = time(&gpu, &mut executor, options.frames, sun)?;
-        let (point_ms, point_wall_ms) = time(&gpu, &mut executor, options.frames, bulb)?;
-        rows.push(RelightRow {
-            k,
-            psnr_db: median(&psnrs),
-            ms,
-            wall_ms,
-            point_ms,
-            point_wall_ms,
-            point_psnr_db: psnr(&traced_point, &relit_point)?,
-            bytes: gpu.map_bytes(),
-        });
+        rows.push(row(&gpu, &mut executor, &refs, &dir, options.frames)?);
     }
     let k16 = rows.iter().find(|row| row.k == 16);
+    let trace = &options.settings.trace;
     Ok(RelightReport {
         directional_fps: k16.map_or(0.0, |row| 1000.0 / row.wall_ms),
         point_fps: k16.map_or(0.0, |row| 1000.0 / row.point_wall_ms),
@@ -176,10 +139,69 @@ pub fn run(scene: &Scene, options: &RelightOptions) -> Result<RelightReport> {
         spp: trace.spp,
         bounces: trace.bounces,
         held_out_deg: HELD_OUT_DEG.iter().map(|&(e, a)| [e, a]).collect(),
-        point_light: point.to_array(),
+        point_light: refs.point.to_array(),
         cached: r.cached,
         trace_s: r.trace_s,
         maps: r.path.clone(),
+    })
+}
+
+/// One k: relit at every reference light (scored, written), then timed.
+fn row(
+    gpu: &RelightGpu,
+    executor: &mut Executor,
+    refs: &References,
+    dir: &Path,
+    frames: u32,
+) -> Result<RelightRow> {
+    let (k, p) = (gpu.k, gpu.panorama);
+    let mut psnrs = Vec::new();
+    for (j, (d, t)) in refs.directions.iter().zip(&refs.directional).enumerate() {
+        let light = GpuLight::Directional {
+            to_light: *d,
+            irradiance: Vec3::ONE,
+        };
+        let relit = gpu.render_and_read(executor, light)?;
+        psnrs.push(psnr(t, &relit)?);
+        write_images(
+            dir,
+            &format!("relit_k{k}_dir{j}"),
+            p,
+            &relit,
+            SHOWN_IRRADIANCE,
+        )?;
+    }
+    let intensity = Vec3::splat(POINT_INTENSITY);
+    let light = GpuLight::Point {
+        position: refs.point,
+        intensity,
+    };
+    let relit_point = gpu.render_and_read(executor, light)?;
+    write_images(dir, &format!("relit_k{k}_point"), p, &relit_point, 1.0)?;
+    // Timed: a sun circling and rising, a bulb circling the reflector.
+    let sun = |f: f32| GpuLight::Directional {
+        to_light: direction(20.0 + 40.0 * f, 360.0 * f),
+        irradiance: Vec3::ONE,
+    };
+    let origin = refs.origin;
+    let bulb = |f: f32| {
+        let a = std::f32::consts::TAU * f;
+        GpuLight::Point {
+            position: origin + Vec3::new(2.0 * a.cos(), 1.5, 2.0 * a.sin()),
+            intensity,
+        }
+    };
+    let (ms, wall_ms) = time(gpu, executor, frames, sun)?;
+    let (point_ms, point_wall_ms) = time(gpu, executor, frames, bulb)?;
+    Ok(RelightRow {
+        k,
+        psnr_db: median(&psnrs),
+        ms,
+        wall_ms,
+        point_ms,
+        point_wall_ms,
+        point_psnr_db: psnr(&refs.point_traced, &relit_point)?,
+        bytes: gpu.map_bytes(),
     })
 }
 
