@@ -33,13 +33,24 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
         ),
         _ => SceneError::io(path, e),
     })?;
-    let mut gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| {
+    let not_gltf = |e: gltf::Error| {
         SceneError::gltf(
             path,
             "file",
             format!("{e} (expected glTF 2.0: JSON or binary .glb)"),
         )
-    })?;
+    };
+    // Parsed unvalidated first: the gltf crate's validation indexes the
+    // accessors by a primitive's POSITION index without a bounds check, so
+    // an index out of range would panic there; it is checked here first.
+    let mut gltf = gltf::Gltf::from_slice_without_validation(&bytes).map_err(not_gltf)?;
+    check_accessor_indices(path, gltf.document.as_json())?;
+    let json = std::mem::replace(
+        &mut gltf.document,
+        gltf::Document::from_json_without_validation(Default::default()),
+    )
+    .into_json();
+    gltf.document = gltf::Document::from_json(json).map_err(not_gltf)?;
     if let Some(ext) = gltf.document.extensions_required().next() {
         return Err(SceneError::gltf(
             path,
@@ -76,6 +87,26 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
         fill_missing_normals(&mut mesh);
     }
     Ok(mesh)
+}
+
+/// Every primitive's attribute and index accessors exist.
+fn check_accessor_indices(path: &Path, root: &gltf::json::Root) -> Result<(), SceneError> {
+    for (mi, m) in root.meshes.iter().enumerate() {
+        for (pi, p) in m.primitives.iter().enumerate() {
+            let used = p.attributes.values().chain(p.indices.as_ref());
+            if let Some(bad) = used.map(|i| i.value()).find(|&i| i >= root.accessors.len()) {
+                return Err(SceneError::gltf(
+                    path,
+                    format!("meshes[{mi}].primitives[{pi}]"),
+                    format!(
+                        "accessor {bad} (expected an index below {}, the number of accessors)",
+                        root.accessors.len()
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Every mesh the file places, with its node's world transform.

@@ -176,6 +176,23 @@ fn triangle_loads_with_computed_normals() {
 }
 
 #[test]
+fn an_accessor_index_out_of_range_is_an_error_not_a_panic() {
+    // The gltf crate's own validation would index past its accessors here.
+    let mut doc = Doc::default();
+    let mut p = triangle(&mut doc, TRI, json!({}));
+    p["attributes"]["POSITION"] = json!(7);
+    let e = err_of(&doc.json(vec![p], one_node(), None));
+    assert!(
+        e.contains("meshes[0].primitives[0]") && e.contains("accessor 7"),
+        "{e}"
+    );
+    let mut doc = Doc::default();
+    let p = triangle(&mut doc, TRI, json!({ "indices": 9 }));
+    let e = err_of(&doc.json(vec![p], one_node(), None));
+    assert!(e.contains("accessor 9"), "{e}");
+}
+
+#[test]
 fn rejects_bad_numbers_and_triangles() {
     let mut doc = Doc::default();
     let nan = triangle(
