@@ -11,6 +11,8 @@
 //! design removes). PEM variants light the room as `--room` says (inferred
 //! light maps by default); "default, analytic room" is the default frame
 //! with the analytic room, so the two room passes are timed side by side.
+//! "rem" is reflection-space IBR (its source maps traced first when
+//! missing), lit like the PEM variants.
 
 use crate::options::{PemOptions, RunPlace};
 use crate::pem::player::{Compositing, PemKind, PemSettings};
@@ -28,6 +30,8 @@ enum Draws {
     Bare,
     StaticEm,
     Pem(PemSettings),
+    /// Reflection-space IBR (`--rem-size`, `--rem-level` as given).
+    Rem,
 }
 
 /// The variants, in table order; the last one moves (decoding on).
@@ -57,6 +61,7 @@ fn variants() -> Vec<(&'static str, Draws)> {
         ),
         ("default, analytic room", Draws::Pem(default)),
         ("multipass", Draws::Pem(multipass)),
+        ("rem", Draws::Rem),
         ("default, decoding", Draws::Pem(default)),
     ]
 }
@@ -208,6 +213,19 @@ fn renderers_for(
                 which.push(renderers.len());
                 renderers.push(r);
             }
+            Draws::Rem => {
+                let mut r = Renderer::new(device, scene, width, height)?;
+                let settings = crate::rem::sources::RemSettings {
+                    size: opts.pem.rem_size,
+                    level: opts.pem.rem_level,
+                    ..Default::default()
+                };
+                let maps = crate::rem::sources::source_maps(scene, ctx.out, settings)?;
+                r.set_rem(scene, &maps, opts.pem.blend)?;
+                r.set_room(scene, room.as_ref())?;
+                which.push(renderers.len());
+                renderers.push(r);
+            }
         }
     }
     Ok((renderers, which))
@@ -297,6 +315,7 @@ fn mode(d: &Draws) -> FrameMode {
         Draws::Bare => FrameMode::Bare,
         Draws::StaticEm => FrameMode::StaticEm,
         Draws::Pem(_) => FrameMode::Pem,
+        Draws::Rem => FrameMode::Rem,
     }
 }
 

@@ -30,6 +30,7 @@ pub mod perf;
 pub mod play;
 pub mod probe;
 pub mod relight;
+pub mod rem;
 pub mod renderer;
 pub mod shader_interface;
 pub mod util;

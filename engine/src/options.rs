@@ -25,6 +25,9 @@ pub enum Mode {
     /// Glass by hybrid rendering: CPU ray paths through the glass at the
     /// vertices of an adaptive tessellation, exit rays into a shell map.
     Hybrid,
+    /// Reflection-space IBR: traced radiance sphere maps at the vertices of
+    /// an icosahedron of views, warped and blended per frame.
+    Rem,
 }
 
 impl Mode {
@@ -38,6 +41,7 @@ impl Mode {
             Mode::Trace => "trace",
             Mode::Bare => "bare",
             Mode::Hybrid => "hybrid",
+            Mode::Rem => "rem",
         }
     }
 
@@ -100,6 +104,10 @@ pub struct PemOptions {
     pub tau: Option<f32>,
     /// How the room is lit.
     pub room: RoomShading,
+    /// Reflection-space IBR: source sphere-map resolution.
+    pub rem_size: u32,
+    /// Reflection-space IBR: subdivisions of the icosahedron of views.
+    pub rem_level: u32,
 }
 
 impl Default for PemOptions {
@@ -116,6 +124,8 @@ impl Default for PemOptions {
             compositing: Compositing::Deferred,
             tau: None,
             room: RoomShading::Inferred,
+            rem_size: crate::rem::sources::RemSettings::default().size,
+            rem_level: 0,
         }
     }
 }
@@ -152,6 +162,12 @@ impl PemOptions {
         }
         if self.room != d.room {
             f.push(("room".into(), Some("analytic".into())));
+        }
+        if self.rem_size != d.rem_size {
+            f.push(("rem-size".into(), Some(self.rem_size.to_string())));
+        }
+        if self.rem_level != d.rem_level {
+            f.push(("rem-level".into(), Some(self.rem_level.to_string())));
         }
         f
     }

@@ -76,8 +76,10 @@ pub fn setup_mode<'s>(
     pem: &PemOptions,
     trace_spp: u32,
 ) -> Result<FrameSource<'s>> {
-    let inferred_room = matches!(mode, Mode::LayeredPem | Mode::SpherePem | Mode::Ptm)
-        && pem.room == RoomShading::Inferred;
+    let inferred_room = matches!(
+        mode,
+        Mode::LayeredPem | Mode::SpherePem | Mode::Ptm | Mode::Rem
+    ) && pem.room == RoomShading::Inferred;
     let room = if inferred_room {
         let maps = crate::compile::room::room_maps(ctx)?;
         if maps.compile_s > 0.0 {
@@ -110,6 +112,24 @@ pub fn setup_mode<'s>(
         Mode::Hybrid => {
             crate::glass::setup(renderer, ctx.scene, ctx.out, pem.tau)?;
             FrameSource::Raster(FrameMode::Hybrid)
+        }
+        Mode::Rem => {
+            let settings = crate::rem::sources::RemSettings {
+                size: pem.rem_size,
+                level: pem.rem_level,
+                ..Default::default()
+            };
+            let maps = crate::rem::sources::source_maps(ctx.scene, ctx.out, settings)?;
+            if maps.trace_s > 0.0 {
+                eprintln!(
+                    "{}: reflection-space source maps traced in {:.1} s ({} bytes)",
+                    ctx.scene.name,
+                    maps.trace_s,
+                    maps.device_bytes()
+                );
+            }
+            renderer.set_rem(ctx.scene, &maps, pem.blend)?;
+            FrameSource::Raster(FrameMode::Rem)
         }
         Mode::LayeredPem | Mode::SpherePem | Mode::Ptm => {
             let settings = pem_settings(mode, pem, ctx.scene)?;

@@ -16,5 +16,5 @@ pub use commands::Commands;
 pub use device::{Device, DeviceOptions, create_device};
 pub use error::{GpuError, GpuResult, VkContext};
 pub use image::{Filtering, Image, ImageDesc, ImageKind, Sampler};
-pub use pipeline::{Binding, DepthTest, Pipeline, PipelineDesc, StencilTest};
+pub use pipeline::{Binding, Blend, DepthTest, Pipeline, PipelineDesc, StencilTest};
 pub use queries::{PassQueries, PassSample};

@@ -20,11 +20,23 @@ pub struct PipelineDesc<'a> {
     pub push_constant_size: u32,
     /// Set 0, binding i has descriptor type `bindings[i]` (fragment stage).
     pub bindings: &'a [vk::DescriptorType],
-    /// Blend the output over the target by its alpha (`a·src + (1 − a)·dst`)
-    /// instead of replacing it: how a second pass mixes in a weighted term.
-    pub blend_by_alpha: bool,
+    /// How the output meets what the target holds.
+    pub blend: Blend,
     pub depth: DepthTest,
     pub stencil: StencilTest,
+}
+
+/// How a pipeline's output meets what its target holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Blend {
+    /// Replace it.
+    Replace,
+    /// Blend over it by the output's alpha (`a·src + (1 − a)·dst`): how a
+    /// second pass mixes in a weighted term.
+    ByAlpha,
+    /// Add to it, colour and alpha (`src + dst`): weighted sums whose
+    /// weight total accumulates in alpha.
+    Add,
 }
 
 /// How a pipeline uses the depth attachment.
@@ -355,15 +367,28 @@ unsafe fn create_graphics_pipeline(
 fn color_blend_attachments(desc: &PipelineDesc) -> Vec<vk::PipelineColorBlendAttachmentState> {
     let mut attachment = vk::PipelineColorBlendAttachmentState::default()
         .color_write_mask(vk::ColorComponentFlags::RGBA);
-    if desc.blend_by_alpha {
-        attachment = attachment
-            .blend_enable(true)
-            .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
-            .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
-            .color_blend_op(vk::BlendOp::ADD)
-            .src_alpha_blend_factor(vk::BlendFactor::ZERO)
-            .dst_alpha_blend_factor(vk::BlendFactor::ONE)
-            .alpha_blend_op(vk::BlendOp::ADD);
+    match desc.blend {
+        Blend::Replace => {}
+        Blend::ByAlpha => {
+            attachment = attachment
+                .blend_enable(true)
+                .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
+                .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+                .color_blend_op(vk::BlendOp::ADD)
+                .src_alpha_blend_factor(vk::BlendFactor::ZERO)
+                .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+                .alpha_blend_op(vk::BlendOp::ADD);
+        }
+        Blend::Add => {
+            attachment = attachment
+                .blend_enable(true)
+                .src_color_blend_factor(vk::BlendFactor::ONE)
+                .dst_color_blend_factor(vk::BlendFactor::ONE)
+                .color_blend_op(vk::BlendOp::ADD)
+                .src_alpha_blend_factor(vk::BlendFactor::ONE)
+                .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+                .alpha_blend_op(vk::BlendOp::ADD);
+        }
     }
     let plain = vk::PipelineColorBlendAttachmentState::default()
         .color_write_mask(vk::ColorComponentFlags::RGBA);

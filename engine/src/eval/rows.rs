@@ -92,6 +92,12 @@ pub fn all_rows() -> Vec<Row> {
         labelled("layered-pem spacing4").with(|p| p.spacing = 4),
         labelled("layered-pem spacing8").with(|p| p.spacing = 8),
         labelled("layered-pem uncompressed").with(|p| p.maps = Maps::Exr),
+        Row::new("rem", Mode::Rem),
+        Row::new("rem nearest-sample", Mode::Rem).with(|p| p.blend = false),
+        Row::new("rem level1", Mode::Rem).with(|p| {
+            p.rem_level = 1;
+            p.rem_size = 128;
+        }),
         Row::new("ptm", Mode::Ptm),
         Row::new("ptm nearest-sample", Mode::Ptm).with(|p| p.blend = false),
         Row {

@@ -9,7 +9,7 @@ use super::reference::{ReferenceImage, References, View as RefView};
 use super::rows::{Row, rows_for};
 use super::table::{AboveScore, EvalRow, EvalTable, ViewCounts};
 use super::views::{Category, View, views};
-use crate::options::RunPlace;
+use crate::options::{Mode, RunPlace};
 use crate::play::{FrameSource, Session, compile_context, setup_mode};
 use crate::util::stats::{mean, median, percentile};
 use anyhow::{Context, Result, bail};
@@ -95,11 +95,18 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
                 continue;
             }
         };
+        let map_bytes = match row.mode {
+            Mode::Rem | Mode::LayeredPem | Mode::SpherePem | Mode::Ptm => renderer.map_bytes,
+            _ => None,
+        };
         let (results, picture) = run.measure_row(&mut source, &mut renderer, &scene, &progress)?;
         if !row.label.contains(' ') {
             pictures.extend(picture.map(|p| (row.label.clone(), p)));
         }
-        table_rows.push(table_row(row, &results, opts.views));
+        table_rows.push(EvalRow {
+            map_bytes,
+            ..table_row(row, &results, opts.views)
+        });
     }
     progress.finish_and_clear();
     let table = EvalTable { rows: table_rows };

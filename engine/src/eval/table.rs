@@ -204,12 +204,13 @@ impl EvalTable {
 
     /// A GitHub Markdown table, one line per row in order: mode, settings as
     /// `name=value` pairs, PSNR (dB, 2 decimals; `≥ 100` at the cap), FLIP
-    /// (4 decimals), ms/frame (2 decimals). Ends with a newline.
+    /// (4 decimals), ms/frame (2 decimals), the bytes of the maps played
+    /// (`—` where none are counted). Ends with a newline.
     pub fn to_markdown(&self) -> String {
         let mut out = String::from(
             "| mode | settings | PSNR on (dB) | PSNR between (dB) | PSNR above (dB) \
-             | FLIP on | FLIP between | FLIP above | ms/frame |\n\
-             |---|---|--:|--:|--:|--:|--:|--:|--:|\n",
+             | FLIP on | FLIP between | FLIP above | ms/frame | map bytes |\n\
+             |---|---|--:|--:|--:|--:|--:|--:|--:|--:|\n",
         );
         for row in &self.rows {
             let settings = if row.settings.is_empty() {
@@ -226,7 +227,7 @@ impl EvalTable {
             };
             let _ = writeln!(
                 out,
-                "| {} | {} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {:.2} |",
+                "| {} | {} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {:.2} | {} |",
                 cell(&row.mode),
                 cell(&settings),
                 psnr_cell(row.psnr_on_db),
@@ -236,6 +237,8 @@ impl EvalTable {
                 row.flip_between,
                 row.flip_above,
                 row.frame_ms,
+                row.map_bytes
+                    .map_or_else(|| "—".to_owned(), |b| b.to_string()),
             );
         }
         out
@@ -403,11 +406,11 @@ mod tests {
         assert_eq!(
             lines[2],
             "| pem | blend=true, em_resolution=256, filter=trilinear | 31.25 | 29.50 | 24.13 \
-             | 0.0625 | 0.0700 | 0.1000 | 3.50 |"
+             | 0.0625 | 0.0700 | 0.1000 | 3.50 | — |"
         );
         assert!(lines[3].starts_with("| a\\|b | — | ≥ 100 | "));
         // Same number of cells on every line (escaped pipes are not separators).
         let cells = |l: &str| l.replace("\\|", "").matches('|').count();
-        assert!(lines.iter().all(|l| cells(l) == 10), "{md}");
+        assert!(lines.iter().all(|l| cells(l) == 11), "{md}");
     }
 }

@@ -28,7 +28,7 @@ pub fn glass_pipeline(
             cull_mode: vk::CullModeFlags::BACK,
             push_constant_size: size_of::<GlassPush>() as u32,
             bindings: &[vk::DescriptorType::COMBINED_IMAGE_SAMPLER],
-            blend_by_alpha: false,
+            blend: crate::backend::Blend::Replace,
             depth: crate::backend::DepthTest::TestWrite,
             stencil: crate::backend::StencilTest::Off,
         },

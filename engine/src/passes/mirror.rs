@@ -42,7 +42,7 @@ pub fn mirror_pipeline(
             cull_mode: vk::CullModeFlags::BACK,
             push_constant_size: size_of::<MirrorPush>() as u32,
             bindings: &[vk::DescriptorType::COMBINED_IMAGE_SAMPLER; 2],
-            blend_by_alpha: false,
+            blend: crate::backend::Blend::Replace,
             depth: crate::backend::DepthTest::TestWrite,
             stencil: crate::backend::StencilTest::Off,
         },

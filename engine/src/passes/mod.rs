@@ -8,6 +8,7 @@ pub mod pem_deferred;
 pub mod probe;
 pub mod readback;
 pub mod relight;
+pub mod rem;
 pub mod room;
 pub mod room_maps;
 pub mod target;

@@ -71,7 +71,11 @@ impl PemPipelines {
                     cull_mode: vk::CullModeFlags::BACK,
                     push_constant_size: size_of::<PemPush>() as u32,
                     bindings: &vec![vk::DescriptorType::COMBINED_IMAGE_SAMPLER; shading.bindings()],
-                    blend_by_alpha: blend,
+                    blend: if blend {
+                        crate::backend::Blend::ByAlpha
+                    } else {
+                        crate::backend::Blend::Replace
+                    },
                     depth: DepthTest::TestWrite,
                     stencil: StencilTest::Off,
                 },

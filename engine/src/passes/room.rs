@@ -266,7 +266,7 @@ pub fn room_pipeline(
             cull_mode: vk::CullModeFlags::BACK,
             push_constant_size: size_of::<RoomPush>() as u32,
             bindings: &[vk::DescriptorType::COMBINED_IMAGE_SAMPLER, second],
-            blend_by_alpha: false,
+            blend: crate::backend::Blend::Replace,
             depth: crate::backend::DepthTest::TestWrite,
             stencil: crate::backend::StencilTest::Off,
         },

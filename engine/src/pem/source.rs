@@ -43,6 +43,14 @@ enum Kind {
 }
 
 impl MapSource {
+    /// Bytes of the container file (None when reading EXR maps).
+    pub fn container_bytes(&self) -> Option<u64> {
+        match &self.kind {
+            Kind::Container { path, .. } => std::fs::metadata(path).ok().map(|m| m.len()),
+            Kind::Exr { .. } => None,
+        }
+    }
+
     /// Opens the container at `path`, checking it holds the maps this scene
     /// asks for, in the order `engine encode` writes them.
     pub fn container(scene: &Scene, path: &Path) -> Result<Self> {

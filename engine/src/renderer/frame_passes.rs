@@ -28,6 +28,9 @@ pub(super) struct FrameParts<'a> {
     pub(super) mirror: &'a MirrorRenderer,
     pub(super) reflectors: &'a [Reflector],
     pub(super) pem: Option<&'a PemPlayer>,
+    /// Set in REM frames only.
+    pub(super) rem: Option<&'a crate::rem::RemPlayer>,
+    pub(super) eye: glam::Vec3,
     pub(super) gbuffer: &'a GBuffer,
     pub(super) glass: Option<&'a GlassPlayer>,
     pub(super) color: &'a Image,
@@ -55,7 +58,7 @@ pub(super) fn frame_passes<'a>(
         area: None,
     };
     let mut passes: Vec<Box<dyn Pass + 'a>> = match mode {
-        FrameMode::StaticEm | FrameMode::Pem | FrameMode::Hybrid => {
+        FrameMode::StaticEm | FrameMode::Pem | FrameMode::Hybrid | FrameMode::Rem => {
             lit_passes(parts, mode, blend, target, view_proj)?
         }
         FrameMode::Bare => vec![Box::new(
@@ -87,6 +90,10 @@ fn lit_passes<'a>(
     if let Some(upload) = upload {
         passes.push(Box::new(upload));
     }
+    let rem = parts.rem.map(|rem| (rem, rem.views.draws(parts.eye)));
+    if let Some((rem, (dest, draws))) = &rem {
+        passes.push(Box::new(rem.gpu.warp_pass(*dest, draws.clone())));
+    }
     passes.push(Box::new(
         parts.room.pass("room", parts.gpu, target, view_proj),
     ));
@@ -94,12 +101,22 @@ fn lit_passes<'a>(
         clear: false,
         ..target
     };
-    if let (Some(pem), Some(b)) = (parts.pem, blend) {
+    if let Some((rem, (dest, _))) = rem {
+        let area = area_of(view_proj, [rem.bounds], parts.width, parts.height);
+        let target = Target { area, ..later };
+        passes.push(Box::new(
+            rem.gpu
+                .shade_pass(parts.gpu, target, view_proj, parts.eye, dest),
+        ));
+    } else if let (Some(pem), Some(b)) = (parts.pem, blend) {
         passes.extend(pem.draw_passes(parts.gpu, parts.gbuffer, b, later, view_proj)?);
     } else if !parts.reflectors.is_empty() {
         passes.push(static_mirror_pass(parts, later, view_proj));
     }
-    if let Some(g) = parts.glass.filter(|_| mode != FrameMode::Pem) {
+    if let Some(g) = parts
+        .glass
+        .filter(|_| !matches!(mode, FrameMode::Pem | FrameMode::Rem))
+    {
         let area = area_of(view_proj, [g.bounds()], parts.width, parts.height);
         passes.push(Box::new(g.pass(Target { area, ..later }, view_proj)));
     }

@@ -42,6 +42,8 @@ pub enum FrameMode {
     Pem,
     /// The lit room, glass by hybrid rendering (`crate::glass`).
     Hybrid,
+    /// The lit room, the reflector by reflection-space IBR (see `set_rem`).
+    Rem,
 }
 
 /// Why a frame could not be drawn: the device (kept typed: device lost,
@@ -89,6 +91,7 @@ pub struct Renderer {
     projection: Mat4,
     texgen_scratch: Vec<inference::texgen::TexgenVertex>,
     pem: Option<PemPlayer>,
+    rem: Option<crate::rem::RemPlayer>,
     /// Per-pixel lookups of deferred PEM compositing (frame-sized).
     gbuffer: GBuffer,
     /// The scene's glass object (drawn in static-EM and hybrid frames).
@@ -97,6 +100,9 @@ pub struct Renderer {
     last_view_proj: Mat4,
     /// What set-up cost on the GPU (static EM capture, MIP chain).
     pub setup_timings: Vec<PassTiming>,
+    /// Bytes of the maps the last `set_pem` (container) or `set_rem`
+    /// (source maps on the device) set up, for the eval table.
+    pub map_bytes: Option<u64>,
 }
 
 impl Renderer {
@@ -132,10 +138,12 @@ impl Renderer {
             projection,
             texgen_scratch: Vec::new(),
             pem: None,
+            rem: None,
             gbuffer: GBuffer::new(device, width, height)?,
             glass,
             last_view_proj: Mat4::IDENTITY,
             setup_timings: Vec::new(),
+            map_bytes: None,
         };
         renderer.setup_timings = renderer.capture_static_ems(scene.camera.near, far)?;
         Ok(renderer)
@@ -166,6 +174,7 @@ impl Renderer {
         if let Some(old) = self.pem.take() {
             old.release(&mut self.executor);
         }
+        self.map_bytes = source.container_bytes();
         self.pem = Some(PemPlayer::new(
             &self.device,
             &mut self.executor,
@@ -176,6 +185,32 @@ impl Renderer {
             (COLOR_FORMAT, DEPTH_FORMAT),
         )?);
         Ok(())
+    }
+
+    /// Sets up reflection-space IBR (`FrameMode::Rem`) from `maps`;
+    /// `blend` false draws the nearest source map alone.
+    pub fn set_rem(
+        &mut self,
+        scene: &Scene,
+        maps: &crate::rem::sources::SourceMaps,
+        blend: bool,
+    ) -> GpuResult<()> {
+        let rem = crate::rem::RemPlayer::new(
+            &self.device,
+            &mut self.executor,
+            scene,
+            maps,
+            blend,
+            (COLOR_FORMAT, DEPTH_FORMAT),
+        )?;
+        self.map_bytes = Some(rem.bytes);
+        self.rem = Some(rem);
+        Ok(())
+    }
+
+    /// The REM set-up's views and source bytes (None without `set_rem`).
+    pub fn rem(&self) -> Option<&crate::rem::RemPlayer> {
+        self.rem.as_ref()
     }
 
     /// Lets background map decoding finish before frames are timed.
@@ -247,6 +282,8 @@ impl Renderer {
             mirror: &self.mirror,
             reflectors: &self.reflectors,
             pem: self.pem.as_ref(),
+            rem: self.rem.as_ref().filter(|_| mode == FrameMode::Rem),
+            eye,
             gbuffer: &self.gbuffer,
             glass: self.glass.as_ref(),
             color: &self.color,

@@ -82,6 +82,17 @@ impl Renderer {
             .count() as u64)
     }
 
+    /// The last REM frame's blended sphere map (Σ weight × radiance, the
+    /// weights' sum in alpha) as linear RGBA f32, rows from t = 0.
+    pub fn rem_blended(&mut self) -> GpuResult<Vec<[f32; 4]>> {
+        let Some(rem) = self.rem.as_ref() else {
+            return Err(GpuError::Invalid("no set_rem()".into()));
+        };
+        let image = rem.gpu.blended();
+        let bytes = read_back(&self.device, &mut self.executor, image, "rem read-back")?;
+        Ok(rgba16f_to_f32(&bytes))
+    }
+
     /// The last frame's pixels as linear RGBA f32, row-major from the top.
     pub fn pixels(&self) -> GpuResult<Vec<[f32; 4]>> {
         let bytes = self.readback.mapped()?;

@@ -9,6 +9,7 @@ pub const SHIPPED: &[(&str, &str)] = &[
         include_str!("../../../assets/scenes/teapot_rings.toml"),
     ),
     ("glass", include_str!("../../../assets/scenes/glass.toml")),
+    ("brass", include_str!("../../../assets/scenes/brass.toml")),
 ];
 
 /// The text of the shipped scene `name`, if there is one.

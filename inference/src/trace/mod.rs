@@ -67,6 +67,7 @@ pub use bvh::SceneBvh;
 pub use camera::CameraRays;
 pub use error::TraceError;
 pub use layers::{Layer, LayerPlan};
+pub use optics::phong_exponent;
 pub use photons::PhotonMap;
 pub use shading::Integrator;
 pub use transport::{Caustics, Transport};

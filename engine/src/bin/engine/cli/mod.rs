@@ -356,6 +356,12 @@ pub struct PemArgs {
     /// `analytic` point light plus ambient.
     #[arg(long, value_enum, default_value_t = RoomShading::Inferred)]
     pub room: RoomShading,
+    /// `--mode rem`: resolution of the traced source sphere maps.
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(4..=2048))]
+    pub rem_size: u32,
+    /// `--mode rem`: icosahedron subdivisions (0: 12 source views, 1: 42).
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=3))]
+    pub rem_level: u32,
 }
 
 /// Parses `WIDTHxHEIGHT`, each 1..=8192.
@@ -421,6 +427,8 @@ impl PemArgs {
             compositing: self.compositing,
             tau: self.tau,
             room: self.room,
+            rem_size: self.rem_size,
+            rem_level: self.rem_level,
         }
     }
 }
