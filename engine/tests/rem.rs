@@ -180,7 +180,7 @@ fn the_command_line_traces_source_maps_once() {
     let first = run_engine(&args);
     assert!(first.status.success(), "{}", output_text(&first));
     assert!(output_text(&first).contains("tracing 12 reflection-space source maps"));
-    assert!(out.join("rem/teapot.rem").is_file());
+    assert!(out.join("rem/teapot.16.l0.rem").is_file());
     let perf: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("perf.json")).expect("perf.json"))
             .expect("json");

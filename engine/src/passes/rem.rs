@@ -25,8 +25,8 @@ const MAP_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 const MAP_DEPTH: vk::Format = vk::Format::D32_SFLOAT;
 /// Rings of the warp disk (uniform in reflection angle, so finer toward
 /// the rim in the map) and segments around it.
-const RINGS: u32 = 32;
-const SEGMENTS: u32 = 64;
+const RINGS: u32 = 16;
+const SEGMENTS: u32 = 48;
 
 /// Where a source's weight fades: full while the cosine of the angle
 /// between a reflection direction and the source's singularity (straight
@@ -206,7 +206,9 @@ fn pipeline(
     stage: Stage,
     formats: (vk::Format, vk::Format),
 ) -> GpuResult<Pipeline> {
-    let (name, vs, fs, bindings, attributes, push, blend, depth) = match stage {
+    // The disk is drawn whole; the reflector's back faces are culled, as
+    // the mirror pass does.
+    let (name, vs, fs, bindings, attributes, push, blend, depth, cull) = match stage {
         Stage::Warp => (
             "rem_warp",
             spirv::REM_WARP_VERT,
@@ -216,6 +218,7 @@ fn pipeline(
             size_of::<RemWarpPush>(),
             Blend::Add,
             DepthTest::Off,
+            vk::CullModeFlags::NONE,
         ),
         Stage::Shade => (
             "rem",
@@ -226,6 +229,7 @@ fn pipeline(
             size_of::<RemPush>(),
             Blend::Replace,
             DepthTest::TestWrite,
+            vk::CullModeFlags::BACK,
         ),
     };
     Pipeline::new(
@@ -238,7 +242,7 @@ fn pipeline(
             vertex_attributes: attributes,
             color_formats: &[formats.0],
             depth_format: formats.1,
-            cull_mode: vk::CullModeFlags::NONE,
+            cull_mode: cull,
             push_constant_size: push as u32,
             bindings: &[vk::DescriptorType::COMBINED_IMAGE_SAMPLER],
             blend,

@@ -103,10 +103,13 @@ pub fn reflector(scene: &Scene) -> Result<usize> {
         })
 }
 
-/// `<out>/rem/<object>.rem`.
-pub fn maps_path(out: &Path, scene: &Scene, object: usize) -> PathBuf {
-    out.join("rem")
-        .join(format!("{}.rem", scene.objects[object].name))
+/// `<out>/rem/<object>.<size>.l<level>.rem`: each resolution and
+/// subdivision has its own file, so rows that alternate them keep both.
+pub fn maps_path(out: &Path, scene: &Scene, object: usize, settings: RemSettings) -> PathBuf {
+    out.join("rem").join(format!(
+        "{}.{}.l{}.rem",
+        scene.objects[object].name, settings.size, settings.level
+    ))
 }
 
 /// The source maps of `scene`'s reflector: read when fresh under `out`,
@@ -121,7 +124,7 @@ pub fn source_maps(scene: &Scene, out: &Path, settings: RemSettings) -> Result<S
         );
     }
     let object = reflector(scene)?;
-    let path = maps_path(out, scene, object);
+    let path = maps_path(out, scene, object, settings);
     let key = maps_key(scene, settings);
     let why = match freshness(&path, &key) {
         Freshness::Fresh => match read(&path, object, settings) {
