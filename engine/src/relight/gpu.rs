@@ -247,7 +247,7 @@ fn relight_pipeline(device: &Device, fragment: &[u8], name: &str) -> GpuResult<P
                 vk::DescriptorType::STORAGE_BUFFER,
                 vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
             ],
-            blend_by_alpha: false,
+            blend: crate::backend::Blend::Replace,
             depth: DepthTest::Off,
             stencil: StencilTest::Off,
         },
