@@ -1,0 +1,64 @@
+//! `engine encode` and `engine codec-report` command lines.
+
+use super::{parse_ratio, parse_size};
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args, Debug, Clone)]
+pub struct EncodeArgs {
+    /// A built-in scene's name (teapot) or the path of a .toml scene file.
+    #[arg(long, default_value = "teapot")]
+    pub scene: String,
+    /// Target compression ratio against 32-bit floats [default: 384].
+    #[arg(long, conflicts_with = "bytes")]
+    pub ratio: Option<f64>,
+    /// Target container size in bytes.
+    #[arg(long)]
+    pub bytes: Option<u64>,
+    /// Where `engine infer --all` wrote the maps [default: out/<scene>/infer].
+    #[arg(long)]
+    pub infer_dir: Option<PathBuf>,
+    /// The container file to write.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct CodecReportArgs {
+    /// The container to measure.
+    pub file: PathBuf,
+    /// Where to write the JSON report.
+    #[arg(long)]
+    pub json: PathBuf,
+    /// A built-in scene's name (teapot) or the path of a .toml scene file.
+    #[arg(long, default_value = "teapot")]
+    pub scene: String,
+    /// Where `engine infer --all` wrote the maps [default: out/<scene>/infer].
+    #[arg(long)]
+    pub infer_dir: Option<PathBuf>,
+    /// Traced targets for the rendered-frame PSNR [default: out/<scene>/trace].
+    #[arg(long)]
+    pub trace_dir: Option<PathBuf>,
+    /// Size the targets were traced at, as WIDTHxHEIGHT.
+    #[arg(long, default_value = "640x480", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Measure rendered frames at every Nth sample (0: skip; the MPEG-view
+    /// baseline uses the same frames and pixels, so it is skipped too).
+    #[arg(long, default_value_t = 10)]
+    pub frames_every: u32,
+    /// Also encode the scene at each of --curve-ratios and measure the
+    /// codec and the baselines at the same bytes: ratio-against-PSNR curves
+    /// in the JSON (`curves`). Takes one encoder analysis plus the
+    /// baselines' encodings (minutes).
+    #[arg(long)]
+    pub curve: bool,
+    /// Compression ratios of the curve points (against 32-bit floats).
+    #[arg(long, value_delimiter = ',', default_value = "100,200,400,800,1600", value_parser = parse_ratio)]
+    pub curve_ratios: Vec<f64>,
+    /// Turn the Khronos validation layer on for the rendered frames.
+    #[arg(long)]
+    pub validate: bool,
+    /// Vulkan device to use (substring of its name) [default: lavapipe].
+    #[arg(long, env = "ENGINE_DEVICE")]
+    pub device: Option<String>,
+}
