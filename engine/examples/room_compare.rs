@@ -143,24 +143,36 @@ fn display_diff(a: &Frame, b: &Frame, gain: f32) -> Frame {
         .collect()
 }
 
-/// Display PSNR of `pixels` per object of the reference (its `.mask` layers).
+/// Display PSNR of `pixels` per object of the reference (its `.mask`
+/// layers), then over the edge pixels: those an object covers only partly
+/// (the tracer's antialiased silhouettes, where one raster sample per pixel
+/// must differ).
 fn print_split(
     layers: &[inference::trace::output::ExrLayer],
     traced: &Frame,
     pixels: &Frame,
 ) -> Result<()> {
+    let mut edges = vec![false; traced.len()];
     for (name, chs) in layers.iter().filter(|(n, _)| n.ends_with(".mask")) {
         let Some((_, mask)) = chs.first() else {
             continue;
         };
-        let mask: Vec<bool> = mask.iter().map(|&m| m >= 0.5).collect();
-        if let Some((db, share)) = display_psnr_masked(traced, pixels, &mask)? {
-            println!(
-                "  {:<10} {db:6.2} dB ({:5.1}% of the squared error)",
-                name.trim_end_matches(".mask"),
-                100.0 * share
-            );
+        for (e, &m) in edges.iter_mut().zip(mask) {
+            *e |= m > 0.02 && m < 0.98;
         }
+        let mask: Vec<bool> = mask.iter().map(|&m| m >= 0.5).collect();
+        print_share(name.trim_end_matches(".mask"), traced, pixels, &mask)?;
+    }
+    print_share("edges", traced, pixels, &edges)
+}
+
+fn print_share(name: &str, traced: &Frame, pixels: &Frame, mask: &[bool]) -> Result<()> {
+    if let Some((db, share)) = display_psnr_masked(traced, pixels, mask)? {
+        let n = mask.iter().filter(|&&m| m).count();
+        println!(
+            "  {name:<10} {db:6.2} dB ({:5.1}% of the squared error, {n} pixels)",
+            100.0 * share
+        );
     }
     Ok(())
 }
