@@ -7,7 +7,7 @@ layout(location = 1) in float in_cos;
 
 layout(push_constant) uniform Push {
     mat4 view_proj;
-    vec4 f0;
+    vec4 f0; // rgb Schlick F0; w = LOD bias (PEM maps; 0 for static EMs)
 } pc;
 
 layout(set = 0, binding = 0) uniform samplerCube environment;
@@ -18,5 +18,5 @@ layout(location = 0) out vec4 out_color;
 void main() {
     float factor = fresnel_factor(fresnel_lut, in_cos);
     vec3 fresnel = schlick(pc.f0.rgb, factor);
-    out_color = vec4(fresnel * texture(environment, in_lookup).rgb, 1.0);
+    out_color = vec4(fresnel * texture(environment, in_lookup, pc.f0.w).rgb, 1.0);
 }

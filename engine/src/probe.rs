@@ -132,7 +132,7 @@ impl VulkanProbe {
         let n = geometry.positions.len();
         let uvs = match &geometry.lookup {
             Lookup::Uv(uvs) => uvs.clone(),
-            Lookup::Cube(_) => vec![glam::Vec2::ZERO; n],
+            Lookup::Cube { .. } => vec![glam::Vec2::ZERO; n],
         };
         let mesh = Mesh {
             positions: geometry.positions.clone(),
@@ -142,7 +142,7 @@ impl VulkanProbe {
         };
         let texgen = match &geometry.lookup {
             // cos θ = 1 reads LUT 0, so Schlick with F0 = 1 is exactly 1.
-            Lookup::Cube(dirs) => {
+            Lookup::Cube { dirs, .. } => {
                 let data: Vec<[f32; 4]> = dirs.iter().map(|d| [d.x, d.y, d.z, 1.0]).collect();
                 Some(Buffer::with_data(
                     &self.device,
@@ -228,6 +228,10 @@ impl VulkanProbe {
             return Err(GpuError::Invalid("probe resources missing".into()));
         };
         let view_proj: Mat4 = geometry.view_proj;
+        let lod_bias = match geometry.lookup {
+            Lookup::Cube { lod_bias, .. } => lod_bias,
+            Lookup::Uv(_) => 0.0,
+        };
         let push_bare = move |p: &Pipeline, cmd| {
             p.bind(
                 cmd,
@@ -245,7 +249,7 @@ impl VulkanProbe {
                 Some(texture.set),
                 &MirrorPush {
                     view_proj,
-                    f0: Vec4::ONE,
+                    f0: glam::Vec3::ONE.extend(lod_bias),
                 },
             )
         };
@@ -300,7 +304,7 @@ fn probe_is_cube(
             layout.len()
         )));
     }
-    let cube = matches!(geometry.lookup, Lookup::Cube(_));
+    let cube = matches!(geometry.lookup, Lookup::Cube { .. });
     if cube != (layout.faces() == 6) {
         return Err(GpuError::Invalid(
             "cube lookups need a cube layout and uv lookups a 2D one".into(),

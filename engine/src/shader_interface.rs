@@ -124,7 +124,8 @@ pub struct RoomLight {
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct MirrorPush {
     pub view_proj: Mat4,
-    /// rgb Schlick F0.
+    /// rgb Schlick F0; w = LOD bias (a PEM map's probe render; 0 for
+    /// static EMs).
     pub f0: Vec4,
 }
 
@@ -135,7 +136,8 @@ pub struct PemPush {
     pub view_proj: Mat4,
     /// rgb Schlick F0; a = the pass's blend weight (1 on the first pass).
     pub f0_weight: Vec4,
-    /// x = the array element holding this sample's maps.
+    /// x = the array element holding this sample's maps; y = 1 when a
+    /// G-buffer draw has a local layer; z = the reflector's LOD bias.
     pub slot: Vec4,
 }
 

@@ -206,13 +206,16 @@ fn assert_export_round_trips(dir: &Path, scene_path: &Path, infer: &Path) {
             );
         }
     }
-    let geometry = |name: &str| {
+    let em = |name: &str, field: &str| {
         sidecar["maps"]
             .as_array()
             .and_then(|m| m.iter().find(|m| m["name"] == name))
-            .map(|m| m["em"]["geometry"].clone())
+            .map(|m| m["em"][field].clone())
             .expect("map listed")
     };
+    let geometry = |name: &str| em(name, "geometry");
+    // The lookup's LOD bias, which another engine must add to match.
+    assert_eq!(em("teapot.specular_distant", "lod_bias"), 0.0);
     assert_eq!(geometry("teapot.specular_distant"), "box");
     assert_eq!(geometry("teapot.specular_local"), "ellipsoid");
     assert_eq!(geometry("teapot.ptm"), serde_json::Value::Null);

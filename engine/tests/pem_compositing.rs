@@ -1,8 +1,8 @@
 //! Deferred compositing draws what the papers' multipass draws: on a
 //! sample (one map, no blending) and between samples (two maps blended),
 //! the two frames agree — the G-buffer's explicit level of detail is the
-//! one a forward `texture()` picks, so maps inferred through either path
-//! play in both.
+//! one a forward `texture()` picks (LOD bias included), so maps inferred
+//! through either path play in both.
 
 mod common;
 
@@ -17,8 +17,70 @@ use std::process::Command;
 #[test]
 fn deferred_and_multipass_frames_agree() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let scene_path = tiny_scene(dir.path());
-    let out = dir.path().join("out");
+    let mut on_sample = Vec::new();
+    // Without and with a LOD bias: the G-buffer adds it as `texture(…,
+    // bias)` does, so both paths (and the probe renders) read the same levels.
+    for (name, lod_bias) in [("plain", 0.0f32), ("biased", -2.0)] {
+        let (scene, out) = compile(dir.path(), name, lod_bias);
+        let report = std::fs::read_to_string(out.join("infer/sample_0000/report.json"))
+            .expect("report.json");
+        let report: serde_json::Value = serde_json::from_str(&report).expect("json");
+        let a_vs_render = report["a_vs_render_psnr_db"].as_f64().expect("a_vs_render");
+        assert!(
+            a_vs_render > 100.0,
+            "{name}: A x vs render {a_vs_render:.1} dB"
+        );
+        let device = validated_device();
+        let orbit = scene.orbit;
+        let frame = |compositing, eye| {
+            let mut r = Renderer::new(&device, &scene, 96, 72).expect("renderer");
+            let settings = PemSettings {
+                compositing,
+                ..PemSettings::new(PemKind::Layered)
+            };
+            let source = MapSource::container(&scene, &out.join("teapot.ptxc")).expect("container");
+            r.set_pem(&scene, settings, source).expect("set-up");
+            r.frame(FrameMode::Pem, eye, orbit.view(eye))
+                .expect("frame");
+            r.pixels().expect("pixels")
+        };
+        for (what, eye, min_db) in [
+            ("on a sample", orbit.sample_eye(1).expect("eye"), 100.0),
+            (
+                "between samples",
+                orbit.eye(orbit.start_deg + 0.4 * orbit.step_deg, 0.0),
+                85.0,
+            ),
+        ] {
+            let deferred = frame(Compositing::Deferred, eye);
+            let multipass = frame(Compositing::Multipass, eye);
+            let db = psnr(&multipass, &deferred);
+            eprintln!("{name}, {what}: deferred against multipass {db:.1} dB");
+            assert!(db >= min_db, "{name}, {what}: {db:.1} dB");
+        }
+        on_sample.push(frame(
+            Compositing::Deferred,
+            orbit.sample_eye(1).expect("eye"),
+        ));
+    }
+    // The bias is applied: maps inferred and played with it draw another frame.
+    let db = psnr(&on_sample[0], &on_sample[1]);
+    assert!(db < 60.0, "the LOD bias changed nothing ({db:.1} dB)");
+    assert_no_validation_messages();
+}
+
+/// The tiny scene with `lod_bias`, compiled into `dir/<name>` at 96×72.
+fn compile(dir: &std::path::Path, name: &str, lod_bias: f32) -> (Scene, std::path::PathBuf) {
+    let scene_path = tiny_scene(dir);
+    let text = std::fs::read_to_string(&scene_path).expect("scene");
+    let text = text.replacen(
+        "resolution = 16",
+        &format!("resolution = 16\nlod_bias = {lod_bias:?}"),
+        1,
+    );
+    let scene_path = dir.join(format!("{name}.toml"));
+    std::fs::write(&scene_path, text).expect("write scene");
+    let out = dir.join(name);
     let o = Command::new(env!("CARGO_BIN_EXE_engine"))
         .args([
             "--scene",
@@ -37,33 +99,5 @@ fn deferred_and_multipass_frames_agree() {
         .expect("run engine");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let scene = Scene::load(scene_path.to_str().expect("utf-8")).expect("scene");
-    let device = validated_device();
-    let orbit = scene.orbit;
-    let frame = |compositing, eye| {
-        let mut r = Renderer::new(&device, &scene, 96, 72).expect("renderer");
-        let settings = PemSettings {
-            compositing,
-            ..PemSettings::new(PemKind::Layered)
-        };
-        let source = MapSource::container(&scene, &out.join("teapot.ptxc")).expect("container");
-        r.set_pem(&scene, settings, source).expect("set-up");
-        r.frame(FrameMode::Pem, eye, orbit.view(eye))
-            .expect("frame");
-        r.pixels().expect("pixels")
-    };
-    for (what, eye, min_db) in [
-        ("on a sample", orbit.sample_eye(1).expect("eye"), 100.0),
-        (
-            "between samples",
-            orbit.eye(orbit.start_deg + 0.4 * orbit.step_deg, 0.0),
-            85.0,
-        ),
-    ] {
-        let deferred = frame(Compositing::Deferred, eye);
-        let multipass = frame(Compositing::Multipass, eye);
-        let db = psnr(&multipass, &deferred);
-        eprintln!("{what}: deferred against multipass {db:.1} dB");
-        assert!(db >= min_db, "{what}: {db:.1} dB");
-    }
-    assert_no_validation_messages();
+    (scene, out)
 }

@@ -46,12 +46,13 @@ fn cube_map_matrix_matches_renders() {
         key: 1,
         positions: teapot.mesh.positions.clone(),
         indices: teapot.mesh.indices.clone(),
-        lookup: Lookup::Cube(
-            lookups
+        lookup: Lookup::Cube {
+            dirs: lookups
                 .iter()
                 .map(|l| glam::Vec3::new(l[0], l[1], l[2]))
                 .collect(),
-        ),
+            lod_bias: 0.0,
+        },
         view_proj,
         width: W,
         height: H,

@@ -207,12 +207,13 @@ fn distant_geometry(
         key: 0xC0DEC ^ u64::from(k),
         positions: object.mesh.positions.clone(),
         indices: object.mesh.indices.clone(),
-        lookup: Lookup::Cube(
-            lookups
+        lookup: Lookup::Cube {
+            dirs: lookups
                 .iter()
                 .map(|l| glam::Vec3::new(l[0], l[1], l[2]))
                 .collect(),
-        ),
+            lod_bias: object.em.as_ref().map_or(0.0, |em| em.lod_bias),
+        },
         view_proj: projection * scene.orbit.view(eye),
         width,
         height,

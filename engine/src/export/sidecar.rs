@@ -9,9 +9,10 @@
 //! the map's `geometry` (where it leaves the box or ellipsoid), and sample
 //! the cube in direction `hit − lookup_origin` (a ray that misses falls
 //! back to its own direction). `sphere_at_infinity` samples the reflected
-//! direction itself. Between two samples, blend the two nearest by
-//! azimuth; the local layer is premultiplied RGBA composited over the
-//! distant one.
+//! direction itself, with the hardware's trilinear level of detail plus
+//! `lod_bias` (the maps were inferred for that lookup). Between two
+//! samples, blend the two nearest by azimuth; the local layer is
+//! premultiplied RGBA composited over the distant one.
 
 use crate::compile::infer::Job;
 use crate::export::file_name;
@@ -88,6 +89,9 @@ pub struct EmJson {
     pub radii: Option<[f32; 3]>,
     /// Cube direction = hit − lookup_origin (the reflector's area-weighted centroid).
     pub lookup_origin: [f32; 3],
+    /// Added to the level of detail of every lookup (as GLSL's
+    /// `texture(…, bias)`).
+    pub lod_bias: f32,
 }
 
 #[derive(Serialize)]
@@ -144,7 +148,7 @@ fn map_json(spec: &MapSpec, jobs: &[Job]) -> MapJson {
     let job = jobs
         .iter()
         .find(|j| j.object.name == spec.object && j.layer == spec.layer);
-    let em = job.and_then(|j| Some(em_json(j.geometry?, j.origin.to_array())));
+    let em = job.and_then(|j| Some(em_json(j.geometry?, j.origin.to_array(), j.lod_bias())));
     MapJson {
         name: spec.name(),
         object: spec.object.clone(),
@@ -167,7 +171,7 @@ fn map_json(spec: &MapSpec, jobs: &[Job]) -> MapJson {
     }
 }
 
-fn em_json(geometry: EmGeometry, lookup_origin: [f32; 3]) -> EmJson {
+fn em_json(geometry: EmGeometry, lookup_origin: [f32; 3], lod_bias: f32) -> EmJson {
     let mut em = EmJson {
         geometry: "sphere_at_infinity",
         center: None,
@@ -175,6 +179,7 @@ fn em_json(geometry: EmGeometry, lookup_origin: [f32; 3]) -> EmJson {
         box_max: None,
         radii: None,
         lookup_origin,
+        lod_bias,
     };
     match geometry {
         EmGeometry::SphereAtInfinity => {}

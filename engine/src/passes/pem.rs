@@ -118,6 +118,8 @@ pub struct PemDraw<'a> {
     pub f0: Vec3,
     /// The array element holding this sample's maps.
     pub slot: u32,
+    /// The reflector's LOD bias (PTMs ignore it).
+    pub lod_bias: f32,
 }
 
 /// The reflectors drawn from one viewpoint sample with weight `weight`;
@@ -148,7 +150,7 @@ impl Pass for PemPass<'_> {
                 let push = PemPush {
                     view_proj: self.view_proj,
                     f0_weight: draw.f0.extend(self.weight),
-                    slot: glam::Vec4::new(draw.slot as f32, 0.0, 0.0, 0.0),
+                    slot: glam::Vec4::new(draw.slot as f32, 0.0, draw.lod_bias, 0.0),
                 };
                 self.pipelines
                     .get(draw.shading, self.blend)

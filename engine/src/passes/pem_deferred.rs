@@ -119,6 +119,8 @@ pub struct GBufferDraw<'a> {
     pub texgen: (&'a Buffer, &'a Buffer),
     pub stencil: u32,
     pub local: bool,
+    /// The reflector's LOD bias, added to the recorded levels of detail.
+    pub lod_bias: f32,
 }
 
 /// Pass 1: the reflectors into the G-buffer, depth-tested against the
@@ -171,7 +173,7 @@ impl Pass for GBufferPass<'_> {
                 // slot.y: whether this part records a local-layer lookup.
                 let push = PemPush {
                     view_proj: self.view_proj,
-                    slot: Vec4::new(0.0, f32::from(draw.local), 0.0, 0.0),
+                    slot: Vec4::new(0.0, f32::from(draw.local), draw.lod_bias, 0.0),
                     ..PemPush::default()
                 };
                 self.pipeline.bind(cmd, Some(self.set), &push)?;

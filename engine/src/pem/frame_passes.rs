@@ -153,6 +153,7 @@ impl PemPlayer {
             texgen,
             f0: r.f0,
             slot,
+            lod_bias: r.lod_bias,
         };
         let s = &self.sets;
         Ok(match self.settings.kind {
@@ -192,6 +193,7 @@ fn gbuffer_draws<'a>(
         texgen: (&r.texgen_distant, local_stream),
         stencil,
         local,
+        lod_bias: r.lod_bias,
     };
     [
         draw(0, r.hull_index_count, false),

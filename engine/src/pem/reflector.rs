@@ -20,6 +20,9 @@ pub struct PemReflector {
     pub name: String,
     pub f0: Vec3,
     pub resolution: u32,
+    /// Added to every map lookup's level of detail (`[objects.em] lod_bias`,
+    /// as the maps were inferred).
+    pub lod_bias: f32,
     positions: Vec<Vec3>,
     normals: Vec<Vec3>,
     origin: Vec3,
@@ -74,6 +77,7 @@ impl PemReflector {
             name: o.name.clone(),
             f0,
             resolution,
+            lod_bias: o.em.as_ref().map_or(0.0, |em| em.lod_bias),
             positions: o.mesh.positions.clone(),
             normals: o.mesh.normals.clone(),
             origin,

@@ -19,8 +19,10 @@ use glam::{Mat4, Vec2, Vec3};
 pub enum Lookup {
     /// 2D texture coordinates (repeat wrap), as a diffuse texture or PTM.
     Uv(Vec<Vec2>),
-    /// Cube-map lookup vectors from CPU texgen (need not be unit length).
-    Cube(Vec<Vec3>),
+    /// Cube-map lookup vectors from CPU texgen (need not be unit length),
+    /// read with `lod_bias` added to the level of detail (the reflector's
+    /// [`crate::scene::EmSettings::lod_bias`]).
+    Cube { dirs: Vec<Vec3>, lod_bias: f32 },
 }
 
 /// One object seen from one view: what a probe render draws.

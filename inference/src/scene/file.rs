@@ -190,6 +190,8 @@ pub struct EmFile {
     pub resolution: u32,
     #[serde(default = "default_layers")]
     pub layers: Vec<EmLayer>,
+    #[serde(default)]
+    pub lod_bias: f32,
 }
 
 /// `[objects.glass]`; see `scene::glass::GlassSettings` for the meanings.

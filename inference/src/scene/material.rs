@@ -21,12 +21,21 @@ pub enum Material {
 }
 
 /// Per-object environment-map settings (PEM layers).
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct EmSettings {
     /// Cube face edge length in texels.
     pub resolution: u32,
     pub layers: Vec<EmLayer>,
+    /// Added to the level of detail of every lookup into the maps, in the
+    /// probe renders the maps are inferred through and in playback alike.
+    /// The hardware's isotropic level blurs a curved mirror's reflection
+    /// beyond what the tracer's pixel (a box of 16 paths) averages; a
+    /// negative bias reads finer levels.
+    pub lod_bias: f32,
 }
+
+/// The LOD biases a scene may ask for.
+pub const LOD_BIASES: std::ops::RangeInclusive<f32> = -4.0..=2.0;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -42,6 +51,7 @@ impl Default for EmSettings {
         EmSettings {
             resolution: 256,
             layers: vec![EmLayer::Distant, EmLayer::Local],
+            lod_bias: 0.0,
         }
     }
 }

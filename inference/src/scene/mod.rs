@@ -17,6 +17,8 @@ pub mod shipped;
 pub mod texture;
 
 #[cfg(test)]
+mod em_tests;
+#[cfg(test)]
 mod glass_tests;
 #[cfg(test)]
 mod tests;
@@ -31,7 +33,7 @@ pub use error::SceneError;
 pub use glass::GlassSettings;
 pub use grid::{SampleBlend, ViewGrid};
 pub use light::{AreaLight, DirectionalLight, PointLight};
-pub use material::{EM_RESOLUTIONS, EmLayer, EmSettings, Material};
+pub use material::{EM_RESOLUTIONS, EmLayer, EmSettings, LOD_BIASES, Material};
 pub use mesh::Mesh;
 pub use shipped::{SHIPPED, shipped};
 pub use texture::{Pattern, Texture};

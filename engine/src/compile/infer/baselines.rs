@@ -46,12 +46,14 @@ pub(super) fn static_em_psnr(
     inference::texgen::sphere_at_infinity(eye, &mesh.positions, &mesh.normals, &mut lookups);
     let geometry = ProbeGeometry {
         key: view.key ^ 0x5EED_57A7_1CE0_0000,
-        lookup: Lookup::Cube(
-            lookups
+        // The static EM is played without a bias.
+        lookup: Lookup::Cube {
+            dirs: lookups
                 .iter()
                 .map(|l| Vec3::new(l[0], l[1], l[2]))
                 .collect(),
-        ),
+            lod_bias: 0.0,
+        },
         ..view.clone()
     };
     let layout = TextureLayout::full_chain(TextureShape::Cube { size: *size });

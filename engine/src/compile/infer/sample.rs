@@ -189,7 +189,7 @@ impl<'a> SampleRun<'a> {
         let (width, height) = self.req.size;
         let mesh = &job.object.mesh;
         let lookup = match job.geometry {
-            Some(g) => cube_lookup(&g, job.origin, eye, mesh),
+            Some(g) => cube_lookup(&g, job.origin, eye, mesh, job.lod_bias()),
             None => Lookup::Uv(mesh.uvs.clone()),
         };
         ProbeGeometry {
@@ -246,8 +246,14 @@ fn layer_line(sample: u32, l: &LayerReport) -> String {
 }
 
 /// Per-vertex cube lookups of `mesh` seen from `eye` for an EM on
-/// `geometry` centred at `origin` (CPU texgen).
-fn cube_lookup(geometry: &EmGeometry, origin: Vec3, eye: Vec3, mesh: &Mesh) -> Lookup {
+/// `geometry` centred at `origin` (CPU texgen), read with `lod_bias`.
+fn cube_lookup(
+    geometry: &EmGeometry,
+    origin: Vec3,
+    eye: Vec3,
+    mesh: &Mesh,
+    lod_bias: f32,
+) -> Lookup {
     let mut lookups = vec![[0.0f32; 4]; mesh.positions.len()];
     texgen(
         geometry,
@@ -257,10 +263,11 @@ fn cube_lookup(geometry: &EmGeometry, origin: Vec3, eye: Vec3, mesh: &Mesh) -> L
         &mesh.normals,
         &mut lookups,
     );
-    Lookup::Cube(
-        lookups
+    Lookup::Cube {
+        dirs: lookups
             .iter()
             .map(|l| Vec3::new(l[0], l[1], l[2]))
             .collect(),
-    )
+        lod_bias,
+    }
 }

@@ -14,7 +14,7 @@ use crate::scene::mesh::Mesh;
 use crate::scene::obj::load_obj;
 use crate::teapot::{self, DEFAULT_SEGMENTS, MAX_SEGMENTS, TeapotPart};
 
-use crate::scene::material::EM_RESOLUTIONS;
+use crate::scene::material::{EM_RESOLUTIONS, LOD_BIASES};
 
 impl Loader<'_> {
     pub(super) fn object(
@@ -142,9 +142,21 @@ impl Loader<'_> {
                 format!("{:?} repeats a layer", em.layers),
             ));
         }
+        if !LOD_BIASES.contains(&em.lod_bias) {
+            return Err(self.err(
+                format!("{field}.lod_bias"),
+                format!(
+                    "{} (expected levels from {} to {})",
+                    em.lod_bias,
+                    LOD_BIASES.start(),
+                    LOD_BIASES.end()
+                ),
+            ));
+        }
         Ok(EmSettings {
             resolution: em.resolution,
             layers: em.layers.clone(),
+            lod_bias: em.lod_bias,
         })
     }
 }

@@ -1,0 +1,38 @@
+//! `[objects.em]`: the LOD bias — none unless asked, read, and out of range
+//! or not a number named by field.
+
+use super::*;
+
+/// The shipped teapot scene with `from` replaced by `to`, from a temp file.
+fn load_edited(from: &str, to: &str) -> Result<Scene, SceneError> {
+    let text = super::shipped::shipped("teapot").expect("shipped teapot scene");
+    assert!(text.contains(from), "test bug: {from:?} not in teapot.toml");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("t.toml");
+    std::fs::write(&path, text.replacen(from, to, 1)).expect("write scene");
+    Scene::load(&path.to_string_lossy())
+}
+
+fn teapot_bias(s: &Scene) -> f32 {
+    let teapot = s.object("teapot").expect("teapot");
+    teapot.em.as_ref().expect("teapot has EMs").lod_bias
+}
+
+#[test]
+fn the_lod_bias_is_zero_unless_asked_and_checked() {
+    let s = Scene::load("teapot").expect("the built-in teapot scene loads");
+    assert_eq!(teapot_bias(&s), 0.0);
+    let em = "resolution = 256\n";
+    let s = load_edited(em, "resolution = 256\nlod_bias = -1.5\n").expect("loads");
+    assert_eq!(teapot_bias(&s), -1.5);
+    for bad in ["-9.0", "nan", "3.0"] {
+        let e = load_edited(em, &format!("resolution = 256\nlod_bias = {bad}\n"))
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(
+            e.contains(".em.lod_bias") && e.contains("expected"),
+            "{bad}: {e}"
+        );
+    }
+}
