@@ -6,6 +6,16 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
+/// How every EXR the engine writes is encoded: run-length, as `exr`'s
+/// `FAST_LOSSLESS`, but with its blocks in increasing order. Unspecified
+/// order lets the parallel compressor write them as they finish, so the
+/// same pixels made different bytes from run to run (and different
+/// checksums in the key records of files a farmed compile should share).
+pub const EXR_ENCODING: exr::prelude::Encoding = exr::prelude::Encoding {
+    line_order: exr::prelude::LineOrder::Increasing,
+    ..exr::prelude::Encoding::FAST_LOSSLESS
+};
+
 /// `dir/.<name>.<pid>.<n>.tmp`: hidden, beside `path`, unique per process
 /// and call, so concurrent writers of the same file never share one.
 pub fn temp_path(path: &Path) -> PathBuf {

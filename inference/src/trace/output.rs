@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use exr::prelude::{
-    AnyChannel, AnyChannels, Encoding, FlatSamples, Image, ImageAttributes, IntegerBounds, Layer,
+    AnyChannel, AnyChannels, FlatSamples, Image, ImageAttributes, IntegerBounds, Layer,
     LayerAttributes, ReadChannels, ReadLayers, SmallVec, Text, Vec2, WritableImage, read,
 };
 
@@ -62,7 +62,7 @@ pub fn write_exr(path: &Path, image: &TraceImage) -> Result<(), TraceError> {
             Layer::new(
                 size,
                 LayerAttributes::named(layer.name.as_str()),
-                Encoding::FAST_LOSSLESS,
+                crate::files::EXR_ENCODING,
                 AnyChannels::sort(channels),
             )
         })
