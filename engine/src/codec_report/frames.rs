@@ -212,7 +212,7 @@ fn distant_geometry(
                 .iter()
                 .map(|l| glam::Vec3::new(l[0], l[1], l[2]))
                 .collect(),
-            lod_bias: object.em.as_ref().map_or(0.0, |em| em.lod_bias),
+            lod_bias: object.lod_bias(),
         },
         view_proj: projection * scene.orbit.view(eye),
         width,

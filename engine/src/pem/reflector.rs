@@ -77,7 +77,7 @@ impl PemReflector {
             name: o.name.clone(),
             f0,
             resolution,
-            lod_bias: o.em.as_ref().map_or(0.0, |em| em.lod_bias),
+            lod_bias: o.lod_bias(),
             positions: o.mesh.positions.clone(),
             normals: o.mesh.normals.clone(),
             origin,

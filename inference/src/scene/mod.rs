@@ -73,6 +73,14 @@ pub struct Object {
     pub glass: Option<GlassSettings>,
 }
 
+impl Object {
+    /// The LOD bias of the object's EM lookups (`[objects.em] lod_bias`;
+    /// 0, the hardware's own level of detail, without EMs).
+    pub fn lod_bias(&self) -> f32 {
+        self.em.as_ref().map_or(0.0, |em| em.lod_bias)
+    }
+}
+
 impl Scene {
     /// `name_or_path`: the name of a shipped scene (built into the binary,
     /// [`SHIPPED`]) or a path to a `.toml` file. Relative mesh paths are

@@ -28,7 +28,7 @@ pub struct Job<'a> {
 impl Job<'_> {
     /// The LOD bias of the object's EM lookups (`[objects.em] lod_bias`).
     pub fn lod_bias(&self) -> f32 {
-        self.object.em.as_ref().map_or(0.0, |em| em.lod_bias)
+        self.object.lod_bias()
     }
     /// `<object>.<layer>`.
     pub fn name(&self) -> String {
