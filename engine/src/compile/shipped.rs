@@ -11,7 +11,7 @@
 use super::CompileContext;
 use crate::maps::DataDirs;
 use anyhow::{Context, Result, bail};
-use inference::key::{Freshness, freshness, record_path};
+use inference::key::{Freshness, freshness, read_record, record_path};
 use inference::scene::Scene;
 use std::path::{Path, PathBuf};
 
@@ -62,20 +62,34 @@ pub fn ship(ctx: &CompileContext, dest: &Path) -> Result<Vec<PathBuf>> {
     if !container.is_file() {
         bail!("{}: no compiled container to ship", container.display());
     }
+    copy_with_records(ctx.out, dest, &files(ctx.out)?)
+}
+
+/// Copies each of `files` (relative paths) from `from` into `dest` with its
+/// key record. A file already at the destination is replaced only when it is
+/// the engine's (a record of this engine beside it); the record is written
+/// last, so an interrupted copy reads as damaged, never as fresh.
+fn copy_with_records(from: &Path, dest: &Path, files: &[PathBuf]) -> Result<Vec<PathBuf>> {
     crate::util::files::claim_dir(dest)?;
     let mut written = Vec::new();
-    for rel in files(ctx.out)? {
-        let (from, to) = (ctx.out.join(&rel), dest.join(&rel));
+    for rel in files {
+        let (src, to) = (from.join(rel), dest.join(rel));
         if let Some(parent) = to.parent() {
             crate::util::files::claim_dir(parent)?;
         }
-        for (from, to) in [
-            (from.clone(), to.clone()),
-            (record_path(&from), record_path(&to)),
+        crate::util::files::check_overwrite_keyed(&to)?;
+        if record_path(&to).exists() && read_record(&to).is_none() {
+            bail!(
+                "{}: exists and is not a key record this engine wrote: not overwritten; move it away",
+                record_path(&to).display()
+            );
+        }
+        for (src, to) in [
+            (src.clone(), to.clone()),
+            (record_path(&src), record_path(&to)),
         ] {
-            crate::util::files::check_overwrite_keyed(&to)?;
             let bytes =
-                std::fs::read(&from).with_context(|| format!("reading {}", from.display()))?;
+                std::fs::read(&src).with_context(|| format!("reading {}", src.display()))?;
             crate::util::files::write(&to, &bytes)?;
         }
         written.push(to);
@@ -132,4 +146,61 @@ pub fn check(ctx: &CompileContext) -> Result<Vec<(String, String)>> {
             )
         })
         .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use inference::key::{Key, write_record};
+
+    fn compiled(dir: &Path, rel: &str, bytes: &[u8]) {
+        let path = dir.join(rel);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(&path, bytes).unwrap();
+        write_record(&path, &Key::new().with("test", bytes.len() as u64)).unwrap();
+    }
+
+    #[test]
+    fn a_shipped_set_is_replaced_by_a_newer_one() {
+        let (out, dest) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+        let files = [
+            PathBuf::from("s.ptxc"),
+            PathBuf::from("room/floor.light.exr"),
+        ];
+        compiled(out.path(), "s.ptxc", b"first");
+        compiled(out.path(), "room/floor.light.exr", b"light");
+        copy_with_records(out.path(), dest.path(), &files).unwrap();
+        compiled(out.path(), "s.ptxc", b"second, longer");
+        copy_with_records(out.path(), dest.path(), &files).unwrap();
+        let shipped = dest.path().join("s.ptxc");
+        assert_eq!(std::fs::read(&shipped).unwrap(), b"second, longer");
+        assert!(
+            inference::key::is_ours(&shipped),
+            "record matches the new bytes"
+        );
+    }
+
+    #[test]
+    fn a_file_or_record_the_engine_did_not_write_is_not_overwritten() {
+        let (out, dest) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+        let files = [PathBuf::from("s.ptxc")];
+        compiled(out.path(), "s.ptxc", b"compiled");
+        copy_with_records(out.path(), dest.path(), &files).unwrap();
+        std::fs::remove_file(dest.path().join("s.ptxc")).unwrap();
+        std::fs::write(dest.path().join("s.ptxc.key"), b"a user's notes").unwrap();
+        let e = copy_with_records(out.path(), dest.path(), &files).unwrap_err();
+        assert!(e.to_string().contains("s.ptxc.key"), "{e}");
+        assert_eq!(
+            std::fs::read(dest.path().join("s.ptxc.key")).unwrap(),
+            b"a user's notes"
+        );
+        std::fs::remove_file(dest.path().join("s.ptxc.key")).unwrap();
+        std::fs::write(dest.path().join("s.ptxc"), b"a user's file").unwrap();
+        let e = copy_with_records(out.path(), dest.path(), &files).unwrap_err();
+        assert!(e.to_string().contains("not overwritten"), "{e}");
+        assert_eq!(
+            std::fs::read(dest.path().join("s.ptxc")).unwrap(),
+            b"a user's file"
+        );
+    }
 }
