@@ -73,10 +73,20 @@ fn deferred_and_multipass_frames_agree() {
 fn compile(dir: &std::path::Path, name: &str, lod_bias: f32) -> (Scene, std::path::PathBuf) {
     let scene_path = tiny_scene(dir);
     let text = std::fs::read_to_string(&scene_path).expect("scene");
-    let text = text.replacen(
-        "resolution = 16",
-        &format!("resolution = 16\nlod_bias = {lod_bias:?}"),
-        1,
+    // The tiny scene inherits the shipped teapot's bias: replace its line.
+    let text: String = text
+        .lines()
+        .map(|l| {
+            if l.starts_with("lod_bias =") {
+                format!("lod_bias = {lod_bias:?}\n")
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    assert!(
+        text.contains(&format!("lod_bias = {lod_bias:?}\n")),
+        "teapot.toml lacks lod_bias"
     );
     let scene_path = dir.join(format!("{name}.toml"));
     std::fs::write(&scene_path, text).expect("write scene");

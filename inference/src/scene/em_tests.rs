@@ -21,12 +21,14 @@ fn teapot_bias(s: &Scene) -> f32 {
 #[test]
 fn the_lod_bias_is_zero_unless_asked_and_checked() {
     let s = Scene::load("teapot").expect("the built-in teapot scene loads");
-    assert_eq!(teapot_bias(&s), 0.0);
-    let em = "resolution = 256\n";
-    let s = load_edited(em, "resolution = 256\nlod_bias = -1.5\n").expect("loads");
+    assert_eq!(teapot_bias(&s), -2.0, "the shipped teapot asks for -2");
+    let line = bias_line();
+    let s = load_edited(&line, "").expect("loads without the line");
+    assert_eq!(teapot_bias(&s), 0.0, "no bias unless asked");
+    let s = load_edited(&line, "lod_bias = -1.5\n").expect("loads");
     assert_eq!(teapot_bias(&s), -1.5);
     for bad in ["-9.0", "nan", "3.0"] {
-        let e = load_edited(em, &format!("resolution = 256\nlod_bias = {bad}\n"))
+        let e = load_edited(&line, &format!("lod_bias = {bad}\n"))
             .err()
             .map(|e| e.to_string())
             .unwrap_or_default();
@@ -35,4 +37,14 @@ fn the_lod_bias_is_zero_unless_asked_and_checked() {
             "{bad}: {e}"
         );
     }
+}
+
+/// The shipped teapot's `lod_bias = …` line, with its newline.
+fn bias_line() -> String {
+    let text = super::shipped::shipped("teapot").expect("shipped teapot scene");
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("lod_bias ="))
+        .expect("teapot.toml sets lod_bias");
+    format!("{line}\n")
 }
