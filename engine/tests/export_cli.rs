@@ -214,8 +214,7 @@ fn assert_export_round_trips(dir: &Path, scene_path: &Path, infer: &Path) {
             .expect("map listed")
     };
     let geometry = |name: &str| em(name, "geometry");
-    // The lookup's LOD bias, which another engine must add to match (the
-    // tiny scene keeps the shipped teapot's -2).
+    // The LOD bias another engine must add to match (the shipped teapot's).
     assert_eq!(em("teapot.specular_distant", "lod_bias"), -2.0);
     assert_eq!(geometry("teapot.specular_distant"), "box");
     assert_eq!(geometry("teapot.specular_local"), "ellipsoid");
