@@ -11,7 +11,7 @@
 use super::CompileContext;
 use crate::maps::DataDirs;
 use anyhow::{Context, Result, bail};
-use inference::key::{Freshness, freshness, read_record, record_path};
+use inference::key::{Freshness, freshness, record_path};
 use inference::scene::Scene;
 use std::path::{Path, PathBuf};
 
@@ -78,12 +78,6 @@ fn copy_with_records(from: &Path, dest: &Path, files: &[PathBuf]) -> Result<Vec<
             crate::util::files::claim_dir(parent)?;
         }
         crate::util::files::check_overwrite_keyed(&to)?;
-        if record_path(&to).exists() && read_record(&to).is_none() {
-            bail!(
-                "{}: exists and is not a key record this engine wrote: not overwritten; move it away",
-                record_path(&to).display()
-            );
-        }
         for (src, to) in [
             (src.clone(), to.clone()),
             (record_path(&src), record_path(&to)),

@@ -148,7 +148,13 @@ fn map_json(spec: &MapSpec, jobs: &[Job]) -> MapJson {
     let job = jobs
         .iter()
         .find(|j| j.object.name == spec.object && j.layer == spec.layer);
-    let em = job.and_then(|j| Some(em_json(j.geometry?, j.origin.to_array(), j.lod_bias())));
+    let em = job.and_then(|j| {
+        Some(em_json(
+            j.geometry?,
+            j.origin.to_array(),
+            j.object.lod_bias(),
+        ))
+    });
     MapJson {
         name: spec.name(),
         object: spec.object.clone(),

@@ -61,12 +61,20 @@ pub fn check_overwrite(path: &Path) -> Result<()> {
     )
 }
 
-/// Whether a keyed output (a container, a map) may be written at `path`:
-/// absent, or carrying a key record this engine wrote (stale or damaged
-/// files of its own are rebuilt; anything else is refused, wherever it is).
+/// Whether a keyed output (a container, a map) and its key record may be
+/// written at `path`: absent, or carrying a key record this engine wrote
+/// (stale or damaged files of its own are rebuilt; anything else is
+/// refused, wherever it is, a foreign file at the record's path included).
 pub fn check_overwrite_keyed(path: &Path) -> Result<()> {
-    if !path.exists() || inference::key::read_record(path).is_some() {
+    let record = inference::key::record_path(path);
+    if inference::key::read_record(path).is_some() || !record.exists() && !path.exists() {
         return Ok(());
+    }
+    if !path.exists() {
+        bail!(
+            "{}: exists and is not a key record this engine wrote: not overwritten; move it away",
+            record.display()
+        );
     }
     bail!(
         "{}: exists and is not a file the engine compiled (no key record beside it): not overwritten; \
@@ -137,6 +145,12 @@ mod tests {
         inference::key::write_record(&file, &inference::key::Key::new())?;
         std::fs::write(&file, b"damaged since")?;
         check_overwrite_keyed(&file)?; // ours, damaged: rebuilt
+        let lone = dir.path().join("other.ptxc");
+        std::fs::write(inference::key::record_path(&lone), b"a user's notes")?;
+        let e = check_overwrite_keyed(&lone)
+            .expect_err("not our record")
+            .to_string();
+        assert!(e.contains("other.ptxc.key"), "{e}");
         Ok(())
     }
 

@@ -26,10 +26,6 @@ pub struct Job<'a> {
 }
 
 impl Job<'_> {
-    /// The LOD bias of the object's EM lookups (`[objects.em] lod_bias`).
-    pub fn lod_bias(&self) -> f32 {
-        self.object.lod_bias()
-    }
     /// `<object>.<layer>`.
     pub fn name(&self) -> String {
         format!("{}.{}", self.object.name, self.layer.file_part())
@@ -108,8 +104,8 @@ pub fn map_key(trace: &Key, job: &Job, options: &SolveOptions, size: (u32, u32))
         h.f32(options.eps_prior);
     }
     // Added with the LOD bias: maps read without one keep their keys.
-    if job.geometry.is_some() && job.lod_bias() != 0.0 {
-        h.f32(job.lod_bias());
+    if job.geometry.is_some() && job.object.lod_bias() != 0.0 {
+        h.f32(job.object.lod_bias());
     }
     for p in &job.object.mesh.positions {
         h.v3(*p);

@@ -189,7 +189,7 @@ impl<'a> SampleRun<'a> {
         let (width, height) = self.req.size;
         let mesh = &job.object.mesh;
         let lookup = match job.geometry {
-            Some(g) => cube_lookup(&g, job.origin, eye, mesh, job.lod_bias()),
+            Some(g) => cube_lookup(&g, job.origin, eye, mesh, job.object.lod_bias()),
             None => Lookup::Uv(mesh.uvs.clone()),
         };
         ProbeGeometry {
