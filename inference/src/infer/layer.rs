@@ -7,6 +7,7 @@ use super::forward::forward_map;
 use crate::probe::{
     ProbeError, ProbeGeometry, ProbeRenderer, RenderingMatrix, build_matrix, verify_matrix,
 };
+use crate::solve::csr::CsrMatrix;
 use crate::solve::layout::{TextureLayout, TextureShape};
 use crate::solve::{Solution, SolveOptions, solve_channels};
 use std::time::{Duration, Instant};
@@ -153,6 +154,31 @@ pub fn infer_layer(
     options: &SolveOptions,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<LayerResult, InferError> {
+    infer_layer_with(
+        renderer,
+        geometry,
+        shape,
+        target,
+        &[],
+        warm_start,
+        options,
+        progress,
+    )
+}
+
+/// [`infer_layer`] with neighbouring views' rows stacked into the solve,
+/// each view's rows scaled by its weight.
+#[allow(clippy::too_many_arguments)]
+pub fn infer_layer_with(
+    renderer: &mut dyn ProbeRenderer,
+    geometry: &ProbeGeometry,
+    shape: TextureShape,
+    target: &Target,
+    extra: &[(ProbeGeometry, Target, f32)],
+    warm_start: Option<&[Vec<f32>]>,
+    options: &SolveOptions,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<LayerResult, InferError> {
     let expected = check_target(geometry, target)?;
     let layout = TextureLayout::full_chain(shape);
     let mut timed = Timed {
@@ -165,7 +191,15 @@ pub fn infer_layer(
     let probe_time = timed.spent;
     let verify = verify_matrix(&mut timed, geometry, &layout, &matrix, 1)?;
 
-    let (solutions, solve_time) = solve_target(&matrix, target, &layout, warm_start, options)?;
+    let mut extras = Vec::new();
+    for (g, t, w) in extra {
+        check_target(g, t)?;
+        let mut m = build_matrix(&mut timed, g, &layout, shape, &mut |_, _| {})?;
+        m.a.values.iter_mut().for_each(|v| *v *= w);
+        extras.push((m, t, *w));
+    }
+    let (solutions, solve_time) =
+        solve_target(&matrix, target, &extras, &layout, warm_start, options)?;
     let forward = forward_maps(&matrix, target, &layout, geometry.width, expected);
     let map: Vec<Vec<f32>> = solutions.iter().map(|s| s.x.clone()).collect();
     let rendered_ls = render_with_alpha(&mut timed, geometry, &layout, &map)?;
@@ -229,25 +263,39 @@ fn check_target(geometry: &ProbeGeometry, target: &Target) -> Result<usize, Infe
 fn solve_target(
     matrix: &RenderingMatrix,
     target: &Target,
+    extras: &[(RenderingMatrix, &Target, f32)],
     layout: &TextureLayout,
     warm_start: Option<&[Vec<f32>]>,
     options: &SolveOptions,
 ) -> Result<(Vec<Solution>, Duration), InferError> {
     let bs: Vec<Vec<f32>> = (0..target.channels)
         .map(|c| {
-            matrix
+            let mut b: Vec<f32> = matrix
                 .pixels
                 .iter()
                 .map(|&p| target.pixels[p as usize][c])
-                .collect()
+                .collect();
+            for (m, t, w) in extras {
+                b.extend(m.pixels.iter().map(|&p| w * t.pixels[p as usize][c]));
+            }
+            b
         })
         .collect();
     let b_refs: Vec<&[f32]> = bs.iter().map(Vec::as_slice).collect();
+    let stacked;
+    let a = if extras.is_empty() {
+        &matrix.a
+    } else {
+        let mut parts = vec![&matrix.a];
+        parts.extend(extras.iter().map(|(m, _, _)| &m.a));
+        stacked = CsrMatrix::vstack(&parts)?;
+        &stacked
+    };
     let warm: Option<Vec<&[f32]>> = warm_start
         .filter(|w| w.len() == target.channels && w.iter().all(|m| m.len() == layout.len()))
         .map(|w| w.iter().map(Vec::as_slice).collect());
     let start = Instant::now();
-    let solutions = solve_channels(&matrix.a, &b_refs, layout, warm.as_deref(), options)?;
+    let solutions = solve_channels(a, &b_refs, layout, warm.as_deref(), options)?;
     Ok((solutions, start.elapsed()))
 }
 

@@ -12,4 +12,4 @@ pub mod stacked;
 #[cfg(test)]
 mod tests;
 
-pub use layer::{InferError, LayerResult, Target, infer_layer};
+pub use layer::{InferError, LayerResult, Target, infer_layer, infer_layer_with};

@@ -196,3 +196,46 @@ fn a_four_channel_layer_is_scored_on_the_alpha_it_will_composite_with() {
         alpha.collect::<Vec<_>>()
     );
 }
+
+#[test]
+fn a_neighbouring_view_pulls_the_fit_by_its_weight() {
+    // Both views see the same texels; the neighbour's target is twice the
+    // sample's. Rows scaled by w minimise |Ax − b|² + w²|Ax − 2b|², so the
+    // render is (1 + 2w²) / (1 + w²) × b: 1.2 b at w = ½, 1.5 b at w = 1.
+    let exact = SolveOptions {
+        eps_f: 0.0,
+        ..SolveOptions::default()
+    };
+    let own = gradient(1.0);
+    let twice = gradient(2.0);
+    for (w, expected) in [(0.5f32, 1.2f32), (1.0, 1.5)] {
+        let target = Target {
+            name: "test.layer",
+            pixels: &own,
+            channels: 3,
+        };
+        let neighbour = Target {
+            pixels: &twice,
+            ..target
+        };
+        let r = infer_layer_with(
+            &mut Device { covered: true },
+            &geometry(),
+            SHAPE,
+            &target,
+            &[(geometry(), neighbour, w)],
+            None,
+            &exact,
+            &mut |_, _| {},
+        )
+        .expect("infer");
+        for (&p, rendered) in r.pixels.iter().zip(&r.rendered_least_squares) {
+            let want = expected * own[p as usize][0];
+            assert!(
+                (rendered[0] - want).abs() <= 1e-3 * want.max(1.0),
+                "w = {w}: pixel {p} renders {} for {want}",
+                rendered[0]
+            );
+        }
+    }
+}

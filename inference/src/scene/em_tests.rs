@@ -1,4 +1,4 @@
-//! `[objects.em]`: the LOD bias — none unless asked, read, and out of range
+//! `[objects.em]`: the LOD bias and the neighbour weight — none unless asked, read, and out of range
 //! or not a number named by field.
 
 use super::*;
@@ -47,4 +47,21 @@ fn bias_line() -> String {
         .find(|l| l.starts_with("lod_bias ="))
         .expect("teapot.toml sets lod_bias");
     format!("{line}\n")
+}
+
+#[test]
+fn the_neighbour_weight_is_zero_unless_asked_and_checked() {
+    let weight = |s: &Scene| s.object("teapot").expect("teapot").neighbour_weight();
+    let s = Scene::load("teapot").expect("the built-in teapot scene loads");
+    assert_eq!(weight(&s), 0.0);
+    let line = bias_line();
+    let with = |w: &str| load_edited(&line, &format!("{line}neighbour_weight = {w}\n"));
+    assert_eq!(weight(&with("0.5").expect("loads")), 0.5);
+    for bad in ["-0.1", "nan", "1.5"] {
+        let e = with(bad).err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(
+            e.contains(".em.neighbour_weight") && e.contains("expected"),
+            "{bad}: {e}"
+        );
+    }
 }

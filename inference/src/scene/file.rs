@@ -192,6 +192,8 @@ pub struct EmFile {
     pub layers: Vec<EmLayer>,
     #[serde(default)]
     pub lod_bias: f32,
+    #[serde(default)]
+    pub neighbour_weight: f32,
 }
 
 /// `[objects.glass]`; see `scene::glass::GlassSettings` for the meanings.

@@ -32,10 +32,18 @@ pub struct EmSettings {
     /// beyond what the tracer's pixel (a box of 16 paths) averages; a
     /// negative bias reads finer levels.
     pub lod_bias: f32,
+    /// Weight of each neighbouring sample's view (azimuth ± 1 on the same
+    /// ring, its own trace) stacked into a sample's EM solve; 0 solves each
+    /// sample from its own view alone. Sharp maps fit to one view generalize
+    /// poorly to the views between samples; their neighbours constrain
+    /// the texels only nearby views reach.
+    pub neighbour_weight: f32,
 }
 
 /// The LOD biases a scene may ask for.
 pub const LOD_BIASES: std::ops::RangeInclusive<f32> = -4.0..=2.0;
+/// The neighbour weights a scene may ask for.
+pub const NEIGHBOUR_WEIGHTS: std::ops::RangeInclusive<f32> = 0.0..=1.0;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -52,6 +60,7 @@ impl Default for EmSettings {
             resolution: 256,
             layers: vec![EmLayer::Distant, EmLayer::Local],
             lod_bias: 0.0,
+            neighbour_weight: 0.0,
         }
     }
 }

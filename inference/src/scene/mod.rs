@@ -79,6 +79,12 @@ impl Object {
     pub fn lod_bias(&self) -> f32 {
         self.em.as_ref().map_or(0.0, |em| em.lod_bias)
     }
+
+    /// The weight of neighbouring samples' views in the object's EM solves
+    /// (`[objects.em] neighbour_weight`; 0 without EMs).
+    pub fn neighbour_weight(&self) -> f32 {
+        self.em.as_ref().map_or(0.0, |em| em.neighbour_weight)
+    }
 }
 
 impl Scene {

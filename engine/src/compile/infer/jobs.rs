@@ -107,6 +107,12 @@ pub fn map_key(trace: &Key, job: &Job, options: &SolveOptions, size: (u32, u32))
     if job.geometry.is_some() && job.object.lod_bias() != 0.0 {
         h.f32(job.object.lod_bias());
     }
+    // Added with neighbouring views: maps solved from their own view alone
+    // keep their keys.
+    if job.geometry.is_some() && job.object.neighbour_weight() > 0.0 {
+        h.str("neighbours");
+        h.f32(job.object.neighbour_weight());
+    }
     for p in &job.object.mesh.positions {
         h.v3(*p);
     }

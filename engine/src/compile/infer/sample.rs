@@ -14,7 +14,7 @@ use anyhow::{Context, Result};
 use glam::{Mat4, Vec3};
 use inference::em_geometry::{EmGeometry, texgen};
 use inference::infer::maps::{read_map, write_map};
-use inference::infer::{Target, infer_layer};
+use inference::infer::{Target, infer_layer_with};
 use inference::key::Key;
 use inference::probe::{Lookup, ProbeGeometry};
 use inference::scene::Mesh;
@@ -139,11 +139,23 @@ impl<'a> SampleRun<'a> {
             pixels: &pixels,
             channels: job.channels(),
         };
-        let result = infer_layer(
+        let neighbours = self.neighbour_views(k, job, &key)?;
+        let extra: Vec<(ProbeGeometry, Target, f32)> = neighbours
+            .iter()
+            .map(|n| {
+                let target = Target {
+                    pixels: &n.pixels,
+                    ..target
+                };
+                (n.geometry.clone(), target, n.weight)
+            })
+            .collect();
+        let result = infer_layer_with(
             &mut self.probe,
             &geometry,
             job.shape(),
             &target,
+            &extra,
             previous.as_deref(),
             &self.plan.options_for(job),
             &mut |_, _| {},
@@ -182,6 +194,39 @@ impl<'a> SampleRun<'a> {
         Ok((report, previous.is_some()))
     }
 
+    /// The views stacked into sample `k`'s solve of an EM layer beside its
+    /// own (`[objects.em] neighbour_weight`): the samples one azimuth line
+    /// either side on the same ring, each with its own traced target, probe
+    /// geometry and the weight.
+    fn neighbour_views(&mut self, k: u32, job: &Job, key: &Key) -> Result<Vec<NeighbourView>> {
+        let w = job.object.neighbour_weight();
+        if w <= 0.0 || !matches!(job.layer, MapLayer::Distant | MapLayer::Local) {
+            return Ok(Vec::new());
+        }
+        let (width, height) = self.req.size;
+        let lines = self.plan.scene.orbit.samples.max(1);
+        let line = k % lines;
+        let mut out = Vec::new();
+        for n in neighbour_samples(k, line, lines) {
+            let eye = self.plan.scene.orbit.sample_eye(n)?;
+            let stem = traced_stem(&self.req.trace_dir, n);
+            let (layers, _) = traced_layers(
+                &self.tracer,
+                &self.plan.scene_key,
+                eye,
+                &self.plan.settings,
+                &stem,
+            )?;
+            let px = job_target_pixels(job, &layers, width as usize * height as usize)?;
+            out.push(NeighbourView {
+                geometry: self.probe_geometry(n, eye, job, key),
+                pixels: px,
+                weight: w,
+            });
+        }
+        Ok(out)
+    }
+
     /// The probe renders' geometry of `job` at sample `k` seen from `eye`:
     /// the object's mesh with its UVs or, for an EM, its per-vertex cube
     /// lookups.
@@ -202,6 +247,26 @@ impl<'a> SampleRun<'a> {
             height,
         }
     }
+}
+
+/// A neighbouring sample's view of an EM layer, stacked into a solve.
+struct NeighbourView {
+    geometry: ProbeGeometry,
+    pixels: Vec<[f32; 4]>,
+    weight: f32,
+}
+
+/// Sample `k`'s neighbours on its ring: azimuth line `line` ± 1 of
+/// `lines`, where they exist (a ring does not wrap: the orbit is an arc).
+fn neighbour_samples(k: u32, line: u32, lines: u32) -> Vec<u32> {
+    let mut n = Vec::new();
+    if line > 0 {
+        n.push(k - 1);
+    }
+    if line + 1 < lines {
+        n.push(k + 1);
+    }
+    n
 }
 
 /// The traced pixels `job`'s map must reproduce: its own layer (the local
@@ -269,5 +334,22 @@ fn cube_lookup(
             .map(|l| Vec3::new(l[0], l[1], l[2]))
             .collect(),
         lod_bias,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::neighbour_samples;
+
+    #[test]
+    fn neighbours_stay_on_their_ring_and_inside_the_arc() {
+        // 1D orbit of 3: the ends have one neighbour.
+        assert_eq!(neighbour_samples(0, 0, 3), vec![1]);
+        assert_eq!(neighbour_samples(1, 1, 3), vec![0, 2]);
+        assert_eq!(neighbour_samples(2, 2, 3), vec![1]);
+        // Ring 1 of 4-line rings: samples 4..8, never 3 or 8.
+        assert_eq!(neighbour_samples(4, 0, 4), vec![5]);
+        assert_eq!(neighbour_samples(7, 3, 4), vec![6]);
+        assert_eq!(neighbour_samples(5, 1, 4), vec![4, 6]);
     }
 }

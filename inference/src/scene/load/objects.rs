@@ -14,7 +14,7 @@ use crate::scene::mesh::Mesh;
 use crate::scene::obj::load_obj;
 use crate::teapot::{self, DEFAULT_SEGMENTS, MAX_SEGMENTS, TeapotPart};
 
-use crate::scene::material::{EM_RESOLUTIONS, LOD_BIASES};
+use crate::scene::material::{EM_RESOLUTIONS, LOD_BIASES, NEIGHBOUR_WEIGHTS};
 
 impl Loader<'_> {
     pub(super) fn object(
@@ -153,10 +153,22 @@ impl Loader<'_> {
                 ),
             ));
         }
+        if !NEIGHBOUR_WEIGHTS.contains(&em.neighbour_weight) {
+            return Err(self.err(
+                format!("{field}.neighbour_weight"),
+                format!(
+                    "{} (expected a weight from {} to {})",
+                    em.neighbour_weight,
+                    NEIGHBOUR_WEIGHTS.start(),
+                    NEIGHBOUR_WEIGHTS.end()
+                ),
+            ));
+        }
         Ok(EmSettings {
             resolution: em.resolution,
             layers: em.layers.clone(),
             lod_bias: em.lod_bias,
+            neighbour_weight: em.neighbour_weight,
         })
     }
 }
