@@ -4,15 +4,18 @@
 //! forward-mapping baseline.
 
 use super::forward::forward_map;
+use super::views::{MatrixCache, View, Views};
 use crate::probe::{
     ProbeError, ProbeGeometry, ProbeRenderer, RenderingMatrix, build_matrix, verify_matrix,
 };
 use crate::solve::csr::CsrMatrix;
 use crate::solve::layout::{TextureLayout, TextureShape};
 use crate::solve::{Solution, SolveOptions, solve_channels};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// What the map must reproduce: `channels` (3 or 4) of `pixels`.
+#[derive(Clone, Copy)]
 pub struct Target<'a> {
     pub name: &'a str,
     pub pixels: &'a [[f32; 4]],
@@ -154,31 +157,37 @@ pub fn infer_layer(
     options: &SolveOptions,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<LayerResult, InferError> {
-    infer_layer_with(
-        renderer,
+    let own = View {
+        id: 0,
         geometry,
-        shape,
-        target,
-        &[],
-        warm_start,
-        options,
-        progress,
-    )
+        target: *target,
+        weight: 1.0,
+    };
+    let views = Views {
+        own,
+        neighbours: &[],
+        cache: &mut MatrixCache::new(0),
+    };
+    infer_layer_with(renderer, views, shape, warm_start, options, progress)
 }
 
 /// [`infer_layer`] with neighbouring views' rows stacked into the solve,
-/// each view's rows scaled by its weight.
-#[allow(clippy::too_many_arguments)]
+/// each view's rows scaled by its weight, and matrices taken from (and
+/// kept in) the views' cache.
 pub fn infer_layer_with(
     renderer: &mut dyn ProbeRenderer,
-    geometry: &ProbeGeometry,
+    views: Views,
     shape: TextureShape,
-    target: &Target,
-    extra: &[(ProbeGeometry, Target, f32)],
     warm_start: Option<&[Vec<f32>]>,
     options: &SolveOptions,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<LayerResult, InferError> {
+    let Views {
+        own,
+        neighbours,
+        cache,
+    } = views;
+    let (geometry, target) = (own.geometry, &own.target);
     let expected = check_target(geometry, target)?;
     let layout = TextureLayout::full_chain(shape);
     let mut timed = Timed {
@@ -186,18 +195,20 @@ pub fn infer_layer_with(
         spent: Duration::ZERO,
     };
     let start = Instant::now();
-    let matrix: RenderingMatrix = build_matrix(&mut timed, geometry, &layout, shape, progress)?;
+    let matrix = cache.get_or_build(own.id, layout.len(), || {
+        build_matrix(&mut timed, geometry, &layout, shape, progress)
+    })?;
+    let mut extras = Vec::new();
+    for n in neighbours {
+        check_target(n.geometry, &n.target)?;
+        let m = cache.get_or_build(n.id, layout.len(), || {
+            build_matrix(&mut timed, n.geometry, &layout, shape, &mut |_, _| {})
+        })?;
+        extras.push((m, &n.target, n.weight));
+    }
     let build_time = start.elapsed();
     let probe_time = timed.spent;
     let verify = verify_matrix(&mut timed, geometry, &layout, &matrix, 1)?;
-
-    let mut extras = Vec::new();
-    for (g, t, w) in extra {
-        check_target(g, t)?;
-        let mut m = build_matrix(&mut timed, g, &layout, shape, &mut |_, _| {})?;
-        m.a.values.iter_mut().for_each(|v| *v *= w);
-        extras.push((m, t, *w));
-    }
     let (solutions, solve_time) =
         solve_target(&matrix, target, &extras, &layout, warm_start, options)?;
     let forward = forward_maps(&matrix, target, &layout, geometry.width, expected);
@@ -228,7 +239,7 @@ pub fn infer_layer_with(
         forward,
         rendered_least_squares: rendered_ls,
         rendered_forward: rendered_fm,
-        pixels: matrix.pixels,
+        pixels: matrix.pixels.clone(),
     })
 }
 
@@ -263,7 +274,7 @@ fn check_target(geometry: &ProbeGeometry, target: &Target) -> Result<usize, Infe
 fn solve_target(
     matrix: &RenderingMatrix,
     target: &Target,
-    extras: &[(RenderingMatrix, &Target, f32)],
+    extras: &[(Arc<RenderingMatrix>, &Target, f32)],
     layout: &TextureLayout,
     warm_start: Option<&[Vec<f32>]>,
     options: &SolveOptions,
@@ -288,7 +299,15 @@ fn solve_target(
     } else {
         let mut parts = vec![&matrix.a];
         parts.extend(extras.iter().map(|(m, _, _)| &m.a));
-        stacked = CsrMatrix::vstack(&parts)?;
+        let mut s = CsrMatrix::vstack(&parts)?;
+        // Each neighbour's rows scaled by its weight, as its b was.
+        let mut row = matrix.a.rows;
+        for (m, _, w) in extras {
+            let values = s.row_ptr[row]..s.row_ptr[row + m.a.rows];
+            s.values[values].iter_mut().for_each(|v| *v *= w);
+            row += m.a.rows;
+        }
+        stacked = s;
         &stacked
     };
     let warm: Option<Vec<&[f32]>> = warm_start

@@ -11,5 +11,7 @@ mod shift_device;
 pub mod stacked;
 #[cfg(test)]
 mod tests;
+pub mod views;
 
 pub use layer::{InferError, LayerResult, Target, infer_layer, infer_layer_with};
+pub use views::{MatrixCache, View, Views};

@@ -218,12 +218,26 @@ fn a_neighbouring_view_pulls_the_fit_by_its_weight() {
             pixels: &twice,
             ..target
         };
+        let g = geometry();
+        let views = Views {
+            own: View {
+                id: 0,
+                geometry: &g,
+                target,
+                weight: 1.0,
+            },
+            neighbours: &[View {
+                id: 1,
+                geometry: &g,
+                target: neighbour,
+                weight: w,
+            }],
+            cache: &mut MatrixCache::new(2),
+        };
         let r = infer_layer_with(
             &mut Device { covered: true },
-            &geometry(),
+            views,
             SHAPE,
-            &target,
-            &[(geometry(), neighbour, w)],
             None,
             &exact,
             &mut |_, _| {},
@@ -238,4 +252,70 @@ fn a_neighbouring_view_pulls_the_fit_by_its_weight() {
             );
         }
     }
+}
+
+/// Counts the renders it passes on to the software device.
+struct Counting {
+    device: Device,
+    renders: usize,
+}
+
+impl ProbeRenderer for Counting {
+    fn render(
+        &mut self,
+        g: &ProbeGeometry,
+        l: &TextureLayout,
+        t: &[[f32; 4]],
+    ) -> Result<Vec<[f32; 4]>, ProbeError> {
+        self.renders += 1;
+        self.device.render(g, l, t)
+    }
+}
+
+#[test]
+fn the_next_samples_solve_probes_no_view_already_kept() {
+    // Sample 0 stacks view 1; sample 1 stacks view 0: its two matrices are
+    // both kept, so it renders only its checks and pictures.
+    let own = gradient(1.0);
+    let g = geometry();
+    let mut cache = MatrixCache::new(4);
+    let mut device = Counting {
+        device: Device { covered: true },
+        renders: 0,
+    };
+    let mut renders = Vec::new();
+    for (own_id, neighbour_id) in [(0, 1), (1, 0)] {
+        let view = |id| View {
+            id,
+            geometry: &g,
+            target: Target {
+                name: "test.layer",
+                pixels: &own,
+                channels: 3,
+            },
+            weight: 0.5,
+        };
+        let views = Views {
+            own: view(own_id),
+            neighbours: &[view(neighbour_id)],
+            cache: &mut cache,
+        };
+        let before = device.renders;
+        infer_layer_with(
+            &mut device,
+            views,
+            SHAPE,
+            None,
+            &SolveOptions::default(),
+            &mut |_, _| {},
+        )
+        .expect("infer");
+        renders.push(device.renders - before);
+    }
+    assert_eq!(cache.hits(), 2);
+    let probes_per_matrix = (renders[0] - renders[1]) / 2;
+    assert!(
+        probes_per_matrix > 0 && renders[0] == renders[1] + 2 * probes_per_matrix,
+        "{renders:?}"
+    );
 }

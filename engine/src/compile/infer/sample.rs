@@ -14,7 +14,7 @@ use anyhow::{Context, Result};
 use glam::{Mat4, Vec3};
 use inference::em_geometry::{EmGeometry, texgen};
 use inference::infer::maps::{read_map, write_map};
-use inference::infer::{Target, infer_layer_with};
+use inference::infer::{MatrixCache, Target, View, Views, infer_layer_with};
 use inference::key::Key;
 use inference::probe::{Lookup, ProbeGeometry};
 use inference::scene::Mesh;
@@ -36,6 +36,9 @@ pub(super) struct SampleRun<'a> {
     static_ems: HashMap<String, StaticEm>,
     tracer: Tracer<'a>,
     projection: Mat4,
+    /// Each view's rendering matrix, kept while the neighbouring samples
+    /// that stack it are solved.
+    matrices: MatrixCache,
 }
 
 impl<'a> SampleRun<'a> {
@@ -53,6 +56,9 @@ impl<'a> SampleRun<'a> {
             static_ems: static_ems(device, plan.scene, width, height)?,
             tracer,
             projection: camera::projection(plan.scene, width, height),
+            // A sample's solve of each job may stack three views: its own
+            // and one either side; the next sample reuses two of them.
+            matrices: MatrixCache::new(3 * plan.jobs.len()),
         })
     }
 
@@ -140,22 +146,21 @@ impl<'a> SampleRun<'a> {
             channels: job.channels(),
         };
         let neighbours = self.neighbour_views(k, job, &key)?;
-        let extra: Vec<(ProbeGeometry, Target, f32)> = neighbours
-            .iter()
-            .map(|n| {
-                let target = Target {
-                    pixels: &n.pixels,
-                    ..target
-                };
-                (n.geometry.clone(), target, n.weight)
-            })
-            .collect();
+        let stacked = stacked_views(job, &neighbours, target);
+        let views = Views {
+            own: View {
+                id: view_id(job, k),
+                geometry: &geometry,
+                target,
+                weight: 1.0,
+            },
+            neighbours: &stacked,
+            cache: &mut self.matrices,
+        };
         let result = infer_layer_with(
             &mut self.probe,
-            &geometry,
+            views,
             job.shape(),
-            &target,
-            &extra,
             previous.as_deref(),
             &self.plan.options_for(job),
             &mut |_, _| {},
@@ -219,6 +224,7 @@ impl<'a> SampleRun<'a> {
             )?;
             let px = job_target_pixels(job, &layers, width as usize * height as usize)?;
             out.push(NeighbourView {
+                sample: n,
                 geometry: self.probe_geometry(n, eye, job, key),
                 pixels: px,
                 weight: w,
@@ -251,9 +257,41 @@ impl<'a> SampleRun<'a> {
 
 /// A neighbouring sample's view of an EM layer, stacked into a solve.
 struct NeighbourView {
+    sample: u32,
     geometry: ProbeGeometry,
     pixels: Vec<[f32; 4]>,
     weight: f32,
+}
+
+/// The neighbours' views of `job` as the solve stacks them: each with the
+/// sample's target but its own traced pixels.
+fn stacked_views<'a>(
+    job: &Job,
+    neighbours: &'a [NeighbourView],
+    target: Target<'a>,
+) -> Vec<View<'a>> {
+    neighbours
+        .iter()
+        .map(|n| View {
+            id: view_id(job, n.sample),
+            geometry: &n.geometry,
+            target: Target {
+                pixels: &n.pixels,
+                ..target
+            },
+            weight: n.weight,
+        })
+        .collect()
+}
+
+/// The cache id of `job`'s rendering matrix at sample `n`'s view: within
+/// one run a job and a view fix the probe geometry and texture layout.
+fn view_id(job: &Job, n: u32) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    job.name().hash(&mut h);
+    n.hash(&mut h);
+    h.finish()
 }
 
 /// Sample `k`'s neighbours on its ring: azimuth line `line` ± 1 of
