@@ -41,11 +41,16 @@ fn the_lod_bias_is_zero_unless_asked_and_checked() {
 
 /// The shipped teapot's `lod_bias = …` line, with its newline.
 fn bias_line() -> String {
+    setting_line("lod_bias =")
+}
+
+/// The shipped teapot's line starting with `start`, with its newline.
+fn setting_line(start: &str) -> String {
     let text = super::shipped::shipped("teapot").expect("shipped teapot scene");
     let line = text
         .lines()
-        .find(|l| l.starts_with("lod_bias ="))
-        .expect("teapot.toml sets lod_bias");
+        .find(|l| l.starts_with(start))
+        .unwrap_or_else(|| panic!("teapot.toml sets {start}"));
     format!("{line}\n")
 }
 
@@ -53,9 +58,11 @@ fn bias_line() -> String {
 fn the_neighbour_weight_is_zero_unless_asked_and_checked() {
     let weight = |s: &Scene| s.object("teapot").expect("teapot").neighbour_weight();
     let s = Scene::load("teapot").expect("the built-in teapot scene loads");
-    assert_eq!(weight(&s), 0.0);
-    let line = bias_line();
-    let with = |w: &str| load_edited(&line, &format!("{line}neighbour_weight = {w}\n"));
+    assert_eq!(weight(&s), 1.0, "the shipped teapot asks for 1");
+    let line = setting_line("neighbour_weight =");
+    let s = load_edited(&line, "").expect("loads without the line");
+    assert_eq!(weight(&s), 0.0, "no neighbours unless asked");
+    let with = |w: &str| load_edited(&line, &format!("neighbour_weight = {w}\n"));
     assert_eq!(weight(&with("0.5").expect("loads")), 0.5);
     for bad in ["-0.1", "nan", "1.5"] {
         let e = with(bad).err().map(|e| e.to_string()).unwrap_or_default();
