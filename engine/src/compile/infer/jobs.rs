@@ -36,6 +36,16 @@ impl Job<'_> {
     pub fn shape(&self) -> TextureShape {
         self.layer.shape(self.resolution)
     }
+    /// The weight of the neighbouring samples' views in this job's solve:
+    /// the object's `neighbour_weight` for the layered PEM's distant and
+    /// local layers, 0 for the sphere PEM and the PTM (the baselines are
+    /// solved as their papers do).
+    pub fn neighbour_weight(&self) -> f32 {
+        match self.layer {
+            MapLayer::Distant | MapLayer::Local => self.object.neighbour_weight(),
+            MapLayer::Sphere | MapLayer::Ptm => 0.0,
+        }
+    }
 }
 
 /// The maps the scene asks for: per reflective object with EM settings,
@@ -109,9 +119,9 @@ pub fn map_key(trace: &Key, job: &Job, options: &SolveOptions, size: (u32, u32))
     }
     // Added with neighbouring views: maps solved from their own view alone
     // keep their keys.
-    if job.geometry.is_some() && job.object.neighbour_weight() > 0.0 {
+    if job.neighbour_weight() > 0.0 {
         h.str("neighbours");
-        h.f32(job.object.neighbour_weight());
+        h.f32(job.neighbour_weight());
     }
     for p in &job.object.mesh.positions {
         h.v3(*p);
@@ -120,4 +130,52 @@ pub fn map_key(trace: &Key, job: &Job, options: &SolveOptions, size: (u32, u32))
         .clone()
         .with("inference version", u64::from(INFERENCE_VERSION))
         .with("map settings", h.finish())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{jobs_for, map_key};
+    use inference::key::Key;
+    use inference::scene::Scene;
+    use inference::solve::SolveOptions;
+
+    #[test]
+    fn the_neighbour_weight_keys_only_the_layered_pems_maps() {
+        let with = Scene::load("teapot").expect("the built-in teapot scene loads");
+        assert!(
+            with.object("teapot")
+                .is_some_and(|o| o.neighbour_weight() > 0.0)
+        );
+        let text = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../assets/scenes/teapot.toml"
+        ))
+        .expect("teapot.toml");
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("t.toml");
+        let without: String = text
+            .lines()
+            .filter(|l| !l.starts_with("neighbour_weight"))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        std::fs::write(&path, without).expect("write scene");
+        let without = Scene::load(&path.to_string_lossy()).expect("loads without the line");
+        let key = |scene: &Scene| -> Vec<(String, u64)> {
+            let jobs = jobs_for(scene, None, true).expect("jobs");
+            jobs.iter()
+                .map(|j| {
+                    let k = map_key(&Key::new(), j, &SolveOptions::default(), (64, 48));
+                    (j.name(), k.hash())
+                })
+                .collect()
+        };
+        for ((name, a), (_, b)) in key(&with).into_iter().zip(key(&without)) {
+            let layered = name.ends_with("distant") || name.ends_with("local");
+            assert_eq!(
+                a != b,
+                layered,
+                "{name}: keyed by the weight only if layered"
+            );
+        }
+    }
 }

@@ -204,8 +204,8 @@ impl<'a> SampleRun<'a> {
     /// either side on the same ring, each with its own traced target, probe
     /// geometry and the weight.
     fn neighbour_views(&mut self, k: u32, job: &Job, key: &Key) -> Result<Vec<NeighbourView>> {
-        let w = job.object.neighbour_weight();
-        if w <= 0.0 || !matches!(job.layer, MapLayer::Distant | MapLayer::Local) {
+        let w = job.neighbour_weight();
+        if w <= 0.0 {
             return Ok(Vec::new());
         }
         let (width, height) = self.req.size;
