@@ -227,7 +227,7 @@ fn expected_container_key(ctx: &CompileContext, plan: &Plan, req: &InferRequest)
                 .iter()
                 .find(|j| j.object.name == spec.object && j.layer == spec.layer)
             {
-                map_keys.push(plan.key(&trace_key, job));
+                map_keys.push(plan.key(k, &trace_key, job));
             }
         }
     }

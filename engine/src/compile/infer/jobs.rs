@@ -132,9 +132,30 @@ pub fn map_key(trace: &Key, job: &Job, options: &SolveOptions, size: (u32, u32))
         .with("map settings", h.finish())
 }
 
+/// Sample `k`'s neighbours on its ring of `lines` azimuth lines (azimuth
+/// line ± 1), where they exist: a ring does not wrap, the orbit is an arc.
+pub(super) fn ring_neighbours(k: u32, lines: u32) -> Vec<u32> {
+    let line = k % lines;
+    let mut n = Vec::new();
+    if line > 0 {
+        n.push(k - 1);
+    }
+    if line + 1 < lines {
+        n.push(k + 1);
+    }
+    n
+}
+
+/// Which of sample `k`'s neighbours its ring's ends cut off: bit 0 the
+/// previous azimuth line, bit 1 the next; 0 for a sample inside the arc.
+pub(super) fn missing_neighbours(k: u32, lines: u32) -> u64 {
+    let line = k % lines;
+    u64::from(line == 0) | u64::from(line + 1 >= lines) << 1
+}
+
 #[cfg(test)]
 mod tests {
-    use super::{jobs_for, map_key};
+    use super::{jobs_for, map_key, missing_neighbours, ring_neighbours};
     use inference::key::Key;
     use inference::scene::Scene;
     use inference::solve::SolveOptions;
@@ -177,5 +198,24 @@ mod tests {
                 "{name}: keyed by the weight only if layered"
             );
         }
+    }
+
+    #[test]
+    fn neighbours_stay_on_their_ring_and_inside_the_arc() {
+        // 1D orbit of 3: the ends have one neighbour.
+        assert_eq!(ring_neighbours(0, 3), vec![1]);
+        assert_eq!(ring_neighbours(1, 3), vec![0, 2]);
+        assert_eq!(ring_neighbours(2, 3), vec![1]);
+        assert_eq!(
+            [0, 1, 2].map(|k| missing_neighbours(k, 3)),
+            [0b01, 0b00, 0b10]
+        );
+        // Ring 1 of 4-line rings: samples 4..8, never 3 or 8.
+        assert_eq!(ring_neighbours(4, 4), vec![5]);
+        assert_eq!(ring_neighbours(7, 4), vec![6]);
+        assert_eq!(ring_neighbours(5, 4), vec![4, 6]);
+        // A single sample has neither.
+        assert_eq!(ring_neighbours(0, 1), Vec::<u32>::new());
+        assert_eq!(missing_neighbours(0, 1), 0b11);
     }
 }

@@ -18,6 +18,7 @@ mod summary;
 pub(crate) mod targets;
 
 pub use diffuse::{DiffuseRequest, infer_diffuse};
+use jobs::missing_neighbours;
 pub use jobs::{INFERENCE_VERSION, Job, jobs_for, map_key};
 pub use sample::WARM_CHAIN;
 
@@ -139,10 +140,19 @@ impl<'a> Plan<'a> {
         Ok(cache::image_key(&self.scene_key, eye, &self.settings))
     }
 
-    /// The key sample `k`'s map of `job` must carry.
-    pub fn key(&self, trace_key: &Key, job: &Job) -> Key {
+    /// The key sample `k`'s map of `job` must carry (`trace_key` is
+    /// sample `k`'s).
+    pub fn key(&self, k: u32, trace_key: &Key, job: &Job) -> Key {
         let size = (self.settings.width, self.settings.height);
-        map_key(trace_key, job, &self.options_for(job), size)
+        let key = map_key(trace_key, job, &self.options_for(job), size);
+        // The neighbours' traces are inputs too. Their eyes follow from
+        // this sample's, but not whether the arc ends beside it: a 1D
+        // orbit's trace keys leave out the sample count.
+        let lines = self.scene.orbit.samples.max(1);
+        match (job.neighbour_weight() > 0.0, missing_neighbours(k, lines)) {
+            (true, missing) if missing != 0 => key.with("neighbours missing", missing),
+            _ => key,
+        }
     }
 
     /// The solve options of `job`: local layers add a prior toward
@@ -172,7 +182,7 @@ impl<'a> Plan<'a> {
             let trace_key = self.trace_key(k)?;
             for (i, job) in self.jobs.iter().enumerate() {
                 let path = map_path(infer_dir, k, &job.object.name, job.layer);
-                let f = inference::key::freshness(&path, &self.key(&trace_key, job));
+                let f = inference::key::freshness(&path, &self.key(k, &trace_key, job));
                 if f != Freshness::Fresh {
                     stale.push((k, i, f));
                 }
@@ -270,4 +280,51 @@ fn group_by_sample(stale: &[(u32, usize, Freshness)]) -> Vec<(u32, Vec<usize>)> 
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{InferRequest, Plan};
+    use inference::scene::Scene;
+
+    /// The built-in teapot (neighbour_weight = 1) with `samples` samples.
+    fn scene(samples: &str) -> Scene {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("t.toml");
+        let text = inference::scene::shipped::shipped("teapot").expect("teapot.toml");
+        std::fs::write(&path, text.replacen("samples = 100", samples, 1)).expect("write");
+        Scene::load(&path.to_string_lossy()).expect("scene loads")
+    }
+
+    #[test]
+    fn a_sample_whose_neighbour_the_arc_now_cuts_off_is_stale() {
+        let request = InferRequest {
+            samples: vec![],
+            skip_fresh: true,
+            sphere: false,
+            em_size: None,
+            size: (64, 48),
+            spp: 1,
+            eps_f: 0.0,
+            trace_dir: "t".into(),
+            infer_dir: "i".into(),
+            device: Default::default(),
+        };
+        let (long, short) = (scene("samples = 100"), scene("samples = 3"));
+        let (long, short) = (
+            Plan::new(&long, &request).expect("plan"),
+            Plan::new(&short, &request).expect("plan"),
+        );
+        for job in 0..long.jobs.len() {
+            let key = |plan: &Plan, k: u32| {
+                let trace = plan.trace_key(k).expect("trace key");
+                plan.key(k, &trace, &plan.jobs[job]).hash()
+            };
+            // The traces' keys are equal (a 1D orbit's leave out the count).
+            assert_eq!(long.trace_key(2).ok(), short.trace_key(2).ok());
+            assert_eq!(key(&long, 1), key(&short, 1), "inside both arcs");
+            let layered = long.jobs[job].neighbour_weight() > 0.0;
+            assert_eq!(key(&long, 2) != key(&short, 2), layered, "sample 2");
+        }
+    }
 }

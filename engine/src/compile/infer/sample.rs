@@ -2,6 +2,7 @@
 //! written with its key record, the sample's report merged after each.
 
 use super::baselines::{StaticEm, static_em_psnr, static_ems};
+use super::jobs::ring_neighbours;
 use super::pictures::{write_comparison, write_map_picture};
 use super::report::{LayerReport, SampleReport, finite_or_max};
 use super::targets::{composite_pixels, specular_pixels, target_pixels};
@@ -113,7 +114,7 @@ impl<'a> SampleRun<'a> {
         }
         let p = k - 1;
         let path = map_path(&self.req.infer_dir, p, &job.object.name, job.layer);
-        let key = self.plan.key(&self.plan.trace_key(p)?, job);
+        let key = self.plan.key(p, &self.plan.trace_key(p)?, job);
         if inference::key::freshness(&path, &key) != inference::key::Freshness::Fresh {
             return Ok(None);
         }
@@ -136,7 +137,7 @@ impl<'a> SampleRun<'a> {
         let name = job.name();
         let mesh = &job.object.mesh;
         let pixels = job_target_pixels(job, layers, pixel_count)?;
-        let key = self.plan.key(trace_key, job);
+        let key = self.plan.key(k, trace_key, job);
         let geometry = self.probe_geometry(k, eye, job, &key);
         let layout = job.layer.layout(job.resolution);
         let previous = self.warm_start(k, job, &layout)?;
@@ -210,9 +211,8 @@ impl<'a> SampleRun<'a> {
         }
         let (width, height) = self.req.size;
         let lines = self.plan.scene.orbit.samples.max(1);
-        let line = k % lines;
         let mut out = Vec::new();
-        for n in neighbour_samples(k, line, lines) {
+        for n in ring_neighbours(k, lines) {
             let eye = self.plan.scene.orbit.sample_eye(n)?;
             let stem = traced_stem(&self.req.trace_dir, n);
             let (layers, _) = traced_layers(
@@ -294,19 +294,6 @@ fn view_id(job: &Job, n: u32) -> u64 {
     h.finish()
 }
 
-/// Sample `k`'s neighbours on its ring: azimuth line `line` ± 1 of
-/// `lines`, where they exist (a ring does not wrap: the orbit is an arc).
-fn neighbour_samples(k: u32, line: u32, lines: u32) -> Vec<u32> {
-    let mut n = Vec::new();
-    if line > 0 {
-        n.push(k - 1);
-    }
-    if line + 1 < lines {
-        n.push(k + 1);
-    }
-    n
-}
-
 /// The traced pixels `job`'s map must reproduce: its own layer (the local
 /// one premultiplied), the whole specular appearance for the sphere EM, or
 /// the composite for the PTM.
@@ -372,22 +359,5 @@ fn cube_lookup(
             .map(|l| Vec3::new(l[0], l[1], l[2]))
             .collect(),
         lod_bias,
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::neighbour_samples;
-
-    #[test]
-    fn neighbours_stay_on_their_ring_and_inside_the_arc() {
-        // 1D orbit of 3: the ends have one neighbour.
-        assert_eq!(neighbour_samples(0, 0, 3), vec![1]);
-        assert_eq!(neighbour_samples(1, 1, 3), vec![0, 2]);
-        assert_eq!(neighbour_samples(2, 2, 3), vec![1]);
-        // Ring 1 of 4-line rings: samples 4..8, never 3 or 8.
-        assert_eq!(neighbour_samples(4, 0, 4), vec![5]);
-        assert_eq!(neighbour_samples(7, 3, 4), vec![6]);
-        assert_eq!(neighbour_samples(5, 1, 4), vec![4, 6]);
     }
 }
