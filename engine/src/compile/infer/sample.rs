@@ -71,16 +71,20 @@ impl<'a> SampleRun<'a> {
         jobs: &[usize],
         bar: &indicatif::ProgressBar,
     ) -> Result<(SampleReport, String)> {
-        let scene = self.plan.scene;
-        let eye = scene.orbit.sample_eye(k)?;
-        let stem = traced_stem(&self.req.trace_dir, k);
-        let (layers, trace_key) = traced_layers(
-            &self.tracer,
-            &self.plan.scene_key,
-            eye,
-            &self.plan.settings,
-            &stem,
-        )?;
+        let own = self.sample_trace(k)?;
+        // Read once per sample, whichever of its jobs stack them.
+        let around = if jobs
+            .iter()
+            .any(|&i| self.plan.jobs[i].neighbour_weight() > 0.0)
+        {
+            let lines = self.plan.scene.orbit.samples.max(1);
+            ring_neighbours(k, lines)
+                .into_iter()
+                .map(|n| Ok((n, self.sample_trace(n)?)))
+                .collect::<Result<Vec<_>>>()?
+        } else {
+            Vec::new()
+        };
         let dir = sample_dir(&self.req.infer_dir, k);
         claim_dir(&dir)?;
         let report_path = dir.join("report.json");
@@ -90,13 +94,28 @@ impl<'a> SampleRun<'a> {
         for &i in jobs {
             let job = &self.plan.jobs[i];
             bar.set_message(format!("sample {k} {}", job.name()));
-            let (layer, warm) = self.infer_job(k, eye, job, &layers, &trace_key)?;
+            let (layer, warm) = self.infer_job(k, job, &own, &around)?;
             lines += &layer_line(k, &layer);
             report = SampleReport::merged(Some(report), k, vec![layer], warm, &order);
             crate::util::files::write_json(&report_path, &report)?;
             bar.inc(1);
         }
         Ok((report, lines))
+    }
+
+    /// Sample `k`'s eye and traced layers (traced first when missing) and
+    /// their key.
+    fn sample_trace(&self, k: u32) -> Result<SampleTrace> {
+        let eye = self.plan.scene.orbit.sample_eye(k)?;
+        let stem = traced_stem(&self.req.trace_dir, k);
+        let (layers, key) = traced_layers(
+            &self.tracer,
+            &self.plan.scene_key,
+            eye,
+            &self.plan.settings,
+            &stem,
+        )?;
+        Ok(SampleTrace { eye, layers, key })
     }
 
     /// The map sample `k`'s solve of `job` starts from: the previous
@@ -122,22 +141,23 @@ impl<'a> SampleRun<'a> {
     }
 
     /// One map: probe renders, solve, baselines; the map, its pictures and
-    /// its key record written. Returns its report and whether it was
-    /// warm-started.
+    /// its key record written. `around` holds the neighbouring samples'
+    /// traces when a job stacks them. Returns its report and whether it
+    /// was warm-started.
     fn infer_job(
         &mut self,
         k: u32,
-        eye: Vec3,
         job: &Job,
-        layers: &[output::ExrLayer],
-        trace_key: &Key,
+        own: &SampleTrace,
+        around: &[(u32, SampleTrace)],
     ) -> Result<(LayerReport, bool)> {
         let (width, height) = self.req.size;
         let pixel_count = width as usize * height as usize;
         let name = job.name();
         let mesh = &job.object.mesh;
-        let pixels = job_target_pixels(job, layers, pixel_count)?;
-        let key = self.plan.key(k, trace_key, job);
+        let eye = own.eye;
+        let pixels = job_target_pixels(job, &own.layers, pixel_count)?;
+        let key = self.plan.key(k, &own.key, job);
         let geometry = self.probe_geometry(k, eye, job, &key);
         let layout = job.layer.layout(job.resolution);
         let previous = self.warm_start(k, job, &layout)?;
@@ -146,7 +166,7 @@ impl<'a> SampleRun<'a> {
             pixels: &pixels,
             channels: job.channels(),
         };
-        let neighbours = self.neighbour_views(k, job, &key)?;
+        let neighbours = self.neighbour_views(job, &key, around)?;
         let stacked = stacked_views(job, &neighbours, target);
         let views = Views {
             own: View {
@@ -200,37 +220,29 @@ impl<'a> SampleRun<'a> {
         Ok((report, previous.is_some()))
     }
 
-    /// The views stacked into sample `k`'s solve of an EM layer beside its
-    /// own (`[objects.em] neighbour_weight`): the samples one azimuth line
-    /// either side on the same ring, each with its own traced target, probe
-    /// geometry and the weight.
-    fn neighbour_views(&mut self, k: u32, job: &Job, key: &Key) -> Result<Vec<NeighbourView>> {
-        let w = job.neighbour_weight();
-        if w <= 0.0 {
+    /// The views stacked into a sample's solve of an EM layer beside its
+    /// own (`[objects.em] neighbour_weight`): the samples `around` it, each
+    /// with its own traced target and probe geometry.
+    fn neighbour_views(
+        &self,
+        job: &Job,
+        key: &Key,
+        around: &[(u32, SampleTrace)],
+    ) -> Result<Vec<NeighbourView>> {
+        if job.neighbour_weight() <= 0.0 {
             return Ok(Vec::new());
         }
         let (width, height) = self.req.size;
-        let lines = self.plan.scene.orbit.samples.max(1);
-        let mut out = Vec::new();
-        for n in ring_neighbours(k, lines) {
-            let eye = self.plan.scene.orbit.sample_eye(n)?;
-            let stem = traced_stem(&self.req.trace_dir, n);
-            let (layers, _) = traced_layers(
-                &self.tracer,
-                &self.plan.scene_key,
-                eye,
-                &self.plan.settings,
-                &stem,
-            )?;
-            let px = job_target_pixels(job, &layers, width as usize * height as usize)?;
-            out.push(NeighbourView {
-                sample: n,
-                geometry: self.probe_geometry(n, eye, job, key),
-                pixels: px,
-                weight: w,
-            });
-        }
-        Ok(out)
+        around
+            .iter()
+            .map(|(n, t)| {
+                Ok(NeighbourView {
+                    sample: *n,
+                    geometry: self.probe_geometry(*n, t.eye, job, key),
+                    pixels: job_target_pixels(job, &t.layers, width as usize * height as usize)?,
+                })
+            })
+            .collect()
     }
 
     /// The probe renders' geometry of `job` at sample `k` seen from `eye`:
@@ -255,16 +267,22 @@ impl<'a> SampleRun<'a> {
     }
 }
 
+/// A sample's eye, its traced layers and their key.
+struct SampleTrace {
+    eye: Vec3,
+    layers: Vec<output::ExrLayer>,
+    key: Key,
+}
+
 /// A neighbouring sample's view of an EM layer, stacked into a solve.
 struct NeighbourView {
     sample: u32,
     geometry: ProbeGeometry,
     pixels: Vec<[f32; 4]>,
-    weight: f32,
 }
 
 /// The neighbours' views of `job` as the solve stacks them: each with the
-/// sample's target but its own traced pixels.
+/// sample's target but its own traced pixels, at the job's weight.
 fn stacked_views<'a>(
     job: &Job,
     neighbours: &'a [NeighbourView],
@@ -279,7 +297,7 @@ fn stacked_views<'a>(
                 pixels: &n.pixels,
                 ..target
             },
-            weight: n.weight,
+            weight: job.neighbour_weight(),
         })
         .collect()
 }

@@ -15,6 +15,28 @@ impl Loader<'_> {
         }
     }
 
+    /// `value` of `field` inside `range`, else an error naming what was
+    /// expected (`what`, e.g. "levels") and the range's ends.
+    pub(super) fn in_range(
+        &self,
+        field: String,
+        value: f32,
+        range: &std::ops::RangeInclusive<f32>,
+        what: &str,
+    ) -> Result<(), SceneError> {
+        if range.contains(&value) {
+            return Ok(());
+        }
+        Err(self.err(
+            field,
+            format!(
+                "{value} (expected {what} from {} to {})",
+                range.start(),
+                range.end()
+            ),
+        ))
+    }
+
     pub(super) fn vec3(&self, field: &str, v: V3) -> Result<Vec3, SceneError> {
         let v = Vec3::from_array(v);
         if !v.is_finite() {

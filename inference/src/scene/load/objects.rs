@@ -142,28 +142,18 @@ impl Loader<'_> {
                 format!("{:?} repeats a layer", em.layers),
             ));
         }
-        if !LOD_BIASES.contains(&em.lod_bias) {
-            return Err(self.err(
-                format!("{field}.lod_bias"),
-                format!(
-                    "{} (expected levels from {} to {})",
-                    em.lod_bias,
-                    LOD_BIASES.start(),
-                    LOD_BIASES.end()
-                ),
-            ));
-        }
-        if !NEIGHBOUR_WEIGHTS.contains(&em.neighbour_weight) {
-            return Err(self.err(
-                format!("{field}.neighbour_weight"),
-                format!(
-                    "{} (expected a weight from {} to {})",
-                    em.neighbour_weight,
-                    NEIGHBOUR_WEIGHTS.start(),
-                    NEIGHBOUR_WEIGHTS.end()
-                ),
-            ));
-        }
+        self.in_range(
+            format!("{field}.lod_bias"),
+            em.lod_bias,
+            &LOD_BIASES,
+            "levels",
+        )?;
+        self.in_range(
+            format!("{field}.neighbour_weight"),
+            em.neighbour_weight,
+            &NEIGHBOUR_WEIGHTS,
+            "a weight",
+        )?;
         Ok(EmSettings {
             resolution: em.resolution,
             layers: em.layers.clone(),
