@@ -12,18 +12,18 @@ layout(push_constant) uniform Push {
 } pc;
 
 // Texel-major: the k coefficients of texel t side by side from t·s (s = k
-// rounded up to even), each RGBA16F; read as pairs (one 16-byte load per two
-// coefficients: lavapipe gathers each load lane by lane, so fewer is faster).
-layout(std430, set = 0, binding = 0) readonly buffer Maps {
-    uvec4 pairs[];
-};
+// rounded up to even), each RGBA16F; read as pairs, one RGBA32UI texel per
+// two coefficients (lavapipe gathers a texel fetch in unrolled code, a
+// storage-buffer load lane by lane in a loop: the same bytes as a texel
+// buffer cost less).
+layout(set = 0, binding = 0) uniform usamplerBuffer pairs;
 layout(set = 0, binding = 1) uniform sampler2D positions; // xyz first hit
 
 layout(location = 0) out vec4 out_color;
 
 // Coefficients 2j and 2j + 1 of the pixel whose first pair is `base`.
 void coefficient_pair(uint base, int j, out vec3 a, out vec3 b) {
-    uvec4 c = pairs[base + uint(j)];
+    uvec4 c = texelFetch(pairs, int(base) + j);
     a = vec3(unpackHalf2x16(c.x), unpackHalf2x16(c.y).x);
     b = vec3(unpackHalf2x16(c.z), unpackHalf2x16(c.w).x);
 }

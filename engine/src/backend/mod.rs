@@ -8,6 +8,7 @@ pub mod error;
 pub mod image;
 pub mod pipeline;
 pub mod queries;
+pub mod texel_view;
 pub mod upload;
 pub mod validation;
 
@@ -18,3 +19,4 @@ pub use error::{GpuError, GpuResult, VkContext};
 pub use image::{Filtering, Image, ImageDesc, ImageKind, Sampler};
 pub use pipeline::{Binding, Blend, DepthTest, Pipeline, PipelineDesc, StencilTest};
 pub use queries::{PassQueries, PassSample};
+pub use texel_view::TexelView;

@@ -68,6 +68,8 @@ pub enum Binding<'a> {
     Uniform(&'a super::buffer::Buffer),
     /// A read-only storage buffer (`std430`), for data a shader indexes freely.
     Storage(&'a super::buffer::Buffer),
+    /// A buffer read as typed texels (`usamplerBuffer`, `texelFetch`).
+    Texels(&'a super::texel_view::TexelView),
 }
 
 pub struct Pipeline {
@@ -207,7 +209,9 @@ impl Pipeline {
                     image_view,
                     image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
                 }],
-                Binding::Uniform(_) | Binding::Storage(_) => [vk::DescriptorImageInfo::default()],
+                Binding::Uniform(_) | Binding::Storage(_) | Binding::Texels(_) => {
+                    [vk::DescriptorImageInfo::default()]
+                }
             })
             .collect();
         let buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = resources
@@ -218,7 +222,14 @@ impl Pipeline {
                     offset: 0,
                     range: vk::WHOLE_SIZE,
                 }],
-                Binding::Image(..) => [vk::DescriptorBufferInfo::default()],
+                Binding::Image(..) | Binding::Texels(_) => [vk::DescriptorBufferInfo::default()],
+            })
+            .collect();
+        let texel_views: Vec<[vk::BufferView; 1]> = resources
+            .iter()
+            .map(|r| match *r {
+                Binding::Texels(view) => [view.raw],
+                _ => [vk::BufferView::null()],
             })
             .collect();
         let writes: Vec<_> = resources
@@ -238,6 +249,9 @@ impl Pipeline {
                     Binding::Storage(_) => write
                         .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
                         .buffer_info(&buffer_infos[i]),
+                    Binding::Texels(_) => write
+                        .descriptor_type(vk::DescriptorType::UNIFORM_TEXEL_BUFFER)
+                        .texel_buffer_view(&texel_views[i]),
                 }
             })
             .collect();

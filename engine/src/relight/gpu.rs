@@ -1,13 +1,14 @@
-//! The relightable panorama on the device: `k` signed SH maps as one storage
-//! buffer of RGBA16F, texel-major (a pixel's k coefficients side by side:
-//! measured faster on lavapipe than k layers of a 2D-array image, see the
+//! The relightable panorama on the device: `k` signed SH maps as one texel
+//! buffer of RGBA16F pairs, texel-major (a pixel's k coefficients side by
+//! side, read as RGBA32UI texels: measured faster on lavapipe than k layers
+//! of a 2D-array image or the same bytes as a storage buffer, see the
 //! README), the position panorama for point lights, the relit target, and
 //! the pass that fills it for one light per frame.
 
 use crate::backend::upload::upload_image;
 use crate::backend::{
     Buffer, DepthTest, Device, GpuError, GpuResult, Image, ImageDesc, Pipeline, PipelineDesc,
-    Sampler, StencilTest,
+    Sampler, StencilTest, TexelView,
 };
 use crate::graph::{Executor, Usage};
 use crate::passes::readback::ReadbackPass;
@@ -31,6 +32,8 @@ pub struct RelightGpu {
     /// Directional and point-light pipelines and their descriptor sets.
     pipelines: [(Pipeline, vk::DescriptorSet); 2],
     _sampler: Sampler,
+    // Declared before `maps`: the view is destroyed before its buffer.
+    _map_view: TexelView,
     maps: Buffer,
     positions: Image,
     pub target: Image,
@@ -62,6 +65,13 @@ impl RelightGpu {
             )));
         }
         let map_buffer = upload_maps(device, maps, k)?;
+        let map_view = TexelView::new(
+            device,
+            "relight sh maps",
+            &map_buffer,
+            vk::Format::R32G32B32A32_UINT,
+            16,
+        )?;
         let position_image = upload_positions(device, executor, p, positions)?;
         let target = Image::new(
             device,
@@ -75,7 +85,7 @@ impl RelightGpu {
             crate::backend::Filtering::Nearest,
         )?;
         let bindings = [
-            crate::backend::Binding::Storage(&map_buffer),
+            crate::backend::Binding::Texels(&map_view),
             crate::backend::Binding::Image(position_image.view, sampler.raw),
         ];
         let with_set = |fragment, name| -> GpuResult<(Pipeline, vk::DescriptorSet)> {
@@ -98,6 +108,7 @@ impl RelightGpu {
             device: device.clone(),
             pipelines,
             _sampler: sampler,
+            _map_view: map_view,
             maps: map_buffer,
             positions: position_image,
             target,
@@ -202,7 +213,7 @@ fn upload_maps(device: &Device, maps: &ShMaps, k: usize) -> GpuResult<Buffer> {
     Buffer::with_data(
         device,
         "relight sh maps",
-        vk::BufferUsageFlags::STORAGE_BUFFER,
+        vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
         &halves.iter().map(|h| h.to_bits()).collect::<Vec<u16>>(),
     )
 }
@@ -244,7 +255,7 @@ fn relight_pipeline(device: &Device, fragment: &[u8], name: &str) -> GpuResult<P
             cull_mode: vk::CullModeFlags::NONE,
             push_constant_size: size_of::<RelightPush>() as u32,
             bindings: &[
-                vk::DescriptorType::STORAGE_BUFFER,
+                vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
                 vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
             ],
             blend: crate::backend::Blend::Replace,
