@@ -191,16 +191,20 @@ pub const GLASS_ATTRIBUTES: [vk::VertexInputAttributeDescription; 5] = [
     attribute(4, 0, vk::Format::R32G32B32_SFLOAT, 48),
 ];
 
-/// `shaders/rem_warp.*` push constants: one source map warped into the
-/// current view's sphere map.
+/// `shaders/rem_warp.frag` push constants: the (up to) three source maps
+/// warped into the current view's sphere map.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct RemWarpPush {
-    /// Upper 3×3: `T_s⁻¹ T_d`, destination frame to source frame.
-    pub dest_to_source: Mat4,
-    /// x = barycentric weight, y = source layer, z = cosine (to the
-    /// source's singularity) where the fade reaches zero, w = where it starts.
-    pub info: Vec4,
+    /// Quaternions of `T_s⁻¹ T_d`, destination frame to source frame.
+    pub rotation: [Vec4; 3],
+    /// xyz barycentric weights (0 for an absent source).
+    pub weight: Vec4,
+    /// xyz source layers.
+    pub layer: Vec4,
+    /// x = cosine (to a source's singularity) where its fade reaches zero,
+    /// y = where it starts.
+    pub fade: Vec4,
 }
 
 /// `shaders/rem.*` push constants: the reflector from the blended map.
@@ -216,14 +220,6 @@ pub struct RemPush {
     pub axis_z: Vec4,
 }
 
-/// `shaders/rem_warp.vert`: a destination sphere-map point per vertex.
-pub const DISK_BINDING: vk::VertexInputBindingDescription = vk::VertexInputBindingDescription {
-    binding: 0,
-    stride: 8,
-    input_rate: vk::VertexInputRate::VERTEX,
-};
-pub const DISK_ATTRIBUTES: [vk::VertexInputAttributeDescription; 1] =
-    [attribute(0, 0, vk::Format::R32G32_SFLOAT, 0)];
 /// `shaders/rem.vert`: position and normal of binding 0.
 pub const REM_ATTRIBUTES: [vk::VertexInputAttributeDescription; 2] =
     [Vertex::ATTRIBUTES[0], Vertex::ATTRIBUTES[1]];
@@ -257,7 +253,6 @@ pub mod spirv {
     pub const RELIGHT_POINT_FRAG: &[u8] = shader!("relight_point.frag");
     pub const GLASS_VERT: &[u8] = shader!("glass.vert");
     pub const GLASS_FRAG: &[u8] = shader!("glass.frag");
-    pub const REM_WARP_VERT: &[u8] = shader!("rem_warp.vert");
     pub const REM_WARP_FRAG: &[u8] = shader!("rem_warp.frag");
     pub const REM_VERT: &[u8] = shader!("rem.vert");
     pub const REM_FRAG: &[u8] = shader!("rem.frag");

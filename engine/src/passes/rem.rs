@@ -1,32 +1,26 @@
 //! Reflection-space IBR on the device: the source maps (one 2D array),
 //! the `rem_warp` pass that warps the current view's three source maps
-//! into one sphere map — a disk tessellated finer toward the rim, drawn
-//! once per source with additive blending, each weighted by its spherical
-//! barycentric weight and faded near its singularity (alpha carries the
-//! weight total) — and the `rem` pass that shades the reflector from it
-//! per pixel.
+//! into one sphere map — one full-screen pass over its texels, each
+//! source read where the texel's reflection direction falls in it,
+//! weighted by its spherical barycentric weight and faded near its
+//! singularity (alpha carries the weight total) — and the `rem` pass that
+//! shades the reflector from it per pixel.
 
 use super::target::{Target, draw_mesh};
 use crate::backend::upload::upload_image;
 use crate::backend::{
-    Binding, Blend, Buffer, DepthTest, Device, Filtering, GpuResult, Image, ImageDesc, Pipeline,
+    Binding, Blend, DepthTest, Device, Filtering, GpuResult, Image, ImageDesc, Pipeline,
     PipelineDesc, Sampler, StencilTest,
 };
 use crate::gpu_scene::GpuScene;
 use crate::graph::{Access, Executor, Pass, Usage};
-use crate::shader_interface::{
-    DISK_ATTRIBUTES, DISK_BINDING, REM_ATTRIBUTES, RemPush, RemWarpPush, Vertex, spirv,
-};
+use crate::shader_interface::{REM_ATTRIBUTES, RemPush, RemWarpPush, Vertex, spirv};
 use ash::vk;
-use glam::{Mat3, Mat4, Vec2, Vec3};
+use glam::{Mat3, Mat4, Quat, Vec3, Vec4};
 use half::f16;
 
 const MAP_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 const MAP_DEPTH: vk::Format = vk::Format::D32_SFLOAT;
-/// Rings of the warp disk (uniform in reflection angle, so finer toward
-/// the rim in the map) and segments around it.
-const RINGS: u32 = 16;
-const SEGMENTS: u32 = 48;
 
 /// Where a source's weight fades: full while the cosine of the angle
 /// between a reflection direction and the source's singularity (straight
@@ -62,9 +56,6 @@ pub struct RemRenderer {
     sources: Image,
     blended: Image,
     blended_depth: Image,
-    disk: Buffer,
-    disk_indices: Buffer,
-    disk_index_count: u32,
     _sampler: Sampler,
     warp_set: vk::DescriptorSet,
     shade_set: vk::DescriptorSet,
@@ -115,20 +106,6 @@ impl RemRenderer {
             ImageDesc::new_2d(MAP_DEPTH, maps.size, maps.size)
                 .usage(vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT),
         )?;
-        let (points, indices) = disk_mesh();
-        let points: Vec<[f32; 2]> = points.iter().map(|p| p.to_array()).collect();
-        let disk = Buffer::with_data(
-            device,
-            "rem disk",
-            vk::BufferUsageFlags::VERTEX_BUFFER,
-            &points,
-        )?;
-        let disk_indices = Buffer::with_data(
-            device,
-            "rem disk",
-            vk::BufferUsageFlags::INDEX_BUFFER,
-            &indices,
-        )?;
         let warp = pipeline(device, Stage::Warp, (MAP_FORMAT, MAP_DEPTH))?;
         let shade = pipeline(device, Stage::Shade, (color_format, depth_format))?;
         let sampler = Sampler::new(
@@ -145,9 +122,6 @@ impl RemRenderer {
             sources,
             blended,
             blended_depth,
-            disk,
-            disk_indices,
-            disk_index_count: indices.len() as u32,
             _sampler: sampler,
             warp_set,
             shade_set,
@@ -206,17 +180,17 @@ fn pipeline(
     stage: Stage,
     formats: (vk::Format, vk::Format),
 ) -> GpuResult<Pipeline> {
-    // The disk is drawn whole; the reflector's back faces are culled, as
-    // the mirror pass does.
+    // The warp is one full-screen triangle; the reflector's back faces are
+    // culled, as the mirror pass does.
     let (name, vs, fs, bindings, attributes, push, blend, depth, cull) = match stage {
         Stage::Warp => (
             "rem_warp",
-            spirv::REM_WARP_VERT,
+            spirv::PEM_COMPOSITE_VERT,
             spirv::REM_WARP_FRAG,
-            [DISK_BINDING],
-            &DISK_ATTRIBUTES[..],
+            &[][..],
+            &[][..],
             size_of::<RemWarpPush>(),
-            Blend::Add,
+            Blend::Replace,
             DepthTest::Off,
             vk::CullModeFlags::NONE,
         ),
@@ -224,7 +198,7 @@ fn pipeline(
             "rem",
             spirv::REM_VERT,
             spirv::REM_FRAG,
-            [Vertex::BINDING],
+            &[Vertex::BINDING][..],
             &REM_ATTRIBUTES[..],
             size_of::<RemPush>(),
             Blend::Replace,
@@ -238,7 +212,7 @@ fn pipeline(
             name,
             vertex_spirv: vs,
             fragment_spirv: fs,
-            vertex_bindings: &bindings,
+            vertex_bindings: bindings,
             vertex_attributes: attributes,
             color_formats: &[formats.0],
             depth_format: formats.1,
@@ -250,32 +224,6 @@ fn pipeline(
             stencil: StencilTest::Off,
         },
     )
-}
-
-/// The warp disk: the centre, then `RINGS` rings of `SEGMENTS` points at
-/// reflection angles `α = π k / RINGS` (radius `sin(α/2)` in the map, so
-/// the rings crowd toward the rim where the warp bends most).
-pub fn disk_mesh() -> (Vec<Vec2>, Vec<u32>) {
-    let mut points = vec![Vec2::splat(0.5)];
-    for k in 1..=RINGS {
-        let rho = (std::f32::consts::PI * k as f32 / RINGS as f32 / 2.0).sin();
-        for s in 0..SEGMENTS {
-            let phi = std::f32::consts::TAU * s as f32 / SEGMENTS as f32;
-            points.push(Vec2::splat(0.5) + 0.5 * rho * Vec2::new(phi.cos(), phi.sin()));
-        }
-    }
-    let at = |k: u32, s: u32| 1 + (k - 1) * SEGMENTS + s % SEGMENTS;
-    let mut indices = Vec::new();
-    for s in 0..SEGMENTS {
-        indices.extend([0, at(1, s), at(1, s + 1)]);
-    }
-    for k in 1..RINGS {
-        for s in 0..SEGMENTS {
-            let (a, b, c, d) = (at(k, s), at(k, s + 1), at(k + 1, s), at(k + 1, s + 1));
-            indices.extend([a, c, b, b, c, d]);
-        }
-    }
-    (points, indices)
 }
 
 /// `rem_warp`: the three (or one) source maps warped into the blended map.
@@ -295,25 +243,32 @@ impl Pass for RemWarpPass<'_> {
     fn record(&self, cmd: vk::CommandBuffer) -> GpuResult<()> {
         let r = self.r;
         self.target().render(&r.device, cmd, || {
-            for draw in &self.draws {
-                let push = RemWarpPush {
-                    dest_to_source: Mat4::from_mat3(draw.frame.transpose() * self.dest),
-                    info: glam::Vec4::new(draw.weight, draw.layer as f32, FADE_COS.1, FADE_COS.0),
-                };
-                r.warp.bind(cmd, Some(r.warp_set), &push)?;
-                // SAFETY: the warp pipeline is bound inside dynamic
-                // rendering; the disk buffers hold disk_index_count indices
-                // of points they hold.
-                unsafe {
-                    let d = &r.device.device;
-                    d.cmd_bind_vertex_buffers(cmd, 0, &[r.disk.raw], &[0]);
-                    d.cmd_bind_index_buffer(cmd, r.disk_indices.raw, 0, vk::IndexType::UINT32);
-                    d.cmd_draw_indexed(cmd, r.disk_index_count, 1, 0, 0, 0);
-                }
-            }
+            r.warp
+                .bind(cmd, Some(r.warp_set), &warp_push(self.dest, &self.draws))?;
+            // SAFETY: the warp pipeline is bound inside dynamic rendering;
+            // its vertex shader makes the full-screen triangle from the
+            // vertex index, no buffers bound.
+            unsafe { r.device.device.cmd_draw(cmd, 3, 1, 0, 0) };
             Ok(())
         })
     }
+}
+
+/// The warp's push constants: each source's rotation from the destination
+/// frame `dest` as a quaternion of `T_s⁻¹ T_d`, its weight and layer (at
+/// most three sources; absent ones weigh 0).
+pub fn warp_push(dest: Mat3, draws: &[WarpDraw]) -> RemWarpPush {
+    let mut push = RemWarpPush {
+        fade: Vec4::new(FADE_COS.1, FADE_COS.0, 0.0, 0.0),
+        ..Default::default()
+    };
+    for (i, draw) in draws.iter().take(3).enumerate() {
+        // Both frames are rotations (right-handed orthonormal, `view_frame`).
+        push.rotation[i] = Vec4::from(Quat::from_mat3(&(draw.frame.transpose() * dest)));
+        push.weight[i] = draw.weight;
+        push.layer[i] = draw.layer as f32;
+    }
+    push
 }
 
 impl<'a> RemWarpPass<'a> {
@@ -362,20 +317,32 @@ mod tests {
     use super::*;
 
     #[test]
-    fn disk_rings_crowd_toward_the_rim_and_stay_inside() {
-        let (points, indices) = disk_mesh();
-        assert_eq!(points.len() as u32, 1 + RINGS * SEGMENTS);
-        assert!(indices.iter().all(|&i| (i as usize) < points.len()));
-        let radius =
-            |k: u32| (points[(1 + (k - 1) * SEGMENTS) as usize] - Vec2::splat(0.5)).length();
-        assert!((radius(RINGS) - 0.5).abs() < 1e-6);
-        let inner = radius(2) - radius(1);
-        let outer = radius(RINGS) - radius(RINGS - 1);
-        assert!(outer < inner / 10.0, "{inner} {outer}");
-        assert!(
-            points
-                .iter()
-                .all(|p| (*p - Vec2::splat(0.5)).length() <= 0.5 + 1e-6)
+    fn the_warp_push_rotates_as_the_frames_do() {
+        use crate::rem::geometry::view_frame;
+        let dest = view_frame(Vec3::new(0.3, 0.2, 1.0));
+        let draws: Vec<WarpDraw> = [Vec3::new(-0.4, 0.5, 0.8), Vec3::Y, Vec3::NEG_Z]
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| WarpDraw {
+                frame: view_frame(v),
+                weight: 0.2 * (i + 1) as f32,
+                layer: i as u32 + 4,
+            })
+            .collect();
+        let push = warp_push(dest, &draws);
+        let v = Vec3::new(0.48, -0.6, 0.64);
+        for (i, d) in draws.iter().enumerate() {
+            let q = Quat::from_vec4(push.rotation[i]);
+            let want = d.frame.transpose() * dest * v;
+            assert!((q * v - want).length() < 1e-5, "source {i}");
+            assert_eq!(push.weight[i], d.weight);
+            assert_eq!(push.layer[i], d.layer as f32);
+        }
+        let one = warp_push(dest, &draws[..1]);
+        assert_eq!(
+            (one.weight[1], one.weight[2]),
+            (0.0, 0.0),
+            "absent sources weigh 0"
         );
     }
 }
