@@ -115,3 +115,50 @@ fn eval_ranks_the_methods_against_the_tracer() {
         - num(row(rows, "layered-pem distant-only"), "psnr_between_db");
     assert!(gain >= 0.25, "local layer: {gain:.2} dB\n{log}");
 }
+
+#[test]
+fn eval_scores_relighting_at_held_out_lights_for_every_k() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = common::tiny_scene(dir.path());
+    let s = |p: &Path| p.to_str().expect("utf-8").to_owned();
+    let out = dir.path().join("eval");
+    let eval = |rows: &str| {
+        Command::new(env!("CARGO_BIN_EXE_engine"))
+            .args(["eval", "--scene", &s(&scene), "--out", &s(&out)])
+            .args(["--data", &s(&dir.path().join("data")), "--rows", rows])
+            .args(["--relight-size", "32x8", "--relight-grid", "5x9"])
+            .args(["--relight-spp", "1", "--validate"])
+            .output()
+            .expect("run engine")
+    };
+    let o = eval("relight");
+    let log = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(o.status.success(), "{log}");
+    assert!(log.contains("validation messages: 0"), "{log}");
+    assert!(log.contains("| k | PSNR directional (dB)"), "{log}");
+    assert!(out.join("relight.png").is_file(), "{log}");
+    let table: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("eval.json")).expect("eval.json"))
+            .expect("JSON");
+    assert_eq!(table["rows"].as_array().map(Vec::len), Some(0), "{table}");
+    let rows = table["relight"]["rows"].as_array().expect("relight rows");
+    let ks: Vec<u64> = rows.iter().filter_map(|r| r["k"].as_u64()).collect();
+    assert_eq!(ks, [9, 16, 25], "{table}");
+    for r in rows {
+        for f in ["psnr_db", "point_psnr_db"] {
+            assert!(num(r, f) > 5.0 && num(r, f) < 100.0, "{f}: {r}");
+        }
+        assert!(num(r, "ms") > 0.0 && num(r, "point_ms") > 0.0, "{r}");
+    }
+    // A label that is no row is named, with the relighting rows among those expected.
+    let bad = eval("relight,no-such-row");
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        !bad.status.success() && err.contains("no-such-row") && err.contains("relight"),
+        "{err}"
+    );
+}

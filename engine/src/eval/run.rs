@@ -6,11 +6,13 @@ use super::chart::tradeoff_chart;
 use super::metrics;
 use super::pictures::side_by_side;
 use super::reference::{ReferenceImage, References, View as RefView};
+use super::relight::{RELIGHT_ROW, RelightOptions, RelightReport};
 use super::rows::{Row, rows_for};
 use super::table::{AboveScore, EvalRow, EvalTable, ViewCounts};
 use super::views::{Category, View, views};
 use crate::options::{Mode, RunPlace};
 use crate::play::{FrameSource, Session, compile_context, setup_mode};
+use crate::relight::GridSettings;
 use crate::util::stats::{mean, median, percentile};
 use anyhow::{Context, Result, bail};
 use inference::trace::TraceSettings;
@@ -32,8 +34,11 @@ pub struct EvalOptions {
     pub spp: u32,
     /// Timed frames per view and row (after one untimed frame).
     pub repeats: u32,
-    /// Only these rows (labels) [default: all].
+    /// Only these rows (labels) [default: all]; `relight` selects the
+    /// relighting rows (k = 9, 16, 25 at held-out lights).
     pub rows: Vec<String>,
+    /// What the relighting rows trace and project.
+    pub relight: GridSettings,
 }
 
 /// What one row measured on one view.
@@ -57,21 +62,19 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
         mut renderer,
         ..
     } = Session::open(place)?;
-    let rows = selected_rows(&opts.rows, &scene)?;
+    let (rows, relight_wanted) = selected_rows(&opts.rows, &scene)?;
     let out = opts.out.clone().unwrap_or_else(|| data.join("eval"));
     crate::util::files::claim_dir(&out)?;
-    let reflector = scene
-        .objects
-        .iter()
-        .find(|o| o.em.is_some() || o.glass.is_some())
-        .with_context(|| {
-            let source = scene.source.display();
-            format!("{source}: no reflector with [objects.em] or glass with [objects.glass]")
-        })?
-        .name
-        .clone();
+    let relight = match relight_wanted {
+        true => Some(relight_rows(&scene, place, opts, &out)?),
+        false => None,
+    };
+    let reflector = reflector_name(&scene)?;
     let views = views(&scene, opts.views, &opts.elevations);
-    let references = references(&scene, &views, place.size, opts.spp, &out, &reflector)?;
+    let references = match rows.is_empty() {
+        true => Vec::new(),
+        false => references(&scene, &views, place.size, opts.spp, &out, &reflector)?,
+    };
     let run = RowRun {
         views: &views,
         references: &references,
@@ -79,10 +82,7 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
         reflector: &reflector,
     };
     let ctx = compile_context(place, &scene, &data);
-    let progress = indicatif::ProgressBar::new((rows.len() * views.len()) as u64).with_style(
-        indicatif::ProgressStyle::with_template("eval {msg} [{bar:30}] {pos}/{len} {elapsed}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
+    let progress = progress_bar((rows.len() * views.len()) as u64);
     let (mut table_rows, mut pictures, mut skipped) = (Vec::new(), Vec::new(), Vec::new());
     for row in &rows {
         progress.set_message(row.label.clone());
@@ -109,22 +109,63 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
         });
     }
     progress.finish_and_clear();
-    let table = EvalTable { rows: table_rows };
+    let table = EvalTable {
+        rows: table_rows,
+        relight,
+    };
     let title = format!(
         "Speed against accuracy, {} {}x{} ({})",
         scene.name, place.size.0, place.size.1, device.name
     );
     let written = write_outputs(&out, &table, &title, &run, pictures, place.size)?;
-    let mut text = format!(
-        "{} | {} {}x{} | {} views per category, above = +{:?}°, reference {} spp\n",
-        device.name, scene.name, place.size.0, place.size.1, opts.views, opts.elevations, opts.spp
-    );
-    text += &table.to_markdown();
-    text += &table.above_markdown();
-    for s in &skipped {
+    let head = format!("{} | {}", device.name, scene.name);
+    Ok(summary(head, place, opts, &table, &skipped) + &written)
+}
+
+/// What `engine eval` prints: the tables and the rows it skipped.
+fn summary(
+    mut text: String,
+    place: &RunPlace,
+    opts: &EvalOptions,
+    table: &EvalTable,
+    skipped: &[String],
+) -> String {
+    if !table.rows.is_empty() {
+        text += &format!(
+            " {}x{} | {} views per category, above = +{:?}°, reference {} spp\n",
+            place.size.0, place.size.1, opts.views, opts.elevations, opts.spp
+        );
+        text += &table.to_markdown();
+        text += &table.above_markdown();
+    }
+    text += &table
+        .relight
+        .as_ref()
+        .map_or_else(String::new, RelightReport::to_markdown);
+    for s in skipped {
         text += &format!("skipped {s}\n");
     }
-    Ok(text + &written)
+    text
+}
+
+fn progress_bar(len: u64) -> indicatif::ProgressBar {
+    indicatif::ProgressBar::new(len).with_style(
+        indicatif::ProgressStyle::with_template("eval {msg} [{bar:30}] {pos}/{len} {elapsed}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    )
+}
+
+/// The object the rows score: the first with an EM or glass table.
+fn reflector_name(scene: &inference::scene::Scene) -> Result<String> {
+    let object = scene
+        .objects
+        .iter()
+        .find(|o| o.em.is_some() || o.glass.is_some())
+        .with_context(|| {
+            let source = scene.source.display();
+            format!("{source}: no reflector with [objects.em] or glass with [objects.glass]")
+        })?;
+    Ok(object.name.clone())
 }
 
 /// The traced gold standard of every view (traced once, cached under
@@ -162,9 +203,14 @@ fn write_outputs(
 ) -> Result<String> {
     let json_path = out.join("eval.json");
     table.write(&json_path)?;
-    let plot_path = out.join("tradeoff.png");
-    tradeoff_chart(&plot_path, table, title)?;
-    if let Some(above) = run.above() {
+    let plot_path = out.join(match table.rows.is_empty() {
+        true => "relight.png",
+        false => "tradeoff.png",
+    });
+    if !table.rows.is_empty() {
+        tradeoff_chart(&plot_path, table, title)?;
+    }
+    if let Some(above) = run.above().filter(|&a| a < run.references.len()) {
         pictures.push(("gold (traced)".into(), run.references[above].beauty.clone()));
         let mask = &run.references[above].mask;
         side_by_side(&out.join("modes_above.png"), &pictures, mask, width, height)?;
@@ -226,23 +272,51 @@ impl RowRun<'_> {
 }
 
 /// The rows whose labels are in `wanted` (all when empty).
-fn selected_rows(wanted: &[String], scene: &inference::scene::Scene) -> Result<Vec<Row>> {
+/// The rendered rows `wanted` names (all when empty) and whether it names
+/// the relighting rows (also when empty).
+fn selected_rows(wanted: &[String], scene: &inference::scene::Scene) -> Result<(Vec<Row>, bool)> {
     let all = rows_for(scene);
     let rows: Vec<Row> = all
         .iter()
         .filter(|r| wanted.is_empty() || wanted.contains(&r.label))
         .cloned()
         .collect();
-    if rows.is_empty() {
+    let relight = wanted.is_empty() || wanted.iter().any(|w| w == RELIGHT_ROW);
+    let unknown: Vec<&String> = wanted
+        .iter()
+        .filter(|w| *w != RELIGHT_ROW && !all.iter().any(|r| &r.label == *w))
+        .collect();
+    if !unknown.is_empty() || (rows.is_empty() && !relight) {
         bail!(
-            "--rows {wanted:?}: no such rows (expected some of: {})",
+            "--rows {unknown:?}: no such rows (expected some of: {}, {RELIGHT_ROW})",
             all.iter()
                 .map(|r| r.label.as_str())
                 .collect::<Vec<_>>()
                 .join(", ")
         );
     }
-    Ok(rows)
+    Ok((rows, relight))
+}
+
+/// The relighting rows: `engine relight`'s measurement on `opts.relight`,
+/// its cache and images under `out/relight`, its chart `out/relight.png`.
+fn relight_rows(
+    scene: &inference::scene::Scene,
+    place: &RunPlace,
+    opts: &EvalOptions,
+    out: &std::path::Path,
+) -> Result<RelightReport> {
+    let options = RelightOptions {
+        settings: opts.relight,
+        out: out.to_path_buf(),
+        frames: 100,
+        device: place.device.clone(),
+        progress: true,
+    };
+    let report = super::relight::run(scene, &options)?;
+    let title = format!("Relighting {} with spherical harmonics", scene.name);
+    report.chart(&out.join("relight.png"), &title)?;
+    Ok(report)
 }
 
 /// One row's frames of one view: timed (maps resident, no decoding

@@ -8,6 +8,7 @@
 //! of that kind (the driver says which aggregate in its docs).
 
 use super::metrics::PSNR_CAP_DB;
+use super::relight::RelightReport;
 use crate::util::files::write as write_atomically;
 use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
@@ -20,6 +21,9 @@ use std::path::Path;
 #[serde(deny_unknown_fields)]
 pub struct EvalTable {
     pub rows: Vec<EvalRow>,
+    /// The `relight` rows: `engine relight`'s measurement, when selected.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub relight: Option<RelightReport>,
 }
 
 /// One mode at one set of settings.
@@ -137,6 +141,9 @@ impl EvalTable {
                     );
                 }
             }
+        }
+        if let Some(r) = &self.relight {
+            r.validate()?;
         }
         Ok(())
     }
@@ -295,6 +302,7 @@ mod tests {
     fn json_has_the_issue_shape() -> Result<()> {
         let table = EvalTable {
             rows: vec![row("pem")],
+            relight: None,
         };
         let value = serde_json::to_value(&table)?;
         assert_eq!(
@@ -320,10 +328,13 @@ mod tests {
         assert_eq!(value["flip_frame_above"], json!(0.08));
         assert!(value.get("flip_frame_on").is_none());
         framed.flip_frame_on = Some(1.5);
-        let e = EvalTable { rows: vec![framed] }
-            .validate()
-            .err()
-            .map(|e| e.to_string());
+        let e = EvalTable {
+            rows: vec![framed],
+            relight: None,
+        }
+        .validate()
+        .err()
+        .map(|e| e.to_string());
         assert!(
             e.as_ref().is_some_and(|e| e.contains("flip_frame_on")),
             "{e:?}"
@@ -343,6 +354,7 @@ mod tests {
         r.map_bytes = Some(1 << 20);
         let table = EvalTable {
             rows: vec![row("pem"), r],
+            relight: None,
         };
         let value = serde_json::to_value(&table)?;
         assert_eq!(
@@ -365,7 +377,10 @@ mod tests {
         let path = dir.path().join("eval.json");
         let mut bad = row("pem");
         bad.psnr_between_db = f64::INFINITY;
-        let table = EvalTable { rows: vec![bad] };
+        let table = EvalTable {
+            rows: vec![bad],
+            relight: None,
+        };
         let e = table.write(&path).err().map(|e| format!("{e:#}"));
         assert!(
             e.as_ref()
@@ -375,10 +390,24 @@ mod tests {
         assert!(!path.exists());
         let mut bad = row("pem");
         bad.flip_above = 1.5;
-        assert!(EvalTable { rows: vec![bad] }.validate().is_err());
+        assert!(
+            EvalTable {
+                rows: vec![bad],
+                relight: None
+            }
+            .validate()
+            .is_err()
+        );
         let mut bad = row("pem");
         bad.frame_ms_p95 = Some(f64::NAN);
-        assert!(EvalTable { rows: vec![bad] }.validate().is_err());
+        assert!(
+            EvalTable {
+                rows: vec![bad],
+                relight: None
+            }
+            .validate()
+            .is_err()
+        );
         Ok(())
     }
 
@@ -399,6 +428,7 @@ mod tests {
         capped.settings.clear();
         let table = EvalTable {
             rows: vec![row("pem"), capped],
+            relight: None,
         };
         let md = table.to_markdown();
         let lines: Vec<&str> = md.lines().collect();

@@ -30,6 +30,43 @@ pub struct GridSettings {
     pub grid: (u32, u32),
 }
 
+impl GridSettings {
+    /// Checked settings: a `width × height` panorama (both 1 to 8192), a
+    /// grid up to 64 × 128, 1 to 1024 samples per texel, at most 8 bounces;
+    /// `what` names the flags in the message.
+    pub fn new(
+        (width, height): (u32, u32),
+        (rings, azimuths): (u32, u32),
+        spp: u32,
+        bounces: u32,
+        seed: u64,
+        what: &str,
+    ) -> Result<Self> {
+        let size_ok = (1..=8192).contains(&width) && (1..=8192).contains(&height);
+        if !size_ok
+            || !(1..=64).contains(&rings)
+            || !(1..=128).contains(&azimuths)
+            || !(1..=1024).contains(&spp)
+            || bounces > 8
+        {
+            bail!(
+                "{what}: size {width}x{height}, grid {rings}x{azimuths}, {spp} spp, {bounces} \
+                 bounces: expected a size up to 8192x8192, a grid up to 64x128, 1 to 1024 \
+                 samples and at most 8 bounces"
+            );
+        }
+        Ok(Self {
+            trace: PanoramaSettings {
+                panorama: Panorama { width, height },
+                spp,
+                seed,
+                bounces,
+            },
+            grid: (rings, azimuths),
+        })
+    }
+}
+
 /// SH maps (k = 25) and the world position of each texel's first hit.
 pub struct Relightable {
     pub maps: ShMaps,

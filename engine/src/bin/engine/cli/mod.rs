@@ -193,6 +193,15 @@ pub struct EvalArgs {
     /// Where the scene's compiled inputs live (trace, infer, container) [default: out/<scene>].
     #[arg(long)]
     pub data: Option<PathBuf>,
+    /// The `relight` rows: panorama size as WIDTHxHEIGHT (as `engine relight --size`).
+    #[arg(long, default_value = "1024x256", value_parser = parse_size)]
+    pub relight_size: (u32, u32),
+    /// The `relight` rows: light grid, rings x azimuths (as `engine relight --grid`).
+    #[arg(long, default_value = "8x16", value_parser = parse_size)]
+    pub relight_grid: (u32, u32),
+    /// The `relight` rows: samples per panorama texel (as `engine relight --spp`).
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub relight_spp: u32,
     /// Turn the Khronos validation layer on.
     #[arg(long)]
     pub validate: bool,

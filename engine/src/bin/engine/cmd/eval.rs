@@ -4,6 +4,7 @@ use crate::cli::{EvalArgs, device};
 use anyhow::Result;
 use engine::eval::{EvalOptions, eval};
 use engine::options::RunPlace;
+use engine::relight::GridSettings;
 
 pub fn run(args: &EvalArgs) -> Result<String> {
     let place = RunPlace {
@@ -20,6 +21,14 @@ pub fn run(args: &EvalArgs) -> Result<String> {
         spp: args.spp,
         repeats: args.repeats,
         rows: args.rows.clone(),
+        relight: GridSettings::new(
+            args.relight_size,
+            args.relight_grid,
+            args.relight_spp,
+            1,
+            0,
+            "--relight-size, --relight-grid, --relight-spp",
+        )?,
     };
     eval(&place, &opts)
 }

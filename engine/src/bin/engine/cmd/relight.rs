@@ -3,40 +3,29 @@
 
 use super::default_dir;
 use crate::cli::{RelightArgs, device};
-use anyhow::{Result, bail};
-use engine::relight::{GridSettings, RelightOptions, run::run as relight};
+use anyhow::Result;
+use engine::eval::relight::{RelightOptions, run as relight};
+use engine::relight::GridSettings;
 use engine::util::files;
-use inference::relight::{Panorama, PanoramaSettings};
 use inference::scene::Scene;
 use std::fmt::Write;
 
 pub fn run(args: &RelightArgs) -> Result<String> {
     let scene = Scene::load(&args.scene)?;
     let (rings, azimuths) = args.grid;
-    if rings > 64 || azimuths > 128 || args.spp == 0 || args.spp > 1024 || args.bounces > 8 {
-        bail!(
-            "--grid {rings}x{azimuths}, --spp {}, --bounces {}: expected a grid up to 64x128, \
-             1 to 1024 samples and at most 8 bounces",
-            args.spp,
-            args.bounces
-        );
-    }
+    let settings = GridSettings::new(
+        args.size,
+        args.grid,
+        args.spp,
+        args.bounces,
+        args.seed,
+        "--size, --grid, --spp, --bounces",
+    )?;
     if let Some(json) = &args.json {
         files::check_overwrite(json)?;
     }
     let options = RelightOptions {
-        settings: GridSettings {
-            trace: PanoramaSettings {
-                panorama: Panorama {
-                    width: args.size.0,
-                    height: args.size.1,
-                },
-                spp: args.spp,
-                seed: args.seed,
-                bounces: args.bounces,
-            },
-            grid: args.grid,
-        },
+        settings,
         out: default_dir(&args.out, &scene, ""),
         frames: args.frames,
         device: device(&args.device, args.validate),

@@ -8,15 +8,14 @@ use inference::relight::grid::direction;
 use inference::relight::sh::ORDERS;
 use inference::relight::{HELD_OUT_DEG, MovingLight, RelightScene};
 use inference::scene::Scene;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use super::cache::{GridSettings, relightable};
-use super::gpu::{GpuLight, RelightGpu};
+use super::metrics::masked_psnr;
 use crate::backend::{DeviceOptions, create_device};
-use crate::eval::metrics::masked_psnr;
 use crate::graph::Executor;
+use crate::relight::{GpuLight, GridSettings, RelightGpu, relightable};
 use crate::util::stats::median;
 
 /// Irradiance of the held-out lights in the written images (W·m⁻²; the
@@ -34,7 +33,7 @@ pub struct RelightOptions {
     pub progress: bool,
 }
 
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RelightRow {
     pub k: usize,
     /// Median linear PSNR (peak = the traced panorama's maximum) over the
@@ -53,7 +52,7 @@ pub struct RelightRow {
     pub bytes: u64,
 }
 
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RelightReport {
     /// Frames per second relighting the panorama at k = 16, wall clock.
     pub directional_fps: f64,
@@ -69,6 +68,100 @@ pub struct RelightReport {
     pub cached: bool,
     pub trace_s: f64,
     pub maps: PathBuf,
+}
+
+/// The label that selects the relighting rows in `engine eval --rows`.
+pub const RELIGHT_ROW: &str = "relight";
+
+impl RelightReport {
+    /// An error naming the first number JSON cannot hold.
+    pub fn validate(&self) -> Result<()> {
+        let fps = [
+            ("directional_fps", self.directional_fps),
+            ("point_fps", self.point_fps),
+        ];
+        for (field, v) in fps {
+            anyhow::ensure!(
+                v.is_finite(),
+                "relight: {field} is {v}, expected a finite number"
+            );
+        }
+        for r in &self.rows {
+            let numbers = [
+                ("psnr_db", r.psnr_db),
+                ("ms", r.ms),
+                ("wall_ms", r.wall_ms),
+                ("point_ms", r.point_ms),
+                ("point_wall_ms", r.point_wall_ms),
+                ("point_psnr_db", r.point_psnr_db),
+            ];
+            for (field, v) in numbers {
+                anyhow::ensure!(
+                    v.is_finite(),
+                    "relight row k = {}: {field} is {v}, expected a finite number",
+                    r.k
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// The rows as a GitHub Markdown table (empty without rows).
+    pub fn to_markdown(&self) -> String {
+        if self.rows.is_empty() {
+            return String::new();
+        }
+        let mut out = format!(
+            "\nRelighting a {}x{} panorama (grid {}x{}, {} spp), held-out lights:\n\n\
+             | k | PSNR directional (dB) | GPU ms | fps (wall) | PSNR point light (dB) | GPU ms \
+             | fps (wall) | map bytes |\n|--:|--:|--:|--:|--:|--:|--:|--:|\n",
+            self.width, self.height, self.grid[0], self.grid[1], self.spp
+        );
+        for r in &self.rows {
+            out += &format!(
+                "| {} | {:.2} | {:.2} | {:.1} | {:.2} | {:.2} | {:.1} | {} |\n",
+                r.k,
+                r.psnr_db,
+                r.ms,
+                1000.0 / r.wall_ms,
+                r.point_psnr_db,
+                r.point_ms,
+                1000.0 / r.point_wall_ms,
+                r.bytes
+            );
+        }
+        out
+    }
+
+    /// PSNR at the held-out lights against GPU time, one point per k, for
+    /// the directional and the point light.
+    pub fn chart(&self, path: &Path, title: &str) -> Result<()> {
+        use super::plot::{ChartSpec, LegendPosition, Series, xy_chart};
+        let mut spec = ChartSpec::new(
+            title,
+            "relight time (GPU ms, median)",
+            "PSNR against the tracer at held-out lights (dB)",
+        );
+        spec.legend = LegendPosition::LowerRight;
+        let labels: Vec<String> = self.rows.iter().map(|r| format!("k = {}", r.k)).collect();
+        spec.series.push(Series {
+            name: "directional light".into(),
+            points: self.rows.iter().map(|r| (r.ms, r.psnr_db)).collect(),
+            labels: labels.clone(),
+            connect: true,
+        });
+        spec.series.push(Series {
+            name: "point light".into(),
+            points: self
+                .rows
+                .iter()
+                .map(|r| (r.point_ms, r.point_psnr_db))
+                .collect(),
+            labels,
+            connect: true,
+        });
+        xy_chart(path, &spec)
+    }
 }
 
 /// Where the moving point light sits for the traced comparison: above and
@@ -254,4 +347,63 @@ fn write_images(
     crate::capture::write_exr(&exr, p.width, p.height, &pixels)
         .with_context(|| exr.display().to_string())?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::eval::table::EvalTable;
+
+    #[test]
+    fn the_relighting_rows_round_trip_and_are_checked() -> Result<()> {
+        let row_k = |k: usize| RelightRow {
+            k,
+            psnr_db: 20.0 + k as f64 / 10.0,
+            ms: 1.0 + k as f64 / 10.0,
+            wall_ms: 2.0,
+            point_ms: 3.0,
+            point_wall_ms: 4.0,
+            point_psnr_db: 19.0,
+            bytes: 1000 * k as u64,
+        };
+        let report = RelightReport {
+            directional_fps: 500.0,
+            point_fps: 250.0,
+            rows: vec![row_k(9), row_k(16), row_k(25)],
+            width: 64,
+            height: 16,
+            grid: [5, 9],
+            spp: 1,
+            bounces: 1,
+            held_out_deg: vec![[35.0, 17.0]],
+            point_light: [0.9, 1.8, -0.7],
+            cached: false,
+            trace_s: 0.5,
+            maps: "out/relight/sh.bin".into(),
+        };
+        let dir = tempfile::tempdir()?;
+        let path = dir.path().join("eval.json");
+        let table = EvalTable {
+            rows: Vec::new(),
+            relight: Some(report),
+        };
+        table.write(&path)?;
+        assert_eq!(EvalTable::read(&path)?, table);
+        let markdown = table.relight.as_ref().map(RelightReport::to_markdown);
+        assert_eq!(
+            markdown.map(|m| m.matches("\n| ").count()),
+            Some(4),
+            "header + 3 rows"
+        );
+        let mut bad = table.clone();
+        if let Some(r) = bad.relight.as_mut() {
+            r.rows[1].point_psnr_db = f64::NAN;
+        }
+        let err = bad.write(&dir.path().join("bad.json")).unwrap_err();
+        assert!(
+            format!("{err:#}").contains("k = 16: point_psnr_db"),
+            "{err:#}"
+        );
+        Ok(())
+    }
 }
