@@ -161,9 +161,23 @@ fn engine_relight_writes_the_report_and_the_relit_panoramas() {
     let rows = report["rows"].as_array().expect("rows");
     let ks: Vec<u64> = rows.iter().map(|r| r["k"].as_u64().expect("k")).collect();
     assert_eq!(ks, [9, 16, 25]);
+    // Played from the codec's container (20:1 by default), the raw maps'
+    // scores beside: compression may cost little, never the picture.
+    assert_eq!(report["ratio"].as_f64(), Some(20.0), "{report}");
+    let stored = report["container_bytes"].as_u64().expect("container bytes");
+    assert!(
+        stored > 0 && stored < 32 * 8 * 25 * 12 / 5,
+        "{stored} bytes"
+    );
     for r in rows {
         let psnr = r["psnr_db"].as_f64().expect("psnr");
         assert!(psnr.is_finite() && psnr > 5.0, "{r}");
+        let raw = r["raw_psnr_db"].as_f64().expect("raw psnr");
+        assert!(
+            raw - psnr < 2.0,
+            "compression cost {:.2} dB: {r}",
+            raw - psnr
+        );
         assert!(r["ms"].as_f64().expect("ms") > 0.0);
     }
     for f in [
@@ -174,11 +188,19 @@ fn engine_relight_writes_the_report_and_the_relit_panoramas() {
     ] {
         assert!(out.join("relight").join(f).is_file(), "{f}");
     }
-    // A second run reads the cached grid.
+    // A second run reads the cached grid; --raw plays the raw maps.
+    all.push("--raw");
     let o = run_engine(&all);
     assert!(
         o.status.success() && output_text(&o).contains("cached grid"),
         "{}",
         output_text(&o)
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&json).expect("json")).expect("parse");
+    assert!(report.get("container_bytes").is_none(), "{report}");
+    assert_eq!(
+        report["rows"][1]["psnr_db"], rows[1]["raw_psnr_db"],
+        "{report}"
     );
 }

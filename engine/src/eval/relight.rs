@@ -15,7 +15,8 @@ use std::time::Instant;
 use super::metrics::masked_psnr;
 use crate::backend::{DeviceOptions, create_device};
 use crate::graph::Executor;
-use crate::relight::{GpuLight, GridSettings, RelightGpu, relightable};
+use crate::relight::codec::compressed;
+use crate::relight::{GpuLight, GridSettings, RelightGpu, key, relightable};
 use crate::util::stats::median;
 
 /// Irradiance of the held-out lights in the written images (W·m⁻²; the
@@ -31,6 +32,9 @@ pub struct RelightOptions {
     pub frames: u32,
     pub device: DeviceOptions,
     pub progress: bool,
+    /// Play (and score) the maps as stored through the codec at this
+    /// ratio:1, the raw maps' scores beside them; `None`: the raw maps.
+    pub ratio: Option<f64>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -50,6 +54,12 @@ pub struct RelightRow {
     pub point_psnr_db: f64,
     /// Bytes of the SH maps on the device.
     pub bytes: u64,
+    /// With maps stored through the codec: the raw maps' `psnr_db` and
+    /// `point_psnr_db` (the cost of compression is the difference).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub raw_psnr_db: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub raw_point_psnr_db: Option<f64>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -68,6 +78,12 @@ pub struct RelightReport {
     pub cached: bool,
     pub trace_s: f64,
     pub maps: PathBuf,
+    /// The codec's container of the maps played (all k = 25 planes), when
+    /// stored through it: its ratio target and bytes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ratio: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub container_bytes: Option<u64>,
 }
 
 /// The label that selects the relighting rows in `engine eval --rows`.
@@ -111,15 +127,23 @@ impl RelightReport {
         if self.rows.is_empty() {
             return String::new();
         }
+        let stored = match (self.ratio, self.container_bytes) {
+            (Some(r), Some(b)) => format!(", maps through the codec at {r}:1, {b} bytes"),
+            _ => ", raw maps".to_owned(),
+        };
         let mut out = format!(
-            "\nRelighting a {}x{} panorama (grid {}x{}, {} spp), held-out lights:\n\n\
-             | k | PSNR directional (dB) | GPU ms | fps (wall) | PSNR point light (dB) | GPU ms \
-             | fps (wall) | map bytes |\n|--:|--:|--:|--:|--:|--:|--:|--:|\n",
+            "\nRelighting a {}x{} panorama (grid {}x{}, {} spp{stored}), held-out lights:\n\n\
+             | k | PSNR directional (dB) | raw maps (dB) | GPU ms | fps (wall) \
+             | PSNR point light (dB) | GPU ms | fps (wall) | bytes on the device |\n\
+             |--:|--:|--:|--:|--:|--:|--:|--:|--:|\n",
             self.width, self.height, self.grid[0], self.grid[1], self.spp
         );
         for r in &self.rows {
+            let raw = r
+                .raw_psnr_db
+                .map_or_else(|| "—".to_owned(), |db| format!("{db:.2}"));
             out += &format!(
-                "| {} | {:.2} | {:.2} | {:.1} | {:.2} | {:.2} | {:.1} | {} |\n",
+                "| {} | {:.2} | {raw} | {:.2} | {:.1} | {:.2} | {:.2} | {:.1} | {} |\n",
                 r.k,
                 r.psnr_db,
                 r.ms,
@@ -213,12 +237,29 @@ pub fn run(scene: &Scene, options: &RelightOptions) -> Result<RelightReport> {
     let r = relightable(scene, &options.settings, &options.out, options.progress)?;
     let dir = options.out.join("relight");
     let refs = references(scene, options, &dir)?;
+    let stored = match options.ratio {
+        Some(ratio) => Some(compressed(
+            &r.maps,
+            &r.path,
+            &key(scene, &options.settings),
+            ratio,
+        )?),
+        None => None,
+    };
+    let played = stored.as_ref().map_or(&r.maps, |s| &s.maps);
     let device = create_device(&options.device)?;
     let mut executor = Executor::new(&device)?;
     let mut rows = Vec::new();
     for k in ORDERS {
-        let gpu = RelightGpu::new(&device, &mut executor, &r.maps, k, &r.positions)?;
-        rows.push(row(&gpu, &mut executor, &refs, &dir, options.frames)?);
+        let gpu = RelightGpu::new(&device, &mut executor, played, k, &r.positions)?;
+        let mut row = row(&gpu, &mut executor, &refs, &dir, options.frames)?;
+        if stored.is_some() {
+            let raw = RelightGpu::new(&device, &mut executor, &r.maps, k, &r.positions)?;
+            let (directional, point) = scores(&raw, &mut executor, &refs, None)?;
+            row.raw_psnr_db = Some(directional);
+            row.raw_point_psnr_db = Some(point);
+        }
+        rows.push(row);
     }
     let k16 = rows.iter().find(|row| row.k == 16);
     let trace = &options.settings.trace;
@@ -236,6 +277,8 @@ pub fn run(scene: &Scene, options: &RelightOptions) -> Result<RelightReport> {
         cached: r.cached,
         trace_s: r.trace_s,
         maps: r.path.clone(),
+        ratio: options.ratio,
+        container_bytes: stored.map(|s| s.bytes),
     })
 }
 
@@ -247,30 +290,7 @@ fn row(
     dir: &Path,
     frames: u32,
 ) -> Result<RelightRow> {
-    let (k, p) = (gpu.k, gpu.panorama);
-    let mut psnrs = Vec::new();
-    for (j, (d, t)) in refs.directions.iter().zip(&refs.directional).enumerate() {
-        let light = GpuLight::Directional {
-            to_light: *d,
-            irradiance: Vec3::ONE,
-        };
-        let relit = gpu.render_and_read(executor, light)?;
-        psnrs.push(psnr(t, &relit)?);
-        write_images(
-            dir,
-            &format!("relit_k{k}_dir{j}"),
-            p,
-            &relit,
-            SHOWN_IRRADIANCE,
-        )?;
-    }
-    let intensity = Vec3::splat(POINT_INTENSITY);
-    let light = GpuLight::Point {
-        position: refs.point,
-        intensity,
-    };
-    let relit_point = gpu.render_and_read(executor, light)?;
-    write_images(dir, &format!("relit_k{k}_point"), p, &relit_point, 1.0)?;
+    let (psnr_db, point_psnr_db) = scores(gpu, executor, refs, Some(dir))?;
     // Timed: a sun circling and rising, a bulb circling the reflector.
     let sun = |f: f32| GpuLight::Directional {
         to_light: direction(20.0 + 40.0 * f, 360.0 * f),
@@ -281,21 +301,56 @@ fn row(
         let a = std::f32::consts::TAU * f;
         GpuLight::Point {
             position: origin + Vec3::new(2.0 * a.cos(), 1.5, 2.0 * a.sin()),
-            intensity,
+            intensity: Vec3::splat(POINT_INTENSITY),
         }
     };
     let (ms, wall_ms) = time(gpu, executor, frames, sun)?;
     let (point_ms, point_wall_ms) = time(gpu, executor, frames, bulb)?;
     Ok(RelightRow {
-        k,
-        psnr_db: median(&psnrs),
+        k: gpu.k,
+        psnr_db,
         ms,
         wall_ms,
         point_ms,
         point_wall_ms,
-        point_psnr_db: psnr(&refs.point_traced, &relit_point)?,
+        point_psnr_db,
         bytes: gpu.map_bytes(),
+        raw_psnr_db: None,
+        raw_point_psnr_db: None,
     })
+}
+
+/// The median PSNR over the held-out directions and the point light's,
+/// the relit panoramas written into `dir` when given.
+fn scores(
+    gpu: &RelightGpu,
+    executor: &mut Executor,
+    refs: &References,
+    dir: Option<&Path>,
+) -> Result<(f64, f64)> {
+    let (k, p) = (gpu.k, gpu.panorama);
+    let mut psnrs = Vec::new();
+    for (j, (d, t)) in refs.directions.iter().zip(&refs.directional).enumerate() {
+        let light = GpuLight::Directional {
+            to_light: *d,
+            irradiance: Vec3::ONE,
+        };
+        let relit = gpu.render_and_read(executor, light)?;
+        psnrs.push(psnr(t, &relit)?);
+        if let Some(dir) = dir {
+            let stem = format!("relit_k{k}_dir{j}");
+            write_images(dir, &stem, p, &relit, SHOWN_IRRADIANCE)?;
+        }
+    }
+    let light = GpuLight::Point {
+        position: refs.point,
+        intensity: Vec3::splat(POINT_INTENSITY),
+    };
+    let relit_point = gpu.render_and_read(executor, light)?;
+    if let Some(dir) = dir {
+        write_images(dir, &format!("relit_k{k}_point"), p, &relit_point, 1.0)?;
+    }
+    Ok((median(&psnrs), psnr(&refs.point_traced, &relit_point)?))
 }
 
 /// Median GPU and wall milliseconds of `frames` relights (light `at(f)`,
@@ -365,6 +420,8 @@ mod tests {
             point_wall_ms: 4.0,
             point_psnr_db: 19.0,
             bytes: 1000 * k as u64,
+            raw_psnr_db: Some(20.5),
+            raw_point_psnr_db: None,
         };
         let report = RelightReport {
             directional_fps: 500.0,
@@ -380,6 +437,8 @@ mod tests {
             cached: false,
             trace_s: 0.5,
             maps: "out/relight/sh.bin".into(),
+            ratio: Some(20.0),
+            container_bytes: Some(12345),
         };
         let dir = tempfile::tempdir()?;
         let path = dir.path().join("eval.json");

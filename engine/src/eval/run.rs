@@ -312,6 +312,7 @@ fn relight_rows(
         frames: 100,
         device: place.device.clone(),
         progress: true,
+        ratio: Some(crate::relight::codec::DEFAULT_RATIO),
     };
     let report = super::relight::run(scene, &options)?;
     let title = format!("Relighting {} with spherical harmonics", scene.name);

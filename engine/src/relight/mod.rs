@@ -5,7 +5,8 @@
 //! `engine relight` measurement is a driver: `eval::relight`.
 
 pub mod cache;
+pub mod codec;
 pub mod gpu;
 
-pub use cache::{GridSettings, Relightable, relightable};
+pub use cache::{GridSettings, Relightable, key, relightable};
 pub use gpu::{GpuLight, RelightGpu};

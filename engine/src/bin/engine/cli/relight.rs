@@ -23,6 +23,14 @@ pub struct RelightArgs {
     /// Random seed of the traces.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Store the SH maps through the codec at this compression ratio (against
+    /// 32-bit floats) and play the decoded maps; the raw maps' scores are
+    /// reported beside them.
+    #[arg(long, default_value_t = engine::relight::codec::DEFAULT_RATIO)]
+    pub ratio: f64,
+    /// Play the raw (uncompressed) maps instead.
+    #[arg(long)]
+    pub raw: bool,
     /// Timed frames per measurement (after 5 warm-up frames).
     #[arg(long, default_value_t = 100)]
     pub frames: u32,

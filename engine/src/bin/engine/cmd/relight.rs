@@ -30,6 +30,7 @@ pub fn run(args: &RelightArgs) -> Result<String> {
         frames: args.frames,
         device: device(&args.device, args.validate),
         progress: true,
+        ratio: (!args.raw).then_some(args.ratio),
     };
     let report = relight(&scene, &options)?;
     if let Some(json) = &args.json {
@@ -52,17 +53,27 @@ pub fn run(args: &RelightArgs) -> Result<String> {
         report.directional_fps,
         report.point_fps
     );
+    if let (Some(ratio), Some(bytes)) = (report.ratio, report.container_bytes) {
+        let _ = writeln!(
+            text,
+            "maps stored through the codec at {ratio}:1 ({bytes} bytes for k = 25; raw maps' \
+             scores in brackets)"
+        );
+    }
+    let raw = |v: Option<f64>| v.map_or_else(String::new, |db| format!(" [{db:.2}]"));
     for r in &report.rows {
         let _ = writeln!(
             text,
-            "  k {:>2}: {:6.2} dB held-out, {:6.2} ms GPU ({:6.2} ms wall), point {:6.2} ms \
-             ({:6.2} dB), {:.1} MB",
+            "  k {:>2}: {:6.2} dB{} held-out, {:6.2} ms GPU ({:6.2} ms wall), point {:6.2} ms \
+             ({:6.2} dB{}), {:.1} MB",
             r.k,
             r.psnr_db,
+            raw(r.raw_psnr_db),
             r.ms,
             r.wall_ms,
             r.point_ms,
             r.point_psnr_db,
+            raw(r.raw_point_psnr_db),
             r.bytes as f64 / 1e6
         );
     }
