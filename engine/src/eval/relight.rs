@@ -166,7 +166,7 @@ impl RelightReport {
             "relight time (GPU ms, median)",
             "PSNR against the tracer at held-out lights (dB)",
         );
-        spec.legend = LegendPosition::LowerRight;
+        spec.legend = LegendPosition::UpperRight;
         let labels: Vec<String> = self.rows.iter().map(|r| format!("k = {}", r.k)).collect();
         spec.series.push(Series {
             name: "directional light".into(),
