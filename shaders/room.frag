@@ -14,9 +14,12 @@ layout(push_constant) uniform Push {
 } pc;
 
 layout(set = 0, binding = 0) uniform sampler2D albedo_texture;
+// w of `center` says which light: > 0 the area light as a point emitter
+// (w = its area), 0 an isotropic point light of intensity `radiance`, < 0 a
+// sun of irradiance `radiance` towards `normal` (`--light-path`).
 layout(set = 0, binding = 1, std140) uniform Light {
-    vec4 center;   // xyz; w = area
-    vec4 normal;   // xyz unit, into the room; w = ambient radiance scale
+    vec4 center;   // xyz; w = area, 0 (point light) or < 0 (sun)
+    vec4 normal;   // xyz unit, into the room (sun: towards it); w = ambient radiance scale
     vec4 radiance; // rgb
 } light;
 
@@ -30,12 +33,19 @@ void main() {
         albedo *= texture(albedo_texture, in_uv).rgb;
     }
     vec3 n = normalize(in_normal);
-    vec3 to_light = light.center.xyz - in_position;
-    float d2 = max(dot(to_light, to_light), 1e-6);
-    vec3 l = to_light * inversesqrt(d2);
-    float cos_surface = max(dot(n, l), 0.0);
-    float cos_light = max(dot(light.normal.xyz, -l), 0.0);
-    vec3 irradiance = light.radiance.rgb * light.center.w * cos_surface * cos_light / d2;
+    vec3 irradiance;
+    if (light.center.w < 0.0) {
+        irradiance = light.radiance.rgb * max(dot(n, light.normal.xyz), 0.0);
+    } else {
+        vec3 to_light = light.center.xyz - in_position;
+        float d2 = max(dot(to_light, to_light), 1e-6);
+        vec3 l = to_light * inversesqrt(d2);
+        float cos_surface = max(dot(n, l), 0.0);
+        bool point = light.center.w == 0.0;
+        float cos_light = point ? 1.0 : max(dot(light.normal.xyz, -l), 0.0);
+        float area = point ? 1.0 : light.center.w;
+        irradiance = light.radiance.rgb * area * cos_surface * cos_light / d2;
+    }
     vec3 ambient = light.radiance.rgb * light.normal.w;
     out_color = vec4(pc.emission.rgb + albedo / PI * (irradiance + PI * ambient), 1.0);
 }

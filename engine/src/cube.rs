@@ -38,6 +38,12 @@ pub fn face_view_proj(face: u32, origin: Vec3, near: f32, far: f32) -> Mat4 {
     rows * Mat4::from_translation(-origin)
 }
 
+/// The (sc, tc, ma) axes of face `face` (0..6): the direction through face
+/// point (s, t) is `(2s − 1)·sc + (2t − 1)·tc + ma`.
+pub fn face_axes(face: u32) -> [Vec3; 3] {
+    FACE_AXES[(face % FACE_COUNT) as usize]
+}
+
 /// The face a direction selects and its (s, t) in [0, 1]², per the spec.
 pub fn face_coords(d: Vec3) -> (u32, f32, f32) {
     let a = d.abs();
@@ -62,6 +68,22 @@ pub fn face_coords(d: Vec3) -> (u32, f32, f32) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn face_axes_give_the_direction_face_coords_reads_back() {
+        for face in 0..FACE_COUNT {
+            for (s, t) in [(0.5, 0.5), (0.1, 0.8), (0.93, 0.02)] {
+                let [sc, tc, ma] = face_axes(face);
+                let d = (2.0 * s - 1.0) * sc + (2.0 * t - 1.0) * tc + ma;
+                let (f, s2, t2) = face_coords(d);
+                assert_eq!(f, face);
+                assert!(
+                    (s2 - s).abs() < 1e-6 && (t2 - t).abs() < 1e-6,
+                    "{face} {s} {t}"
+                );
+            }
+        }
+    }
     use glam::Vec4;
 
     #[test]

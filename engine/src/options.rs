@@ -217,6 +217,19 @@ pub struct PlayOptions {
     pub video: bool,
     /// Samples per pixel of `Mode::Trace` frames.
     pub trace_spp: u32,
+    /// A light that moves along the path (static-EM frames, the reflector
+    /// showing the room relit for it).
+    pub light_path: Option<LightPathOptions>,
+}
+
+/// `--light-path`: which path, and the relightable panorama it plays
+/// (`relight::GridSettings`: size, light grid, samples per texel).
+#[derive(Clone, Copy, Debug)]
+pub struct LightPathOptions {
+    pub path: crate::relight::light_path::LightPath,
+    pub size: (u32, u32),
+    pub grid: (u32, u32),
+    pub spp: u32,
 }
 
 impl PlayOptions {
@@ -230,6 +243,7 @@ impl PlayOptions {
             exr: false,
             video: true,
             trace_spp: 16,
+            light_path: None,
         }
     }
 }

@@ -4,10 +4,13 @@
 use crate::backend::create_device;
 use crate::capture;
 use crate::compile::CompileContext;
-use crate::options::{Mode, PemOptions, PlayOptions, RoomShading, RunPlace};
+use crate::options::{LightPathOptions, Mode, PemOptions, PlayOptions, RoomShading, RunPlace};
 use crate::pem::path::{default_frames, path_view};
 use crate::pem::player::{PemKind, PemSettings};
 use crate::perf::{PerfLog, PerfReport};
+use crate::relight::codec::{DEFAULT_RATIO, compressed};
+use crate::relight::light_path::LightPath;
+use crate::relight::{GridSettings, key, relightable};
 use crate::renderer::{FrameMode, FrameStats, Renderer};
 use crate::util::files::claim_dir;
 use anyhow::{Context, Result, bail};
@@ -16,6 +19,9 @@ use inference::trace::{TraceSettings, Tracer};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::Instant;
+
+/// SH coefficients a moving light is relit with (the paper's k = 16).
+const LIGHT_PATH_K: usize = 16;
 
 /// What playing, benchmarking and evaluating share: the scene, the output
 /// folder (claimed), the device and a renderer at the run's size.
@@ -161,8 +167,12 @@ pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<Played> {
         ..
     } = Session::open(place)?;
     let ctx = compile_context(place, &scene, &out);
-    let mode = opts.mode.unwrap_or_else(|| Mode::default_for(&scene));
+    let mode = play_mode(opts, &scene)?;
     let mut source = setup_mode(&ctx, &mut renderer, mode, &opts.pem, opts.trace_spp)?;
+    let light = match opts.light_path {
+        Some(lp) => Some(setup_light_path(&scene, &out, lp, &mut renderer)?),
+        None => None,
+    };
     let renderer = &mut renderer;
     let scene = &scene;
     let (width, height) = place.size;
@@ -171,7 +181,12 @@ pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<Played> {
         let (azimuth, elevation) = path_view(&scene.orbit, i, frames);
         scene.orbit.eye(azimuth, elevation)
     };
+    let move_light = |renderer: &mut Renderer, i: u32| match light {
+        Some((path, origin)) => renderer.move_light(path.shown(origin, i as f32 / frames as f32)),
+        None => Ok(()),
+    };
     if !matches!(source, FrameSource::Trace(..)) {
+        move_light(renderer, 0)?;
         for _ in 0..opts.warmup {
             source.frame(renderer, scene, eye_of(0))?;
         }
@@ -185,6 +200,7 @@ pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<Played> {
     let mut log = PerfLog::default();
     for i in 0..frames {
         let start = Instant::now();
+        move_light(renderer, i)?;
         let (stats, pixels) = source.frame(renderer, scene, eye_of(i))?;
         log.record(
             start.elapsed().as_secs_f64() * 1e3,
@@ -215,6 +231,41 @@ pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<Played> {
         None
     };
     Ok(Played { report, video })
+}
+
+/// The mode `opts` asks for: as given, else static EM under a moving light,
+/// else the scene's default; a moving light in another mode is an error.
+fn play_mode(opts: &PlayOptions, scene: &Scene) -> Result<Mode> {
+    let mode = match (opts.mode, opts.light_path) {
+        (Some(mode), _) => mode,
+        (None, Some(_)) => Mode::StaticEm,
+        (None, None) => Mode::default_for(scene),
+    };
+    if opts.light_path.is_some() && mode != Mode::StaticEm {
+        bail!(
+            "--light-path with --mode {}: a moving light plays static-EM frames (the other \
+             modes' maps hold the scene's own lights); use --mode static-em or leave --mode out",
+            mode.name()
+        );
+    }
+    Ok(mode)
+}
+
+/// `--light-path`: the relightable panorama (traced and projected once,
+/// cached under `out/relight/`, stored through the codec) on the renderer,
+/// k = 16; the path and where it turns around.
+fn setup_light_path(
+    scene: &Scene,
+    out: &Path,
+    lp: LightPathOptions,
+    renderer: &mut Renderer,
+) -> Result<(LightPath, glam::Vec3)> {
+    let what = "--light-path-size, --light-path-grid, --light-path-spp";
+    let grid = GridSettings::new(lp.size, lp.grid, lp.spp, 1, 0, what)?;
+    let r = relightable(scene, &grid, out, true)?;
+    let stored = compressed(&r.maps, &r.path, &key(scene, &grid), DEFAULT_RATIO)?;
+    renderer.set_light_path(&stored.maps, &r.positions, LIGHT_PATH_K)?;
+    Ok((lp.path, inference::relight::panorama_origin(scene)))
 }
 
 /// `<out>/frame_NNNN`: the stem of frame `i`'s files.

@@ -112,11 +112,24 @@ pub struct RoomPush {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct RoomLight {
-    /// xyz centre; w = area.
+    /// xyz centre; w = area (> 0: the area light as a point emitter), 0 (an
+    /// isotropic point light of intensity `radiance`) or < 0 (a sun).
     pub center: Vec4,
-    /// xyz unit normal into the room; w = ambient radiance scale.
+    /// xyz unit normal into the room (a sun: towards it); w = ambient
+    /// radiance scale.
     pub normal: Vec4,
+    /// rgb radiance, intensity (point light) or irradiance (sun).
     pub radiance: Vec4,
+}
+
+/// `shaders/panorama_cube.frag` push constants: one cube face's axes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct PanoramaCubePush {
+    /// xyz the face's sc axis; w = the face's size in texels.
+    pub sc: Vec4,
+    pub tc: Vec4,
+    pub ma: Vec4,
 }
 
 /// `shaders/mirror.vert` / `mirror.frag` push constants.
@@ -251,6 +264,7 @@ pub mod spirv {
     pub const PEM_COMPOSITE_FRAG: &[u8] = shader!("pem_composite.frag");
     pub const RELIGHT_DIRECTIONAL_FRAG: &[u8] = shader!("relight_directional.frag");
     pub const RELIGHT_POINT_FRAG: &[u8] = shader!("relight_point.frag");
+    pub const PANORAMA_CUBE_FRAG: &[u8] = shader!("panorama_cube.frag");
     pub const GLASS_VERT: &[u8] = shader!("glass.vert");
     pub const GLASS_FRAG: &[u8] = shader!("glass.frag");
     pub const REM_WARP_FRAG: &[u8] = shader!("rem_warp.frag");

@@ -3,6 +3,7 @@
 pub mod em_capture;
 pub mod glass;
 pub mod mirror;
+pub mod panorama_cube;
 pub mod pem;
 pub mod pem_deferred;
 pub mod probe;

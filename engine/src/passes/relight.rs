@@ -10,7 +10,7 @@ use ash::vk;
 pub struct RelightPass<'a> {
     pub device: &'a Device,
     pub pipeline: &'a Pipeline,
-    /// Binds the SH maps' storage buffer (binding 0, written once by the
+    /// Binds the SH maps' texel buffer (binding 0, written once by the
     /// host before any frame) and `positions` (binding 1).
     pub set: vk::DescriptorSet,
     pub positions: &'a Image,
@@ -29,47 +29,63 @@ impl Pass for RelightPass<'_> {
         ]
     }
     fn record(&self, cmd: vk::CommandBuffer) -> GpuResult<()> {
-        let (width, height) = self.target.desc.mip_extent(0);
-        let area = vk::Rect2D {
-            offset: vk::Offset2D::default(),
-            extent: vk::Extent2D { width, height },
-        };
-        let color = [vk::RenderingAttachmentInfo::default()
-            .image_view(self.target.target_view(0, 0)?)
-            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::DONT_CARE)
-            .store_op(vk::AttachmentStoreOp::STORE)];
-        let info = vk::RenderingInfo::default()
-            .render_area(area)
-            .layer_count(1)
-            .color_attachments(&color);
-        let viewport = vk::Viewport {
-            x: 0.0,
-            y: 0.0,
-            width: width as f32,
-            height: height as f32,
-            min_depth: 0.0,
-            max_depth: 1.0,
-        };
-        let d = &self.device.device;
-        // SAFETY: the executor put the target in COLOR_ATTACHMENT_OPTIMAL and
-        // the sampled images in SHADER_READ_ONLY_OPTIMAL (declared accesses);
-        // the pipeline's formats match (colour only, no depth).
-        unsafe {
-            d.cmd_begin_rendering(cmd, &info);
-            d.cmd_set_viewport(cmd, 0, &[viewport]);
-            d.cmd_set_scissor(cmd, 0, &[area]);
-            d.cmd_set_front_face(cmd, vk::FrontFace::COUNTER_CLOCKWISE);
-        }
-        let bound = self.pipeline.bind(cmd, Some(self.set), &self.push);
-        // SAFETY: inside the rendering begun above; the bound pipeline has no
-        // vertex input (the triangle comes from gl_VertexIndex).
-        unsafe {
-            if bound.is_ok() {
-                d.cmd_draw(cmd, 3, 1, 0, 0);
-            }
-            d.cmd_end_rendering(cmd);
-        }
-        bound
+        let view = self.target.target_view(0, 0)?;
+        let extent = self.target.desc.mip_extent(0);
+        let draw = (self.pipeline, self.set);
+        draw_fullscreen(self.device, cmd, view, extent, draw, &self.push)
     }
+}
+
+/// One full-screen triangle into `view` (`width × height`, colour only)
+/// with `pipeline` (no vertex input), its set and push constants.
+pub fn draw_fullscreen<P: bytemuck::Pod>(
+    device: &Device,
+    cmd: vk::CommandBuffer,
+    view: vk::ImageView,
+    (width, height): (u32, u32),
+    (pipeline, set): (&Pipeline, vk::DescriptorSet),
+    push: &P,
+) -> GpuResult<()> {
+    let area = vk::Rect2D {
+        offset: vk::Offset2D::default(),
+        extent: vk::Extent2D { width, height },
+    };
+    let color = [vk::RenderingAttachmentInfo::default()
+        .image_view(view)
+        .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+        .load_op(vk::AttachmentLoadOp::DONT_CARE)
+        .store_op(vk::AttachmentStoreOp::STORE)];
+    let info = vk::RenderingInfo::default()
+        .render_area(area)
+        .layer_count(1)
+        .color_attachments(&color);
+    let viewport = vk::Viewport {
+        x: 0.0,
+        y: 0.0,
+        width: width as f32,
+        height: height as f32,
+        min_depth: 0.0,
+        max_depth: 1.0,
+    };
+    let d = &device.device;
+    // SAFETY: the caller's pass declared `view`'s image as a colour target,
+    // so the executor put it in COLOR_ATTACHMENT_OPTIMAL, and its sampled
+    // images in SHADER_READ_ONLY_OPTIMAL; the pipeline's formats match
+    // (colour only, no depth).
+    unsafe {
+        d.cmd_begin_rendering(cmd, &info);
+        d.cmd_set_viewport(cmd, 0, &[viewport]);
+        d.cmd_set_scissor(cmd, 0, &[area]);
+        d.cmd_set_front_face(cmd, vk::FrontFace::COUNTER_CLOCKWISE);
+    }
+    let bound = pipeline.bind(cmd, Some(set), push);
+    // SAFETY: inside the rendering begun above; the bound pipeline has no
+    // vertex input (the triangle comes from gl_VertexIndex).
+    unsafe {
+        if bound.is_ok() {
+            d.cmd_draw(cmd, 3, 1, 0, 0);
+        }
+        d.cmd_end_rendering(cmd);
+    }
+    bound
 }

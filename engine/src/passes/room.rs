@@ -29,8 +29,9 @@ pub struct RoomRenderer {
     device: Device,
     pipeline: Pipeline,
     draws: Vec<Draw>,
-    /// The `Light` uniform block, constant for the scene.
-    _light: Buffer,
+    /// The `Light` uniform block: the scene's, or a moving light's
+    /// ([`RoomRenderer::set_light`]).
+    light: Buffer,
     /// Inferred room: the light maps, and per drawn object without one a
     /// zero coordinate stream (so the second vertex binding is always bound).
     _maps: Vec<(usize, crate::backend::Image)>,
@@ -109,7 +110,7 @@ impl RoomRenderer {
             device: device.clone(),
             pipeline,
             draws,
-            _light: light,
+            light,
             _maps: Vec::new(),
             light_uvs: Vec::new(),
         })
@@ -179,7 +180,7 @@ impl RoomRenderer {
             device: device.clone(),
             pipeline,
             draws,
-            _light: light,
+            light,
             _maps: images,
             light_uvs,
         })
@@ -187,6 +188,19 @@ impl RoomRenderer {
 
     pub fn device(&self) -> &Device {
         &self.device
+    }
+
+    /// Lights the room with `light` from the next frame on (`--light-path`)
+    /// and darkens the scene's emitters (the moving light replaces them).
+    pub fn set_light(&mut self, light: RoomLight) -> GpuResult<()> {
+        let bytes = bytemuck::bytes_of(&light);
+        // The engine waits for every frame's fence, so no frame reads the
+        // block while it is written.
+        self.light.mapped_mut()?[..bytes.len()].copy_from_slice(bytes);
+        for draw in &mut self.draws {
+            draw.push.emission = Vec4::ZERO;
+        }
+        Ok(())
     }
 
     /// Records every draw with `view_proj` inside the current rendering.

@@ -76,8 +76,11 @@ impl RelightGpu {
         let target = Image::new(
             device,
             "relit panorama",
-            ImageDesc::new_2d(TARGET_FORMAT, p.width, p.height)
-                .usage(vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC),
+            ImageDesc::new_2d(TARGET_FORMAT, p.width, p.height).usage(
+                vk::ImageUsageFlags::COLOR_ATTACHMENT
+                    | vk::ImageUsageFlags::TRANSFER_SRC
+                    | vk::ImageUsageFlags::SAMPLED,
+            ),
         )?;
         let sampler = Sampler::new(
             device,

@@ -7,6 +7,7 @@
 pub mod cache;
 pub mod codec;
 pub mod gpu;
+pub mod light_path;
 
 pub use cache::{GridSettings, Relightable, key, relightable};
 pub use gpu::{GpuLight, RelightGpu};

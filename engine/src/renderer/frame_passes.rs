@@ -30,6 +30,8 @@ pub(super) struct FrameParts<'a> {
     pub(super) pem: Option<&'a PemPlayer>,
     /// Set in REM frames only.
     pub(super) rem: Option<&'a crate::rem::RemPlayer>,
+    /// Set in static-EM frames under `--light-path` only.
+    pub(super) light_path: Option<&'a super::light_path::LightPathGpu>,
     pub(super) eye: glam::Vec3,
     pub(super) gbuffer: &'a GBuffer,
     pub(super) glass: Option<&'a GlassPlayer>,
@@ -89,6 +91,9 @@ fn lit_passes<'a>(
     };
     if let Some(upload) = upload {
         passes.push(Box::new(upload));
+    }
+    if let Some(lp) = parts.light_path {
+        passes.extend(lp.passes(parts.device, parts.reflectors));
     }
     let rem = parts.rem.map(|rem| (rem, rem.views.draws(parts.eye)));
     if let Some((rem, (dest, draws))) = &rem {

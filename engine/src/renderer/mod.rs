@@ -2,6 +2,7 @@
 //! explicit list of passes — only the passes the scene requires.
 
 mod frame_passes;
+mod light_path;
 mod readback;
 mod reflectors;
 
@@ -92,6 +93,8 @@ pub struct Renderer {
     texgen_scratch: Vec<inference::texgen::TexgenVertex>,
     pem: Option<PemPlayer>,
     rem: Option<crate::rem::RemPlayer>,
+    /// `--light-path`: the relit panorama behind the static EMs.
+    light_path: Option<light_path::LightPathGpu>,
     /// Per-pixel lookups of deferred PEM compositing (frame-sized).
     gbuffer: GBuffer,
     /// The scene's glass object (drawn in static-EM and hybrid frames).
@@ -139,6 +142,7 @@ impl Renderer {
             texgen_scratch: Vec::new(),
             pem: None,
             rem: None,
+            light_path: None,
             gbuffer: GBuffer::new(device, width, height)?,
             glass,
             last_view_proj: Mat4::IDENTITY,
@@ -283,6 +287,10 @@ impl Renderer {
             reflectors: &self.reflectors,
             pem: self.pem.as_ref(),
             rem: self.rem.as_ref().filter(|_| mode == FrameMode::Rem),
+            light_path: self
+                .light_path
+                .as_ref()
+                .filter(|_| mode == FrameMode::StaticEm),
             eye,
             gbuffer: &self.gbuffer,
             glass: self.glass.as_ref(),

@@ -16,4 +16,4 @@ mod tests;
 
 pub use grid::{HELD_OUT_DEG, LightGrid};
 pub use maps::ShMaps;
-pub use trace::{MovingLight, Panorama, PanoramaSettings, RelightScene};
+pub use trace::{MovingLight, Panorama, PanoramaSettings, RelightScene, panorama_origin};

@@ -67,6 +67,14 @@ pub struct RelightScene {
     pub origin: Vec3,
 }
 
+/// Where `scene`'s panoramas are seen from: the area-weighted centroid of
+/// the first object with environment maps (the static EM's origin), else
+/// the orbit centre.
+pub fn panorama_origin(scene: &Scene) -> Vec3 {
+    let reflector = scene.objects.iter().find(|o| o.em.is_some());
+    reflector.map_or(scene.orbit.center, |r| r.mesh.area_weighted_centroid())
+}
+
 impl RelightScene {
     /// From `scene`: the first object with environment maps is the reflector and
     /// its area-weighted centroid (the static EM's origin) the panorama's origin;
@@ -84,9 +92,7 @@ impl RelightScene {
         dark.directional_lights.clear();
         dark.point_lights.clear();
         let reflector = scene.objects.iter().position(|o| o.em.is_some());
-        let origin = reflector.map_or(scene.orbit.center, |r| {
-            scene.objects[r].mesh.area_weighted_centroid()
-        });
+        let origin = panorama_origin(scene);
         RelightScene {
             bvh: SceneBvh::build(&dark),
             scene: dark,

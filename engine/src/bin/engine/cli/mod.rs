@@ -3,7 +3,9 @@
 
 use clap::{Args, Parser, Subcommand};
 use engine::backend::{DeviceOptions, Filtering};
-use engine::options::{Maps, Mode, PemOptions, PlayOptions, RoomShading, RunPlace};
+use engine::options::{
+    LightPathOptions, Maps, Mode, PemOptions, PlayOptions, RoomShading, RunPlace,
+};
 use engine::pem::settings::Compositing;
 use std::path::PathBuf;
 
@@ -256,6 +258,21 @@ pub struct PlayArgs {
     /// Samples per pixel of `--mode trace` frames.
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub trace_spp: u32,
+    /// Move a light along the path while playing (static-EM frames: the
+    /// reflector shows the room relit for the light by spherical harmonics,
+    /// the room is lit by it; the scene's lights are dark).
+    #[arg(long, value_enum)]
+    pub light_path: Option<engine::relight::light_path::LightPath>,
+    /// With --light-path: the relightable panorama's size as WIDTHxHEIGHT
+    /// (1024x512 reaches 63° above and below the horizon).
+    #[arg(long, default_value = "1024x512", value_parser = parse_size)]
+    pub light_path_size: (u32, u32),
+    /// With --light-path: the light grid, rings x azimuths.
+    #[arg(long, default_value = "8x16", value_parser = parse_size)]
+    pub light_path_grid: (u32, u32),
+    /// With --light-path: samples per panorama texel.
+    #[arg(long, default_value_t = 2)]
+    pub light_path_spp: u32,
     /// Ignore the compiled scene shipped in assets/compiled/ and run the
     /// full pipeline (trace, infer, room light maps, encode) under --out.
     #[arg(long)]
@@ -361,6 +378,12 @@ impl PlayArgs {
             exr: self.exr,
             video: !self.no_video,
             trace_spp: self.trace_spp,
+            light_path: self.light_path.map(|path| LightPathOptions {
+                path,
+                size: self.light_path_size,
+                grid: self.light_path_grid,
+                spp: self.light_path_spp,
+            }),
         }
     }
 }
