@@ -264,7 +264,7 @@ fn setup_light_path(
     let grid = GridSettings::new(lp.size, lp.grid, lp.spp, 1, 0, what)?;
     let r = relightable(scene, &grid, out, true)?;
     let stored = compressed(&r.maps, &r.path, &key(scene, &grid), DEFAULT_RATIO)?;
-    renderer.set_light_path(&stored.maps, &r.positions, LIGHT_PATH_K)?;
+    renderer.set_light_path(scene, &stored.maps, &r.positions, LIGHT_PATH_K)?;
     Ok((lp.path, inference::relight::panorama_origin(scene)))
 }
 

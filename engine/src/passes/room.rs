@@ -290,13 +290,19 @@ pub fn room_pipeline(
 /// The light shared by every room draw: the first area light as a point
 /// emitter at its centre, and an ambient term standing in for the indirect
 /// light (radiance ≈ ρ/(1 − ρ) · light area / room area · L for ρ = ½).
+/// Surface area of the scene's bounding box: the area the analytic room's
+/// ambient term spreads a light's flux over.
+pub fn room_area(scene: &Scene) -> f32 {
+    let (lo, hi) = scene.bounds();
+    let size = hi - lo;
+    2.0 * (size.x * size.y + size.y * size.z + size.z * size.x)
+}
+
 fn room_lighting(scene: &Scene) -> RoomLight {
     let Some(light) = scene.lights.first() else {
         return RoomLight::default();
     };
-    let (lo, hi) = scene.bounds();
-    let size = hi - lo;
-    let room_area = 2.0 * (size.x * size.y + size.y * size.z + size.z * size.x);
+    let room_area = room_area(scene);
     let ambient = if room_area > 0.0 {
         light.area() / room_area
     } else {

@@ -10,15 +10,19 @@ use crate::backend::{Device, GpuResult};
 use crate::graph::Pass;
 use crate::passes::em_capture::MipPass;
 use crate::passes::panorama_cube::PanoramaCube;
+use crate::passes::room::room_area;
 use crate::relight::light_path::room_light;
 use crate::relight::{GpuLight, RelightGpu};
 use glam::Vec3;
 use inference::relight::ShMaps;
+use inference::scene::Scene;
 
 pub(super) struct LightPathGpu {
     relight: RelightGpu,
     cube: PanoramaCube,
     light: GpuLight,
+    /// The room's surface area (its ambient term).
+    room_area: f32,
 }
 
 impl LightPathGpu {
@@ -50,18 +54,26 @@ impl Renderer {
     /// (with each texel's first-hit `positions`) relit every frame into the
     /// reflectors' cube maps; the room lit by the light alone (call
     /// [`Renderer::move_light`] before each frame).
-    pub fn set_light_path(&mut self, maps: &ShMaps, positions: &[Vec3], k: usize) -> GpuResult<()> {
+    pub fn set_light_path(
+        &mut self,
+        scene: &Scene,
+        maps: &ShMaps,
+        positions: &[Vec3],
+        k: usize,
+    ) -> GpuResult<()> {
         let relight = RelightGpu::new(&self.device, &mut self.executor, maps, k, positions)?;
         let cube = PanoramaCube::new(&self.device, &relight.target, COLOR_FORMAT)?;
         let light = GpuLight::Directional {
             to_light: Vec3::Y,
             irradiance: Vec3::ZERO,
         };
-        self.room.set_light(room_light(light))?;
+        let room_area = room_area(scene);
+        self.room.set_light(room_light(light, room_area))?;
         self.light_path = Some(LightPathGpu {
             relight,
             cube,
             light,
+            room_area,
         });
         Ok(())
     }
@@ -71,7 +83,7 @@ impl Renderer {
     pub fn move_light(&mut self, light: GpuLight) -> GpuResult<()> {
         if let Some(lp) = self.light_path.as_mut() {
             lp.light = light;
-            self.room.set_light(room_light(light))?;
+            self.room.set_light(room_light(light, lp.room_area))?;
         }
         Ok(())
     }
