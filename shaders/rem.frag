@@ -23,8 +23,11 @@ void main() {
     if (dot(n, to_eye) < 0.0) {
         n = -n; // two-sided, as the tracer
     }
-    vec3 r = reflect(-to_eye, n);
-    vec3 local = vec3(dot(r, pc.axis_x.xyz), dot(r, pc.axis_y.xyz), dot(r, pc.axis_z.xyz));
-    vec4 sum = texture(blended, g_mirror_inv(local));
+    // axis_x.w = 1: the maps are indexed by the normal (a diffuse
+    // reflector), else by the mirror direction.
+    vec3 d = pc.axis_x.w > 0.5 ? n : reflect(-to_eye, n);
+    vec3 local = vec3(dot(d, pc.axis_x.xyz), dot(d, pc.axis_y.xyz), dot(d, pc.axis_z.xyz));
+    vec2 uv = pc.axis_x.w > 0.5 ? local.xy * 0.5 + 0.5 : g_mirror_inv(local);
+    vec4 sum = texture(blended, uv);
     out_color = vec4(sum.rgb / max(sum.a, 1e-6), 1.0);
 }

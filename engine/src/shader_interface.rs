@@ -216,7 +216,7 @@ pub struct RemWarpPush {
     /// xyz source layers.
     pub layer: Vec4,
     /// x = cosine (to a source's singularity) where its fade reaches zero,
-    /// y = where it starts.
+    /// y = where it starts; z = 1: warp by the normal (a diffuse reflector).
     pub fade: Vec4,
 }
 
@@ -227,7 +227,9 @@ pub struct RemPush {
     pub view_proj: Mat4,
     /// xyz world eye.
     pub eye: Vec4,
-    /// The blended map's frame `T_d` (world): x right, y up, z to the eye.
+    /// The blended map's frame `T_d` (world): x right, y up, z to the eye;
+    /// `axis_x.w` = 1: the map is indexed by the normal (a diffuse
+    /// reflector), else by the mirror direction.
     pub axis_x: Vec4,
     pub axis_y: Vec4,
     pub axis_z: Vec4,

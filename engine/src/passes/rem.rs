@@ -46,6 +46,8 @@ pub struct SourceTexels<'a> {
     pub texels: &'a [[f32; 4]],
     /// Index of the reflector in `scene.objects`.
     pub object: usize,
+    /// Warp by the normal (a diffuse reflector), not the mirror direction.
+    pub normal_warp: bool,
 }
 
 /// Everything a REM frame needs on the device.
@@ -61,6 +63,8 @@ pub struct RemRenderer {
     shade_set: vk::DescriptorSet,
     /// Index of the reflector in `scene.objects`.
     pub object: usize,
+    /// The maps are warped and read by the normal (`SourceTexels`).
+    pub normal_warp: bool,
 }
 
 impl RemRenderer {
@@ -126,6 +130,7 @@ impl RemRenderer {
             warp_set,
             shade_set,
             object: maps.object,
+            normal_warp: maps.normal_warp,
         })
     }
 
@@ -161,7 +166,7 @@ impl RemRenderer {
             push: RemPush {
                 view_proj,
                 eye: eye.extend(1.0),
-                axis_x: dest.col(0).extend(0.0),
+                axis_x: dest.col(0).extend(f32::from(u8::from(self.normal_warp))),
                 axis_y: dest.col(1).extend(0.0),
                 axis_z: dest.col(2).extend(0.0),
             },
@@ -243,8 +248,11 @@ impl Pass for RemWarpPass<'_> {
     fn record(&self, cmd: vk::CommandBuffer) -> GpuResult<()> {
         let r = self.r;
         self.target().render(&r.device, cmd, || {
-            r.warp
-                .bind(cmd, Some(r.warp_set), &warp_push(self.dest, &self.draws))?;
+            r.warp.bind(
+                cmd,
+                Some(r.warp_set),
+                &warp_push(self.dest, &self.draws, r.normal_warp),
+            )?;
             // SAFETY: the warp pipeline is bound inside dynamic rendering;
             // its vertex shader makes the full-screen triangle from the
             // vertex index, no buffers bound.
@@ -256,10 +264,16 @@ impl Pass for RemWarpPass<'_> {
 
 /// The warp's push constants: each source's rotation from the destination
 /// frame `dest` as a quaternion of `T_s⁻¹ T_d`, its weight and layer (at
-/// most three sources; absent ones weigh 0).
-pub fn warp_push(dest: Mat3, draws: &[WarpDraw]) -> RemWarpPush {
+/// most three sources; absent ones weigh 0), and which warp (`fade.z` = 1:
+/// by the normal).
+pub fn warp_push(dest: Mat3, draws: &[WarpDraw], normal_warp: bool) -> RemWarpPush {
     let mut push = RemWarpPush {
-        fade: Vec4::new(FADE_COS.1, FADE_COS.0, 0.0, 0.0),
+        fade: Vec4::new(
+            FADE_COS.1,
+            FADE_COS.0,
+            f32::from(u8::from(normal_warp)),
+            0.0,
+        ),
         ..Default::default()
     };
     for (i, draw) in draws.iter().take(3).enumerate() {
@@ -329,7 +343,7 @@ mod tests {
                 layer: i as u32 + 4,
             })
             .collect();
-        let push = warp_push(dest, &draws);
+        let push = warp_push(dest, &draws, false);
         let v = Vec3::new(0.48, -0.6, 0.64);
         for (i, d) in draws.iter().enumerate() {
             let q = Quat::from_vec4(push.rotation[i]);
@@ -338,7 +352,8 @@ mod tests {
             assert_eq!(push.weight[i], d.weight);
             assert_eq!(push.layer[i], d.layer as f32);
         }
-        let one = warp_push(dest, &draws[..1]);
+        let one = warp_push(dest, &draws[..1], true);
+        assert_eq!(one.fade.z, 1.0, "normal warp flag");
         assert_eq!(
             (one.weight[1], one.weight[2]),
             (0.0, 0.0),

@@ -213,9 +213,31 @@ pub fn warp_to_source(p_d: Vec2, dest: Mat3, source: Mat3) -> Option<Vec2> {
     Some(g_mirror_inv(source.transpose() * (dest * r_d)))
 }
 
+/// The warp for lobes centred on the normal (a diffuse reflector): from a
+/// destination point to the source point with the same world normal (None
+/// outside the disk or where the source view sees the normal edge-on or
+/// from behind).
+pub fn warp_normal_to_source(p_d: Vec2, dest: Mat3, source: Mat3) -> Option<Vec2> {
+    let n_s = source.transpose() * (dest * g_normal(p_d)?);
+    (n_s.z > 0.0).then(|| g_normal_inv(n_s))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_normal_warp_keeps_the_world_normal() {
+        let (a, b) = (Vec3::new(0.3, 0.2, 1.0), Vec3::new(-0.2, 0.4, 0.9));
+        let (fa, fb) = (view_frame(a), view_frame(b));
+        let p_d = Vec2::new(0.55, 0.42);
+        let p_s = warp_normal_to_source(p_d, fa, fb).expect("seen from both");
+        let (n_d, n_s) = (g_normal(p_d).expect("in"), g_normal(p_s).expect("in"));
+        assert!((fa * n_d - fb * n_s).length() < 1e-5);
+        // A normal the source sees from behind has no source point.
+        let behind = view_frame(-a);
+        assert!(warp_normal_to_source(Vec2::splat(0.5), fa, behind).is_none());
+    }
 
     /// Directions spread over the sphere (a Fibonacci lattice, jittered off
     /// any special symmetry).

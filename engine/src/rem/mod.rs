@@ -67,7 +67,9 @@ impl RemPlayer {
         blend: bool,
         formats: (ash::vk::Format, ash::vk::Format),
     ) -> crate::backend::GpuResult<Self> {
-        let gpu = crate::passes::rem::RemRenderer::new(device, executor, &maps.upload(), formats)?;
+        let warp = sources::RemWarp::of(scene, maps.object).unwrap_or(sources::RemWarp::Mirror);
+        let texels = maps.upload(warp);
+        let gpu = crate::passes::rem::RemRenderer::new(device, executor, &texels, formats)?;
         let mesh = &scene.objects[maps.object].mesh;
         let origin = mesh.area_weighted_centroid();
         Ok(Self {

@@ -4,7 +4,10 @@
 //! BRDF pre-integrated with the room's radiance from the reflector's EM
 //! origin (its area-weighted centroid, as the static EM): for a mirror
 //! `F(n·v) · L(r)`, for a glossy material `F(n·v) · mean L(ω)` over
-//! directions drawn from its Phong lobe around `r`, the tracer's own lobe.
+//! directions drawn from its Phong lobe around `r`, the tracer's own lobe;
+//! for a diffuse reflector `albedo · mean L(ω)` over cosine-distributed
+//! directions around `n` (its irradiance over π: a lobe centred on the
+//! normal, warped by `g_normal` — [`RemWarp`]).
 //! Cached under `<out>/rem/` with the key of what made them.
 
 use super::geometry::{Geodesic, g_mirror, g_normal, view_frame};
@@ -12,7 +15,7 @@ use anyhow::{Context, Result, bail};
 use glam::{Vec2, Vec3};
 use inference::key::{Fnv, Freshness, Key, freshness, read_verified, write_record};
 use inference::scene::{Material, Scene};
-use inference::trace::rng::{Rng, phong_lobe};
+use inference::trace::rng::{Rng, cosine_hemisphere, phong_lobe};
 use inference::trace::{TraceSettings, Tracer, cache, phong_exponent};
 use rayon::prelude::*;
 use std::hash::Hasher;
@@ -47,6 +50,27 @@ impl Default for RemSettings {
     }
 }
 
+/// How a reflector's maps are warped between views (the paper's `g`):
+/// by the mirror direction for lobes centred on it (mirror, glossy), by
+/// the normal for a lobe centred on the normal (diffuse).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RemWarp {
+    Mirror,
+    Normal,
+}
+
+impl RemWarp {
+    /// The warp object `object`'s material needs (None: no REM maps).
+    pub fn of(scene: &Scene, object: usize) -> Option<RemWarp> {
+        let material = scene.objects.get(object)?.material;
+        match scene.materials.get(material)? {
+            Material::Mirror { .. } | Material::Glossy { .. } => Some(RemWarp::Mirror),
+            Material::Diffuse { .. } => Some(RemWarp::Normal),
+            _ => None,
+        }
+    }
+}
+
 /// One reflector's source maps, RGBA (A = 1 inside the disk, 0 outside).
 #[derive(Clone, Debug)]
 pub struct SourceMaps {
@@ -67,12 +91,13 @@ impl SourceMaps {
     }
 
     /// The texels as the device uploads them.
-    pub fn upload(&self) -> crate::passes::rem::SourceTexels<'_> {
+    pub fn upload(&self, warp: RemWarp) -> crate::passes::rem::SourceTexels<'_> {
         crate::passes::rem::SourceTexels {
             size: self.size,
             count: self.geodesic.vertices.len() as u32,
             texels: &self.texels,
             object: self.object,
+            normal_warp: warp == RemWarp::Normal,
         }
     }
 
@@ -82,22 +107,15 @@ impl SourceMaps {
     }
 }
 
-/// The reflector the maps are made for: the first mirror or glossy object
-/// with `[objects.em]` settings.
+/// The reflector the maps are made for: the first mirror, glossy or
+/// diffuse object with `[objects.em]` settings.
 pub fn reflector(scene: &Scene) -> Result<usize> {
-    scene
-        .objects
-        .iter()
-        .position(|o| {
-            o.em.is_some()
-                && matches!(
-                    scene.materials.get(o.material),
-                    Some(Material::Mirror { .. } | Material::Glossy { .. })
-                )
-        })
+    (0..scene.objects.len())
+        .find(|&i| scene.objects[i].em.is_some() && RemWarp::of(scene, i).is_some())
         .with_context(|| {
             format!(
-                "{}: reflection-space IBR needs a mirror or glossy object with [objects.em]",
+                "{}: reflection-space IBR needs a mirror, glossy or diffuse object with \
+                 [objects.em]",
                 scene.source.display()
             )
         })
@@ -197,18 +215,19 @@ pub fn trace_views(
     views: &[Vec3],
 ) -> Result<Vec<[f32; 4]>> {
     let obj = &scene.objects[object];
-    let (f0, exponent) = match scene.materials.get(obj.material) {
-        Some(Material::Mirror { f0 }) => (*f0, None),
-        Some(Material::Glossy { f0, roughness }) => (*f0, Some(phong_exponent(*roughness))),
-        _ => bail!("{}: not a mirror or glossy object", obj.name),
+    let lobe = match scene.materials.get(obj.material) {
+        Some(Material::Mirror { f0 }) => Lobe::Mirror(*f0),
+        Some(Material::Glossy { f0, roughness }) => Lobe::Phong(*f0, phong_exponent(*roughness)),
+        Some(Material::Diffuse { albedo, .. }) => Lobe::Lambert(*albedo),
+        _ => bail!("{}: not a mirror, glossy or diffuse object", obj.name),
     };
     let origin = obj.mesh.area_weighted_centroid();
     let tracer = Tracer::new(scene)?;
     let trace_settings = TraceSettings::default();
     let size = settings.size as usize;
-    let samples = match exponent {
-        None => settings.spp,
-        Some(_) => settings.lobe_samples.max(settings.spp),
+    let samples = match lobe {
+        Lobe::Mirror(_) => settings.spp,
+        _ => settings.lobe_samples.max(settings.spp),
     };
     Ok(tracer.with_integrator(&trace_settings, |integ, bvh| {
         let radiance = |dir: Vec3, rng: &mut Rng| {
@@ -236,11 +255,20 @@ pub fn trace_views(
                     continue;
                 };
                 let (n_w, r_w) = (frame * n, (frame * r).normalize());
-                let dir = match exponent {
-                    None => r_w,
-                    Some(e) => above(phong_lobe(r_w, e, rng.next_f32(), rng.next_f32()), n_w),
+                // (A mirror draws no lobe numbers: its stream stays as it was.)
+                let (dir, scale) = match lobe {
+                    Lobe::Mirror(f0) => (r_w, inference::schlick_fresnel(f0, n.z)),
+                    Lobe::Phong(f0, e) => {
+                        let (u1, u2) = (rng.next_f32(), rng.next_f32());
+                        let d = above(phong_lobe(r_w, e, u1, u2), n_w);
+                        (d, inference::schlick_fresnel(f0, n.z))
+                    }
+                    Lobe::Lambert(albedo) => {
+                        let (u1, u2) = (rng.next_f32(), rng.next_f32());
+                        (cosine_hemisphere(n_w, u1, u2), albedo)
+                    }
                 };
-                sum += inference::schlick_fresnel(f0, n.z) * radiance(dir, &mut rng);
+                sum += scale * radiance(dir, &mut rng);
                 weight += 1.0;
             }
             let c = sum / weight.max(1.0);
@@ -251,6 +279,16 @@ pub fn trace_views(
             .map(texel)
             .collect()
     }))
+}
+
+/// What a source texel integrates: Fresnel times the radiance along the
+/// mirror direction or over a Phong lobe around it (f0, exponent), or the
+/// albedo times the cosine-weighted mean radiance around the normal.
+#[derive(Clone, Copy)]
+enum Lobe {
+    Mirror(Vec3),
+    Phong(Vec3, f32),
+    Lambert(Vec3),
 }
 
 /// `d` mirrored into the hemisphere around `n` when it points below it.
