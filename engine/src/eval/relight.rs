@@ -16,14 +16,15 @@ use super::metrics::masked_psnr;
 use crate::backend::{DeviceOptions, create_device};
 use crate::graph::Executor;
 use crate::relight::codec::compressed;
+use crate::relight::light_path::{BULB_INTENSITY, LightPath, SUN_IRRADIANCE};
 use crate::relight::{GpuLight, GridSettings, RelightGpu, key, relightable};
 use crate::util::stats::median;
 
 /// Irradiance of the held-out lights in the written images (W·m⁻²; the
-/// scores do not depend on it).
-const SHOWN_IRRADIANCE: f32 = 3.0;
-/// Intensity of the moving point light (W·sr⁻¹).
-const POINT_INTENSITY: f32 = 8.0;
+/// scores do not depend on it): the main job's sun.
+const SHOWN_IRRADIANCE: f32 = SUN_IRRADIANCE;
+/// Intensity of the moving point light (W·sr⁻¹): the main job's bulb.
+const POINT_INTENSITY: f32 = BULB_INTENSITY;
 
 pub struct RelightOptions {
     pub settings: GridSettings,
@@ -291,19 +292,9 @@ fn row(
     frames: u32,
 ) -> Result<RelightRow> {
     let (psnr_db, point_psnr_db) = scores(gpu, executor, refs, Some(dir))?;
-    // Timed: a sun circling and rising, a bulb circling the reflector.
-    let sun = |f: f32| GpuLight::Directional {
-        to_light: direction(20.0 + 40.0 * f, 360.0 * f),
-        irradiance: Vec3::ONE,
-    };
-    let origin = refs.origin;
-    let bulb = |f: f32| {
-        let a = std::f32::consts::TAU * f;
-        GpuLight::Point {
-            position: origin + Vec3::new(2.0 * a.cos(), 1.5, 2.0 * a.sin()),
-            intensity: Vec3::splat(POINT_INTENSITY),
-        }
-    };
+    // Timed: the main job's light paths (`--light-path`).
+    let sun = |f: f32| LightPath::Sun.light(refs.origin, f, 1.0);
+    let bulb = |f: f32| LightPath::Bulb.light(refs.origin, f, POINT_INTENSITY);
     let (ms, wall_ms) = time(gpu, executor, frames, sun)?;
     let (point_ms, point_wall_ms) = time(gpu, executor, frames, bulb)?;
     Ok(RelightRow {
