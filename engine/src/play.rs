@@ -10,7 +10,7 @@ use crate::pem::player::{PemKind, PemSettings};
 use crate::perf::{PerfLog, PerfReport};
 use crate::relight::codec::{DEFAULT_RATIO, compressed};
 use crate::relight::light_path::LightPath;
-use crate::relight::{GridSettings, key, relightable};
+use crate::relight::{GridSettings, relightable};
 use crate::renderer::{FrameMode, FrameStats, Renderer};
 use crate::util::files::claim_dir;
 use anyhow::{Context, Result, bail};
@@ -263,7 +263,7 @@ fn setup_light_path(
     let what = "--light-path-size, --light-path-grid, --light-path-spp";
     let grid = GridSettings::new(lp.size, lp.grid, lp.spp, 1, 0, what)?;
     let r = relightable(scene, &grid, out, true)?;
-    let stored = compressed(&r.maps, &r.path, &key(scene, &grid), DEFAULT_RATIO)?;
+    let stored = compressed(&r.maps, &r.path, &r.key, DEFAULT_RATIO)?;
     renderer.set_light_path(scene, &stored.maps, &r.positions, LIGHT_PATH_K)?;
     Ok((lp.path, inference::relight::panorama_origin(scene)))
 }

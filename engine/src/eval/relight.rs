@@ -17,7 +17,7 @@ use crate::backend::{DeviceOptions, create_device};
 use crate::graph::Executor;
 use crate::relight::codec::compressed;
 use crate::relight::light_path::{BULB_INTENSITY, LightPath, SUN_IRRADIANCE};
-use crate::relight::{GpuLight, GridSettings, RelightGpu, key, relightable};
+use crate::relight::{GpuLight, GridSettings, RelightGpu, relightable};
 use crate::util::stats::median;
 
 /// Irradiance of the held-out lights in the written images (W·m⁻²; the
@@ -239,12 +239,7 @@ pub fn run(scene: &Scene, options: &RelightOptions) -> Result<RelightReport> {
     let dir = options.out.join("relight");
     let refs = references(scene, options, &dir)?;
     let stored = match options.ratio {
-        Some(ratio) => Some(compressed(
-            &r.maps,
-            &r.path,
-            &key(scene, &options.settings),
-            ratio,
-        )?),
+        Some(ratio) => Some(compressed(&r.maps, &r.path, &r.key, ratio)?),
         None => None,
     };
     let played = stored.as_ref().map_or(&r.maps, |s| &s.maps);

@@ -75,6 +75,8 @@ pub struct Relightable {
     pub cached: bool,
     pub trace_s: f64,
     pub path: PathBuf,
+    /// The key the maps are cached under (what made them).
+    pub key: Key,
 }
 
 pub fn key(scene: &Scene, settings: &GridSettings) -> Key {
@@ -122,6 +124,7 @@ pub fn relightable(
                     cached: true,
                     trace_s: 0.0,
                     path,
+                    key,
                 });
             }
             Err(e) => eprintln!("{}: rebuilding ({e:#})", path.display()),
@@ -138,6 +141,7 @@ pub fn relightable(
         cached: false,
         trace_s: start.elapsed().as_secs_f64(),
         path,
+        key,
     })
 }
 

@@ -9,5 +9,5 @@ pub mod codec;
 pub mod gpu;
 pub mod light_path;
 
-pub use cache::{GridSettings, Relightable, key, relightable};
+pub use cache::{GridSettings, Relightable, relightable};
 pub use gpu::{GpuLight, RelightGpu};
