@@ -132,11 +132,7 @@ fn eval_scores_relighting_at_held_out_lights_for_every_k() {
             .expect("run engine")
     };
     let o = eval("relight");
-    let log = format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let log = common::output_text(&o);
     assert!(o.status.success(), "{log}");
     assert!(log.contains("validation messages: 0"), "{log}");
     assert!(log.contains("| k | PSNR directional (dB)"), "{log}");

@@ -270,6 +270,13 @@ mod tests {
     use super::*;
     use serde_json::json;
 
+    fn table_of(rows: Vec<EvalRow>) -> EvalTable {
+        EvalTable {
+            rows,
+            relight: None,
+        }
+    }
+
     fn row(mode: &str) -> EvalRow {
         EvalRow {
             mode: mode.to_owned(),
@@ -300,10 +307,7 @@ mod tests {
 
     #[test]
     fn json_has_the_issue_shape() -> Result<()> {
-        let table = EvalTable {
-            rows: vec![row("pem")],
-            relight: None,
-        };
+        let table = table_of(vec![row("pem")]);
         let value = serde_json::to_value(&table)?;
         assert_eq!(
             value,
@@ -328,13 +332,10 @@ mod tests {
         assert_eq!(value["flip_frame_above"], json!(0.08));
         assert!(value.get("flip_frame_on").is_none());
         framed.flip_frame_on = Some(1.5);
-        let e = EvalTable {
-            rows: vec![framed],
-            relight: None,
-        }
-        .validate()
-        .err()
-        .map(|e| e.to_string());
+        let e = table_of(vec![framed])
+            .validate()
+            .err()
+            .map(|e| e.to_string());
         assert!(
             e.as_ref().is_some_and(|e| e.contains("flip_frame_on")),
             "{e:?}"
@@ -352,10 +353,7 @@ mod tests {
             above: 4,
         });
         r.map_bytes = Some(1 << 20);
-        let table = EvalTable {
-            rows: vec![row("pem"), r],
-            relight: None,
-        };
+        let table = table_of(vec![row("pem"), r]);
         let value = serde_json::to_value(&table)?;
         assert_eq!(
             value["rows"][1]["views"],
@@ -377,10 +375,7 @@ mod tests {
         let path = dir.path().join("eval.json");
         let mut bad = row("pem");
         bad.psnr_between_db = f64::INFINITY;
-        let table = EvalTable {
-            rows: vec![bad],
-            relight: None,
-        };
+        let table = table_of(vec![bad]);
         let e = table.write(&path).err().map(|e| format!("{e:#}"));
         assert!(
             e.as_ref()
@@ -390,24 +385,10 @@ mod tests {
         assert!(!path.exists());
         let mut bad = row("pem");
         bad.flip_above = 1.5;
-        assert!(
-            EvalTable {
-                rows: vec![bad],
-                relight: None
-            }
-            .validate()
-            .is_err()
-        );
+        assert!(table_of(vec![bad]).validate().is_err());
         let mut bad = row("pem");
         bad.frame_ms_p95 = Some(f64::NAN);
-        assert!(
-            EvalTable {
-                rows: vec![bad],
-                relight: None
-            }
-            .validate()
-            .is_err()
-        );
+        assert!(table_of(vec![bad]).validate().is_err());
         Ok(())
     }
 
@@ -426,10 +407,7 @@ mod tests {
         let mut capped = row("a|b");
         capped.psnr_on_db = PSNR_CAP_DB;
         capped.settings.clear();
-        let table = EvalTable {
-            rows: vec![row("pem"), capped],
-            relight: None,
-        };
+        let table = table_of(vec![row("pem"), capped]);
         let md = table.to_markdown();
         let lines: Vec<&str> = md.lines().collect();
         assert_eq!(lines.len(), 4);
