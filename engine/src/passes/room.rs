@@ -190,17 +190,20 @@ impl RoomRenderer {
         &self.device
     }
 
-    /// Lights the room with `light` from the next frame on (`--light-path`)
-    /// and darkens the scene's emitters (the moving light replaces them).
+    /// Lights the room with `light` from the next frame on (`--light-path`).
     pub fn set_light(&mut self, light: RoomLight) -> GpuResult<()> {
         let bytes = bytemuck::bytes_of(&light);
         // The engine waits for every frame's fence, so no frame reads the
         // block while it is written.
         self.light.mapped_mut()?[..bytes.len()].copy_from_slice(bytes);
+        Ok(())
+    }
+
+    /// Darkens the scene's emitters (a moving light replaces them).
+    pub fn darken_emitters(&mut self) {
         for draw in &mut self.draws {
             draw.push.emission = Vec4::ZERO;
         }
-        Ok(())
     }
 
     /// Records every draw with `view_proj` inside the current rendering.
@@ -287,9 +290,6 @@ pub fn room_pipeline(
     )
 }
 
-/// The light shared by every room draw: the first area light as a point
-/// emitter at its centre, and an ambient term standing in for the indirect
-/// light (radiance ≈ ρ/(1 − ρ) · light area / room area · L for ρ = ½).
 /// Surface area of the scene's bounding box: the area the analytic room's
 /// ambient term spreads a light's flux over.
 pub fn room_area(scene: &Scene) -> f32 {
@@ -298,6 +298,9 @@ pub fn room_area(scene: &Scene) -> f32 {
     2.0 * (size.x * size.y + size.y * size.z + size.z * size.x)
 }
 
+/// The light shared by every room draw: the first area light as a point
+/// emitter at its centre, and an ambient term standing in for the indirect
+/// light (radiance ≈ ρ/(1 − ρ) · light area / room area · L for ρ = ½).
 fn room_lighting(scene: &Scene) -> RoomLight {
     let Some(light) = scene.lights.first() else {
         return RoomLight::default();

@@ -69,6 +69,7 @@ impl Renderer {
         };
         let room_area = room_area(scene);
         self.room.set_light(room_light(light, room_area))?;
+        self.room.darken_emitters();
         self.light_path = Some(LightPathGpu {
             relight,
             cube,
