@@ -14,13 +14,14 @@ layout(push_constant) uniform Push {
 } pc;
 
 layout(set = 0, binding = 0) uniform sampler2D albedo_texture;
-// w of `center` says which light: > 0 the area light as a point emitter
-// (w = its area), 0 an isotropic point light of intensity `radiance`, < 0 a
-// sun of irradiance `radiance` towards `normal` (`--light-path`).
+// One branch-free formula for every light (llvmpipe runs both sides of a
+// branch on a uniform, which cost the pass ~40%): a light at `position.xyz`
+// (w = 1; an area light as a point emitter, or a point light) or a sun
+// towards `position.xyz` (w = 0, unit, so d² = 1).
 layout(set = 0, binding = 1, std140) uniform Light {
-    vec4 center;   // xyz; w = area, 0 (point light) or < 0 (sun)
-    vec4 normal;   // xyz unit, into the room (sun: towards it); w = ambient radiance scale
-    vec4 radiance; // rgb
+    vec4 position; // xyz; w = 1 (at a point) or 0 (a sun: unit direction towards it)
+    vec4 normal;   // xyz the area light's unit normal, into the room; w = ambient scale
+    vec4 radiance; // rgb radiance × area, intensity or irradiance; a = 1 for an area light
 } light;
 
 layout(location = 0) out vec4 out_color;
@@ -33,19 +34,12 @@ void main() {
         albedo *= texture(albedo_texture, in_uv).rgb;
     }
     vec3 n = normalize(in_normal);
-    vec3 irradiance;
-    if (light.center.w < 0.0) {
-        irradiance = light.radiance.rgb * max(dot(n, light.normal.xyz), 0.0);
-    } else {
-        vec3 to_light = light.center.xyz - in_position;
-        float d2 = max(dot(to_light, to_light), 1e-6);
-        vec3 l = to_light * inversesqrt(d2);
-        float cos_surface = max(dot(n, l), 0.0);
-        bool point = light.center.w == 0.0;
-        float cos_light = point ? 1.0 : max(dot(light.normal.xyz, -l), 0.0);
-        float area = point ? 1.0 : light.center.w;
-        irradiance = light.radiance.rgb * area * cos_surface * cos_light / d2;
-    }
+    vec3 to_light = light.position.xyz - in_position * light.position.w;
+    float d2 = max(dot(to_light, to_light), 1e-6);
+    vec3 l = to_light * inversesqrt(d2);
+    float cos_surface = max(dot(n, l), 0.0);
+    float cos_light = mix(1.0, max(dot(light.normal.xyz, -l), 0.0), light.radiance.a);
+    vec3 irradiance = light.radiance.rgb * cos_surface * cos_light / d2;
     vec3 ambient = light.radiance.rgb * light.normal.w;
     out_color = vec4(pc.emission.rgb + albedo / PI * (irradiance + PI * ambient), 1.0);
 }

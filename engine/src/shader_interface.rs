@@ -112,13 +112,14 @@ pub struct RoomPush {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct RoomLight {
-    /// xyz centre; w = area (> 0: the area light as a point emitter), 0 (an
-    /// isotropic point light of intensity `radiance`) or < 0 (a sun).
-    pub center: Vec4,
-    /// xyz unit normal into the room (a sun: towards it); w = ambient
-    /// radiance scale.
+    /// xyz the light's position, w = 1 (the area light as a point emitter,
+    /// or a point light); or xyz the unit direction towards a sun, w = 0.
+    pub position: Vec4,
+    /// xyz the area light's unit normal into the room; w = ambient scale
+    /// (ambient radiance per unit albedo = `radiance.rgb · w`).
     pub normal: Vec4,
-    /// rgb radiance, intensity (point light) or irradiance (sun).
+    /// rgb radiance × area (area light), intensity (point light) or
+    /// irradiance (sun); a = 1 for an area light (its cosine applies), else 0.
     pub radiance: Vec4,
 }
 

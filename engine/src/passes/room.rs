@@ -306,15 +306,16 @@ fn room_lighting(scene: &Scene) -> RoomLight {
         return RoomLight::default();
     };
     let room_area = room_area(scene);
+    // Ambient radiance = L · area / room area; the block carries L · area.
     let ambient = if room_area > 0.0 {
-        light.area() / room_area
+        1.0 / room_area
     } else {
         0.0
     };
     RoomLight {
-        center: light.center.extend(light.area()),
+        position: light.center.extend(1.0),
         normal: light.normal().extend(ambient),
-        radiance: light.radiance.extend(0.0),
+        radiance: (light.radiance * light.area()).extend(1.0),
     }
 }
 

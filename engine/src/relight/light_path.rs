@@ -51,8 +51,8 @@ impl LightPath {
 }
 
 /// The analytic room shader's light block for `light` (`shaders/room.frag`):
-/// a point light as an isotropic emitter (`center.w = 0`), a sun as a
-/// direction (`center.w < 0`, `normal` = towards the light). The ambient
+/// a point light as an isotropic emitter (`position.w = 1`, no emitter
+/// cosine), a sun as a direction (`position.w = 0`, xyz towards the light). The ambient
 /// term follows the scene light's convention (`passes::room`): the light's
 /// flux spread evenly over the room's `room_area`, as radiance per unit
 /// albedo — `4I/A` for a point light, and for a sun through the open box
@@ -63,7 +63,7 @@ pub fn room_light(light: GpuLight, room_area: f32) -> RoomLight {
             position,
             intensity,
         } => RoomLight {
-            center: position.extend(0.0),
+            position: position.extend(1.0),
             normal: glam::Vec4::new(0.0, 0.0, 0.0, 4.0 / room_area.max(1e-6)),
             radiance: intensity.extend(0.0),
         },
@@ -74,8 +74,8 @@ pub fn room_light(light: GpuLight, room_area: f32) -> RoomLight {
             let l = to_light.normalize_or(Vec3::Y);
             let mean_cos = (l.x.abs() + l.y.abs() + l.z.abs()) / 6.0;
             RoomLight {
-                center: glam::Vec4::new(0.0, 0.0, 0.0, -1.0),
-                normal: l.extend(mean_cos / std::f32::consts::PI),
+                position: l.extend(0.0),
+                normal: Vec3::ZERO.extend(mean_cos / std::f32::consts::PI),
                 radiance: irradiance.extend(0.0),
             }
         }
@@ -98,10 +98,22 @@ mod tests {
         };
         assert!((position - origin - Vec3::new(0.0, 1.5, 2.0)).length() < 1e-5);
         let sun = room_light(LightPath::Sun.shown(origin, 0.0), 160.0);
-        assert!(sun.center.w < 0.0 && (sun.normal.truncate().length() - 1.0).abs() < 1e-5);
-        assert!(sun.normal.y > 0.3, "the sun is above the horizon: {sun:?}");
+        assert_eq!(sun.position.w, 0.0, "a sun is a direction");
+        assert!(
+            (sun.position.truncate().length() - 1.0).abs() < 1e-5,
+            "unit: d² = 1"
+        );
+        assert!(
+            sun.position.y > 0.3,
+            "the sun is above the horizon: {sun:?}"
+        );
+        assert_eq!(sun.radiance.w, 0.0, "no emitter cosine");
         let bulb = room_light(LightPath::Bulb.shown(origin, 0.0), 160.0);
-        assert_eq!(bulb.center.w, 0.0);
+        assert_eq!(
+            (bulb.position.w, bulb.radiance.w),
+            (1.0, 0.0),
+            "a point, no cosine"
+        );
         assert_eq!(bulb.normal.truncate(), Vec3::ZERO, "isotropic");
         assert!((bulb.normal.w - 4.0 / 160.0).abs() < 1e-7);
         assert!(sun.normal.w > 0.0 && sun.normal.w < 1.0 / std::f32::consts::PI);
