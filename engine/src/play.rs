@@ -188,6 +188,7 @@ pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<Played> {
     if !matches!(source, FrameSource::Trace(..)) {
         move_light(renderer, 0)?;
         for _ in 0..opts.warmup {
+            renderer.set_next_view(eye_of(0), scene.orbit.view(eye_of(0)));
             source.frame(renderer, scene, eye_of(0))?;
         }
     }
@@ -201,6 +202,10 @@ pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<Played> {
     for i in 0..frames {
         let start = Instant::now();
         move_light(renderer, i)?;
+        if i + 1 < frames {
+            // Frames in flight: the next view's CPU work overlaps this frame.
+            renderer.set_next_view(eye_of(i + 1), scene.orbit.view(eye_of(i + 1)));
+        }
         let (stats, pixels) = source.frame(renderer, scene, eye_of(i))?;
         log.record(
             start.elapsed().as_secs_f64() * 1e3,

@@ -9,18 +9,20 @@
 //! refraction at the front surface, the same map read at infinity.
 //! Inferred, layered shells are not played yet.
 
+pub mod ahead;
 pub mod shell;
 
 use crate::backend::{Device, GpuError, GpuResult, Image};
 use crate::passes::em_capture::CubeTarget;
 use crate::passes::glass::{GlassGeometry, GlassPass};
 use crate::passes::target::Target;
+use ahead::{Ahead, PathRequest};
 use ash::vk;
 use glam::{Mat4, Vec3};
-use inference::glass::baseline::baseline_mesh;
 use inference::glass::vertices::vertex_stream;
-use inference::glass::{Lens, Screen, Shell, ShellSet, ShellShape, TessSettings, tessellate};
+use inference::glass::{Lens, Shell, ShellSet, ShellShape};
 use inference::scene::Scene;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// How a frame draws the glass.
@@ -39,14 +41,15 @@ pub struct GlassFrameStats {
     pub triangles: usize,
     /// Rays cast through the lens.
     pub rays: u64,
-    /// Vertex ray paths (tessellation) and stream building, ms.
+    /// Vertex ray paths (tessellation; with frames in flight, the wait
+    /// for the worker) and stream building, ms.
     pub paths_ms: f64,
     pub stream_ms: f64,
 }
 
 /// One glass object's device state.
 pub struct GlassPlayer {
-    lens: Lens,
+    lens: Arc<Lens>,
     pub cube: CubeTarget,
     geometry: GlassGeometry,
     room: ShellSet,
@@ -55,6 +58,8 @@ pub struct GlassPlayer {
     pub tau: f32,
     bounds: (Vec3, Vec3),
     stream: Vec<f32>,
+    /// The next frame's paths, being traced (see [`GlassPlayer::trace_ahead`]).
+    ahead: Option<Ahead>,
     pub last: GlassFrameStats,
 }
 
@@ -95,11 +100,12 @@ impl GlassPlayer {
             }),
             infinity: shell(ShellShape::Infinity),
             bounds: object.mesh.bounds(),
-            lens,
+            lens: Arc::new(lens),
             cube,
             geometry,
             tau: settings.tau,
             stream: Vec::new(),
+            ahead: None,
             last: GlassFrameStats::default(),
         }))
     }
@@ -109,27 +115,33 @@ impl GlassPlayer {
         self.bounds
     }
 
-    /// The CPU side of a frame from `eye`: vertex ray paths, the stream,
-    /// the upload. Returns (paths + stream ms, upload ms).
-    pub fn prepare(
-        &mut self,
+    /// What a `kind` frame from `eye` (`view_proj`, `size`) traces.
+    pub fn request(
+        &self,
         kind: GlassKind,
-        eye: Vec3,
-        view_proj: Mat4,
-        (width, height): (u32, u32),
-    ) -> GpuResult<(f64, f64)> {
+        (eye, view_proj): (Vec3, Mat4),
+        size: (u32, u32),
+    ) -> PathRequest {
+        PathRequest {
+            kind,
+            eye,
+            view_proj,
+            size,
+            tau: self.tau,
+        }
+    }
+
+    /// The CPU side of a frame: vertex ray paths (taken from the worker when
+    /// it traced this very view ahead), the stream, the upload. Returns
+    /// (paths + stream ms, upload ms).
+    pub fn prepare(&mut self, request: PathRequest) -> GpuResult<(f64, f64)> {
         let start = Instant::now();
-        let (tess, shells) = match kind {
-            GlassKind::Hybrid => {
-                let screen = Screen {
-                    view_proj,
-                    width,
-                    height,
-                };
-                let settings = TessSettings::new(self.tau);
-                (tessellate(&self.lens, eye, screen, settings), &self.room)
-            }
-            GlassKind::StaticEm => (baseline_mesh(&self.lens, eye), &self.infinity),
+        let tess = (self.ahead.take())
+            .and_then(|a| a.take(&request))
+            .unwrap_or_else(|| ahead::trace(&self.lens, &request));
+        let shells = match request.kind {
+            GlassKind::Hybrid => &self.room,
+            GlassKind::StaticEm => &self.infinity,
         };
         let traced = Instant::now();
         vertex_stream(&tess, shells, &mut self.stream);
@@ -148,6 +160,17 @@ impl GlassPlayer {
         ))
     }
 
+    /// Starts tracing the paths of the frame after this one (`request`) on
+    /// a worker, to run while the device renders this frame; a frame asking
+    /// for another view traces its own.
+    pub fn trace_ahead(&mut self, request: PathRequest) {
+        if let Some(stale) = self.ahead.take() {
+            // Never more than one worker: wait for an unused one first.
+            let _unused = stale.take(&request);
+        }
+        self.ahead = Ahead::start(self.lens.clone(), request);
+    }
+
     /// The pass drawing what [`GlassPlayer::prepare`] uploaded.
     pub fn pass<'a>(&'a self, target: Target<'a>, view_proj: Mat4) -> GlassPass<'a> {
         self.geometry.pass(&self.cube.color, target, view_proj)
@@ -159,25 +182,35 @@ impl GlassPlayer {
     }
 }
 
+/// How a frame in `mode` draws the glass, if at all.
+pub fn glass_kind(mode: crate::renderer::FrameMode) -> Option<GlassKind> {
+    use crate::renderer::FrameMode;
+    match mode {
+        FrameMode::Hybrid => Some(GlassKind::Hybrid),
+        FrameMode::StaticEm => Some(GlassKind::StaticEm),
+        _ => None,
+    }
+}
+
 /// The glass object's CPU side for a static-EM or hybrid frame from `eye`
-/// (`view_proj`); other frames draw no glass.
+/// (`view_proj`); other frames draw no glass. With `next` (the view of the
+/// frame after this one), its paths start on a worker right away.
 pub fn prepare_frame(
     glass: Option<&mut GlassPlayer>,
     mode: crate::renderer::FrameMode,
-    (eye, view_proj): (Vec3, Mat4),
+    view: (Vec3, Mat4),
+    next: Option<(Vec3, Mat4)>,
     size: (u32, u32),
     cpu: &mut crate::renderer::CpuTimes,
 ) -> GpuResult<()> {
-    use crate::renderer::FrameMode;
-    let kind = match mode {
-        FrameMode::Hybrid => GlassKind::Hybrid,
-        FrameMode::StaticEm => GlassKind::StaticEm,
-        _ => return Ok(()),
+    let (Some(g), Some(kind)) = (glass, glass_kind(mode)) else {
+        return Ok(());
     };
-    if let Some(g) = glass {
-        let (paths_ms, upload_ms) = g.prepare(kind, eye, view_proj, size)?;
-        cpu.texgen_ms += paths_ms;
-        cpu.upload_ms += upload_ms;
+    let (paths_ms, upload_ms) = g.prepare(g.request(kind, view, size))?;
+    cpu.texgen_ms += paths_ms;
+    cpu.upload_ms += upload_ms;
+    if let Some(next) = next {
+        g.trace_ahead(g.request(kind, next, size));
     }
     Ok(())
 }

@@ -101,6 +101,9 @@ pub struct Renderer {
     pub glass: Option<crate::glass::GlassPlayer>,
     /// The last frame's view-projection (where its G-buffer was written).
     last_view_proj: Mat4,
+    /// The next frame's eye and view, when the caller knows it: its CPU
+    /// work (glass paths) starts while this frame renders.
+    next_view: Option<(Vec3, Mat4)>,
     /// What set-up cost on the GPU (static EM capture, MIP chain).
     pub setup_timings: Vec<PassTiming>,
     /// Bytes of the maps the last `set_pem` (container) or `set_rem`
@@ -146,6 +149,7 @@ impl Renderer {
             gbuffer: GBuffer::new(device, width, height)?,
             glass,
             last_view_proj: Mat4::IDENTITY,
+            next_view: None,
             setup_timings: Vec::new(),
             map_bytes: None,
         };
@@ -259,6 +263,12 @@ impl Renderer {
         self.executor.run(&list)
     }
 
+    /// Tells the renderer where the next frame looks from (playback knows its
+    /// path), so that frame's CPU work can run while this one renders.
+    pub fn set_next_view(&mut self, eye: Vec3, view: Mat4) {
+        self.next_view = Some((eye, view));
+    }
+
     /// Renders one frame from `eye` (looking at `center`) and reads it back.
     pub fn frame(
         &mut self,
@@ -273,7 +283,12 @@ impl Renderer {
             self.texgen(eye, &mut cpu)?;
         }
         let size = (self.width, self.height);
-        crate::glass::prepare_frame(self.glass.as_mut(), mode, (eye, view_proj), size, &mut cpu)?;
+        let next = self
+            .next_view
+            .take()
+            .map(|(eye, view)| (eye, self.projection * view));
+        let glass = self.glass.as_mut();
+        crate::glass::prepare_frame(glass, mode, (eye, view_proj), next, size, &mut cpu)?;
         let blend = match mode {
             FrameMode::Pem => Some(self.prepare_pem(eye, &mut cpu)?),
             _ => None,
