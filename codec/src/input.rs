@@ -43,6 +43,12 @@ impl ParamGrid {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
+    /// `(i0, i1)` of linear index `linear` (the inverse of [`index`](Self::index);
+    /// an index past the grid gives coordinates `index` rejects).
+    pub fn sample_at(&self, linear: u32) -> [u32; 2] {
+        let n0 = self.n0.max(1);
+        [linear % n0, linear / n0]
+    }
     /// Linear index of `(i0, i1)`, or an error when out of range.
     pub fn index(&self, sample: [u32; 2]) -> Result<usize> {
         if sample[0] >= self.n0 {

@@ -85,3 +85,18 @@ fn two_d_order_splits_the_less_coherent_dimension_first_and_decodes() {
         assert!(psnr >= 65.0, "strong dim {strong}: {psnr} dB");
     }
 }
+
+#[test]
+fn sample_at_inverts_index_in_one_and_two_d() {
+    for grid in [ParamGrid::one_d(13), ParamGrid::two_d(4, 3)] {
+        for linear in 0..grid.len() as u32 {
+            let at = grid.sample_at(linear);
+            assert_eq!(grid.index(at).unwrap(), linear as usize, "{grid:?}");
+        }
+        assert!(
+            grid.index(grid.sample_at(grid.len() as u32)).is_err(),
+            "past the grid"
+        );
+    }
+    assert_eq!(ParamGrid::two_d(4, 3).sample_at(6), [2, 1]);
+}

@@ -244,8 +244,9 @@ fn bad_pem_knobs_fail_cleanly() {
 }
 
 /// A 2D viewpoint space (azimuth lines × elevation rings) compiles every
-/// sample of every ring and plays the default path, which climbs through
-/// the rings, validation-clean.
+/// sample of every ring into a container of 2D parameter blocks (lines ×
+/// rings) and plays the default path, which climbs through the rings,
+/// validation-clean.
 #[test]
 fn a_2d_viewpoint_space_compiles_every_ring_and_plays() {
     let dir = tempfile::tempdir().expect("temp dir");
@@ -268,4 +269,9 @@ fn a_2d_viewpoint_space_compiles_every_ring_and_plays() {
         assert!(map.is_file(), "{} missing", map.display());
     }
     assert!(!out.join("infer/sample_0006").exists());
+    let container = codec::Container::open(&out.join("teapot.ptxc")).expect("container");
+    for t in container.textures() {
+        assert_eq!((t.grid.n0, t.grid.n1), (3, 2), "azimuth lines × rings");
+        assert_eq!(t.log2b(), [3, 3], "8×8 parameter blocks");
+    }
 }

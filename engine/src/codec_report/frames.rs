@@ -123,7 +123,11 @@ impl FrameBench {
         let (mut db, mut vs_raw) = (Vec::new(), Vec::new());
         for it in &self.items {
             let mut decoded = vec![0.0f32; it.layout.len() * 4];
-            codec::decode_leaf_all(container, it.index, 0, [it.k, 0], &mut decoded)?;
+            let Some(texture) = container.textures().get(it.index as usize) else {
+                anyhow::bail!("the container holds no texture {}", it.index);
+            };
+            let at = texture.grid.sample_at(it.k);
+            codec::decode_leaf_all(container, it.index, 0, at, &mut decoded)?;
             let decoded: Vec<[f32; 4]> = decoded
                 .chunks_exact(4)
                 .map(|c| [c[0], c[1], c[2], 1.0])

@@ -21,6 +21,18 @@ pub const DEFAULT_RATIO: f64 = 384.0;
 /// f16's largest finite value: what playback's textures can hold.
 const F16_MAX: f32 = 65504.0;
 
+/// The codec's parameter grid of `orbit`'s viewpoint samples: its azimuth
+/// lines × elevation rings as a 2D grid (2D 8×8 parameter blocks, thesis
+/// ch. 4) when it has rings, else the 1D orbit. Sample `k` (azimuth line
+/// `k % samples` of ring `k / samples`) is the grid's linear index `k`.
+pub fn orbit_grid(orbit: &inference::scene::Orbit) -> ParamGrid {
+    if orbit.rings > 1 {
+        ParamGrid::two_d(orbit.samples, orbit.rings)
+    } else {
+        ParamGrid::one_d(orbit.sample_count())
+    }
+}
+
 /// A map that could not be used for encoding: which one, and why.
 #[derive(Debug, thiserror::Error)]
 #[error("{}: {why}", path.display())]
@@ -60,7 +72,7 @@ pub fn load_input(scene: &Scene, infer_dir: &Path) -> Result<EncodeInput> {
             object: index as u32,
             layer: 0,
         };
-        let mut texture = ParamTexture::zeroed(id, ParamGrid::one_d(samples), leaf, 1.0);
+        let mut texture = ParamTexture::zeroed(id, orbit_grid(&scene.orbit), leaf, 1.0);
         let mut rows = 0u64;
         for k in 0..samples {
             let map = read_checked(infer_dir, k, index, spec)?;
@@ -188,12 +200,54 @@ fn worst_psnr(container: &codec::Container, input: &EncodeInput) -> Result<f64> 
     for t in &input.textures {
         let mut acc = PsnrAccum::default();
         let mut out = vec![0.0f32; t.layout.texels() * 4];
-        for s in 0..t.grid.n0 {
-            cache.decode_leaf_all(container, t.id.object, t.id.layer, [s, 0], &mut out)?;
+        for s in 0..t.grid.len() as u32 {
+            let at = t.grid.sample_at(s);
+            cache.decode_leaf_all(container, t.id.object, t.id.layer, at, &mut out)?;
             cache.end_frame();
             acc.add(t.sample(s as usize), t.layout.channels as usize, &out, 4);
         }
         worst = worst.min(acc.psnr_db());
     }
     Ok(worst)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rings_are_a_2d_grid_whose_linear_order_is_the_sample_order() {
+        let mut scene = inference::scene::Scene::load("teapot").expect("built-in scene");
+        assert_eq!(
+            orbit_grid(&scene.orbit),
+            ParamGrid::one_d(scene.orbit.samples)
+        );
+        scene.orbit.samples = 4;
+        scene.orbit.rings = 3;
+        let grid = orbit_grid(&scene.orbit);
+        assert_eq!(grid, ParamGrid::two_d(4, 3));
+        // Grid dimension 0 is the azimuth line, dimension 1 the ring.
+        for k in 0..scene.orbit.sample_count() {
+            let [line, ring] = grid.sample_at(k);
+            let (azimuth, elevation) = scene.orbit.sample_angles(k);
+            assert_eq!(azimuth, scene.orbit.sample_angles(line).0, "sample {k}");
+            assert_eq!(
+                elevation,
+                scene.orbit.sample_angles(4 * ring).1,
+                "sample {k}"
+            );
+        }
+        assert_ne!(
+            scene.orbit.sample_angles(4).1,
+            scene.orbit.sample_angles(0).1
+        );
+        let key =
+            |grid| crate::compile::container_key([].iter(), codec::Target::Ratio(384.0), grid);
+        assert_eq!(
+            key(ParamGrid::one_d(12)),
+            key(ParamGrid::one_d(100)),
+            "1D keys unchanged"
+        );
+        assert_ne!(key(ParamGrid::two_d(4, 3)), key(ParamGrid::one_d(12)));
+    }
 }

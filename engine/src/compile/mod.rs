@@ -48,8 +48,13 @@ impl CompileContext<'_> {
 }
 
 /// The key of a container: the keys of the maps it holds, the codec's
-/// format and the target it was encoded at.
-pub fn container_key<'k>(map_keys: impl Iterator<Item = &'k Key>, target: codec::Target) -> Key {
+/// format, the target it was encoded at and, for a 2D viewpoint space, its
+/// parameter grid (1D containers keep the key they always had).
+pub fn container_key<'k>(
+    map_keys: impl Iterator<Item = &'k Key>,
+    target: codec::Target,
+    grid: codec::ParamGrid,
+) -> Key {
     let mut h = Fnv::default();
     for k in map_keys {
         h.write_u64(k.hash());
@@ -58,10 +63,18 @@ pub fn container_key<'k>(map_keys: impl Iterator<Item = &'k Key>, target: codec:
         codec::Target::Ratio(r) => r.to_bits(),
         codec::Target::Bytes(b) => b ^ (1 << 63),
     };
-    Key::new()
+    let key = Key::new()
         .with("maps", h.finish())
         .with("codec format", u64::from(codec::FORMAT_VERSION))
-        .with("target", target)
+        .with("target", target);
+    if grid.dims() == 2 {
+        key.with(
+            "parameter grid",
+            u64::from(grid.n0) << 32 | u64::from(grid.n1),
+        )
+    } else {
+        key
+    }
 }
 
 /// The map source for `layers` under `pem`'s options, compiling whatever is
@@ -231,7 +244,8 @@ fn expected_container_key(ctx: &CompileContext, plan: &Plan, req: &InferRequest)
             }
         }
     }
-    Ok(container_key(map_keys.iter(), target))
+    let grid = encode::orbit_grid(&ctx.scene.orbit);
+    Ok(container_key(map_keys.iter(), target, grid))
 }
 
 /// The container: the one named by the user (checked, read only) or the

@@ -79,9 +79,13 @@ impl MapSource {
                 tex.layout.channels,
             );
             let want = (w, h, layout.faces(), spec.layer.channels() as u32);
-            if got != want || tex.grid.n0 < scene.orbit.sample_count() {
+            // A 1D container lists the samples in order; a 2D one must be
+            // the orbit's azimuth lines × rings.
+            let grid_ok = tex.grid.len() >= scene.orbit.sample_count() as usize
+                && (tex.grid.n1 == 1 || tex.grid.n0 == scene.orbit.samples);
+            if got != want || !grid_ok {
                 bail!(
-                    "{}: texture {i} ({}) is {}x{}x{} faces, {} channels, {} samples; expected {}x{}x{}, {} channels, {} samples (re-run `engine encode`)",
+                    "{}: texture {i} ({}) is {}x{}x{} faces, {} channels, {}x{} samples; expected {}x{}x{}, {} channels, {} samples ({} per ring) (re-run `engine encode`)",
                     path.display(),
                     spec.name(),
                     got.0,
@@ -89,11 +93,13 @@ impl MapSource {
                     got.2,
                     got.3,
                     tex.grid.n0,
+                    tex.grid.n1,
                     want.0,
                     want.1,
                     want.2,
                     want.3,
-                    scene.orbit.sample_count()
+                    scene.orbit.sample_count(),
+                    scene.orbit.samples
                 );
             }
             index.push((spec.object.clone(), spec.layer.file_part(), i as u32));
@@ -187,8 +193,11 @@ impl MapSource {
                         layer.file_part()
                     );
                 };
+                let Some(grid) = container.textures().get(texture as usize).map(|t| t.grid) else {
+                    bail!("{}: holds no texture {texture}", path.display());
+                };
                 cache
-                    .decode_leaf_all(container, texture, 0, [sample, 0], out)
+                    .decode_leaf_all(container, texture, 0, grid.sample_at(sample), out)
                     .with_context(|| {
                         format!(
                             "{}: decoding {object}.{} of sample {sample}",

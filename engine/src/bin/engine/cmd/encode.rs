@@ -5,7 +5,7 @@ use crate::cli::EncodeArgs;
 use anyhow::{Context, Result, bail};
 use codec::Target;
 use engine::compile::container_key;
-use engine::compile::encode::{DEFAULT_RATIO, encode_to, load_input};
+use engine::compile::encode::{DEFAULT_RATIO, encode_to, load_input, orbit_grid};
 use engine::maps::{map_path, map_specs};
 use inference::scene::Scene;
 
@@ -39,7 +39,7 @@ pub fn run(args: &EncodeArgs) -> Result<String> {
         &input,
         target,
         &args.out,
-        &container_key(keys.iter(), target),
+        &container_key(keys.iter(), target, orbit_grid(&scene.orbit)),
     )?;
     Ok(format!(
         "{}: {} textures x {} samples, {} bytes from {} raw (ratio {:.1}:1, worst texture {:.1} dB) in {:.1} s{}\n",
