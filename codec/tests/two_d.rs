@@ -100,3 +100,26 @@ fn sample_at_inverts_index_in_one_and_two_d() {
     }
     assert_eq!(ParamGrid::two_d(4, 3).sample_at(6), [2, 1]);
 }
+
+/// A container that lays a 2D space out as a 1D sequence (as the engine
+/// did before 2D blocks) is still measured against the 2D input: samples
+/// match by linear index.
+#[test]
+fn report_matches_a_1d_container_to_a_2d_input_by_linear_index() {
+    use codec::report::{ReportOptions, report};
+    let two_d = scene(&SynthSpec::cube(1, 1, ParamGrid::two_d(4, 3), 16));
+    let mut one_d = two_d.clone();
+    for t in &mut one_d.textures {
+        t.grid = ParamGrid::one_d(12);
+    }
+    let (bytes, _) = encode(&one_d, Target::Ratio(40.0), &EncodeOptions::default()).unwrap();
+    let c = Container::from_bytes(bytes).unwrap();
+    let opts = ReportOptions {
+        jpeg_baseline: false,
+        ffmpeg_baseline: false,
+    };
+    let against_2d = report(&c, &two_d, &opts).unwrap();
+    let against_1d = report(&c, &one_d, &opts).unwrap();
+    assert_eq!(against_2d.psnr_db, against_1d.psnr_db);
+    assert!((psnr_all(&c, &one_d) - against_1d.psnr_db).abs() < 0.5);
+}

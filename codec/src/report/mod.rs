@@ -183,11 +183,23 @@ pub fn report(c: &Container, reference: &EncodeInput, opts: &ReportOptions) -> R
         // first, untimed pass fills the cache's buffer pool so the timed pass
         // measures steady state (recycled memory, not first-touch faults).
         let mut cache = DecodeCache::default();
+        // The container may lay the same samples out on another grid (a 1D
+        // sequence of a 2D space): samples match by linear index.
+        let stored = c
+            .textures()
+            .iter()
+            .find(|ct| ct.id == t.id)
+            .map(|ct| ct.grid)
+            .ok_or(crate::error::CodecError::NoSuchTexture {
+                object: t.id.object,
+                layer: t.id.layer,
+            })?;
         for pass in 0..2 {
             for s1 in 0..t.grid.n1 {
                 for s0 in 0..t.grid.n0 {
+                    let at = stored.sample_at(t.grid.index([s0, s1])? as u32);
                     let start = Instant::now();
-                    cache.decode_leaf_all(c, t.id.object, t.id.layer, [s0, s1], &mut out)?;
+                    cache.decode_leaf_all(c, t.id.object, t.id.layer, at, &mut out)?;
                     let ms = start.elapsed().as_secs_f64() * 1e3;
                     cache.end_frame();
                     if pass == 0 {
