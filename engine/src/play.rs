@@ -193,11 +193,7 @@ pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<Played> {
         }
     }
     let writer = FrameWriter::start(out.clone(), (width, height), opts.exr);
-    let progress = indicatif::ProgressBar::new(u64::from(frames)).with_style(
-        indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames {elapsed}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    progress.set_message(format!("{} {}", scene.name, mode.name()));
+    let progress = frames_progress(frames, format!("{} {}", scene.name, mode.name()));
     let mut log = PerfLog::default();
     for i in 0..frames {
         let start = Instant::now();
@@ -236,6 +232,16 @@ pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<Played> {
         None
     };
     Ok(Played { report, video })
+}
+
+/// A progress bar over `frames` frames, labelled `message`.
+fn frames_progress(frames: u32, message: String) -> indicatif::ProgressBar {
+    let progress = indicatif::ProgressBar::new(u64::from(frames)).with_style(
+        indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames {elapsed}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    progress.set_message(message);
+    progress
 }
 
 /// The mode `opts` asks for: as given, else static EM under a moving light,

@@ -169,6 +169,60 @@ impl Default for ReportOptions {
     }
 }
 
+/// Decodes every sample of texture `t` from `c` along the parameter path
+/// (the default lifetimes; a first, untimed pass fills the cache's buffer
+/// pool so the timed pass measures steady state, not first-touch faults),
+/// appending each decode's time to `times`; returns its error against `t`.
+fn measure_texture(
+    c: &Container,
+    t: &crate::input::ParamTexture,
+    times: &mut Vec<f64>,
+) -> Result<PsnrAccum> {
+    let mut acc = PsnrAccum::default();
+    let mut out = vec![half::f16::ZERO; t.layout.texels() * 4];
+    let mut out32 = vec![0.0f32; t.layout.texels() * 4];
+    let mut cache = DecodeCache::default();
+    // The container may lay the same samples out on another grid (a 1D
+    // sequence of a 2D space): samples match by linear index.
+    let stored = c
+        .textures()
+        .iter()
+        .find(|ct| ct.id == t.id)
+        .map(|ct| ct.grid)
+        .ok_or(crate::error::CodecError::NoSuchTexture {
+            object: t.id.object,
+            layer: t.id.layer,
+        })?;
+    for pass in 0..2 {
+        for s1 in 0..t.grid.n1 {
+            for s0 in 0..t.grid.n0 {
+                let si = t.grid.index([s0, s1])?;
+                let start = Instant::now();
+                cache.decode_leaf_all(
+                    c,
+                    t.id.object,
+                    t.id.layer,
+                    stored.sample_at(si as u32),
+                    &mut out,
+                )?;
+                let ms = start.elapsed().as_secs_f64() * 1e3;
+                cache.end_frame();
+                if pass == 0 {
+                    continue;
+                }
+                times.push(ms);
+                out32
+                    .iter_mut()
+                    .zip(&out)
+                    .for_each(|(d, s)| *d = s.to_f32());
+                acc.add(t.sample(si), t.layout.channels as usize, &out32, 4);
+            }
+        }
+        cache.clear();
+    }
+    Ok(acc)
+}
+
 /// Decodes every sample of every texture, measures PSNR and decode time,
 /// and runs the baselines at the container's byte count.
 pub fn report(c: &Container, reference: &EncodeInput, opts: &ReportOptions) -> Result<CodecReport> {
@@ -176,46 +230,7 @@ pub fn report(c: &Container, reference: &EncodeInput, opts: &ReportOptions) -> R
     let mut textures = Vec::new();
     let mut times = Vec::new();
     for t in &reference.textures {
-        let mut acc = PsnrAccum::default();
-        let mut out = vec![half::f16::ZERO; t.layout.texels() * 4];
-        let mut out32 = vec![0.0f32; t.layout.texels() * 4];
-        // Playback along the parameter path with the default lifetimes; a
-        // first, untimed pass fills the cache's buffer pool so the timed pass
-        // measures steady state (recycled memory, not first-touch faults).
-        let mut cache = DecodeCache::default();
-        // The container may lay the same samples out on another grid (a 1D
-        // sequence of a 2D space): samples match by linear index.
-        let stored = c
-            .textures()
-            .iter()
-            .find(|ct| ct.id == t.id)
-            .map(|ct| ct.grid)
-            .ok_or(crate::error::CodecError::NoSuchTexture {
-                object: t.id.object,
-                layer: t.id.layer,
-            })?;
-        for pass in 0..2 {
-            for s1 in 0..t.grid.n1 {
-                for s0 in 0..t.grid.n0 {
-                    let at = stored.sample_at(t.grid.index([s0, s1])? as u32);
-                    let start = Instant::now();
-                    cache.decode_leaf_all(c, t.id.object, t.id.layer, at, &mut out)?;
-                    let ms = start.elapsed().as_secs_f64() * 1e3;
-                    cache.end_frame();
-                    if pass == 0 {
-                        continue;
-                    }
-                    times.push(ms);
-                    out32
-                        .iter_mut()
-                        .zip(&out)
-                        .for_each(|(d, s)| *d = s.to_f32());
-                    let si = t.grid.index([s0, s1])?;
-                    acc.add(t.sample(si), t.layout.channels as usize, &out32, 4);
-                }
-            }
-            cache.clear();
-        }
+        let acc = measure_texture(c, t, &mut times)?;
         total.merge(&acc);
         textures.push(TexturePsnr {
             object: t.id.object,
