@@ -58,7 +58,7 @@ pub struct GlassPlayer {
     pub tau: f32,
     bounds: (Vec3, Vec3),
     stream: Vec<f32>,
-    /// The next frame's paths, being traced (see [`GlassPlayer::trace_ahead`]).
+    /// The next frame's paths, being traced (see [`GlassPlayer::prepare`]).
     ahead: Option<Ahead>,
     pub last: GlassFrameStats,
 }
@@ -132,13 +132,21 @@ impl GlassPlayer {
     }
 
     /// The CPU side of a frame: vertex ray paths (taken from the worker when
-    /// it traced this very view ahead), the stream, the upload. Returns
-    /// (paths + stream ms, upload ms).
-    pub fn prepare(&mut self, request: PathRequest) -> GpuResult<(f64, f64)> {
+    /// it traced this very view ahead), the stream, the upload; with `next`
+    /// (the frame after this one), that frame's paths start on the worker,
+    /// to run while the device renders this one. Returns (paths + stream
+    /// ms, upload ms).
+    pub fn prepare(
+        &mut self,
+        request: PathRequest,
+        next: Option<PathRequest>,
+    ) -> GpuResult<(f64, f64)> {
         let start = Instant::now();
         let tess = (self.ahead.take())
             .and_then(|a| a.take(&request))
             .unwrap_or_else(|| ahead::trace(&self.lens, &request));
+        // The one worker was just taken: never two at once.
+        self.ahead = next.and_then(|next| Ahead::start(self.lens.clone(), next));
         let shells = match request.kind {
             GlassKind::Hybrid => &self.room,
             GlassKind::StaticEm => &self.infinity,
@@ -158,17 +166,6 @@ impl GlassPlayer {
             (streamed - start).as_secs_f64() * 1e3,
             streamed.elapsed().as_secs_f64() * 1e3,
         ))
-    }
-
-    /// Starts tracing the paths of the frame after this one (`request`) on
-    /// a worker, to run while the device renders this frame; a frame asking
-    /// for another view traces its own.
-    pub fn trace_ahead(&mut self, request: PathRequest) {
-        if let Some(stale) = self.ahead.take() {
-            // Never more than one worker: wait for an unused one first.
-            let _unused = stale.take(&request);
-        }
-        self.ahead = Ahead::start(self.lens.clone(), request);
     }
 
     /// The pass drawing what [`GlassPlayer::prepare`] uploaded.
@@ -206,12 +203,10 @@ pub fn prepare_frame(
     let (Some(g), Some(kind)) = (glass, glass_kind(mode)) else {
         return Ok(());
     };
-    let (paths_ms, upload_ms) = g.prepare(g.request(kind, view, size))?;
+    let next = next.map(|next| g.request(kind, next, size));
+    let (paths_ms, upload_ms) = g.prepare(g.request(kind, view, size), next)?;
     cpu.texgen_ms += paths_ms;
     cpu.upload_ms += upload_ms;
-    if let Some(next) = next {
-        g.trace_ahead(g.request(kind, next, size));
-    }
     Ok(())
 }
 
