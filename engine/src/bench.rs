@@ -255,13 +255,13 @@ impl Run<'_> {
     /// Every variant but the last, interleaved view by view with the maps
     /// resident; returns the median covered reflector pixels.
     fn resident(&self, renderers: &mut [Renderer], logs: &mut [PerfLog]) -> Result<f64> {
-        let o = self.orbit;
+        let o = &self.orbit;
         let moving = self.variants.len() - 1;
         let mut covered = Vec::new();
         for v in 0..self.views {
             let k =
                 ((v as f32 + 0.5) / self.views as f32 * o.samples.saturating_sub(1) as f32) as u32;
-            let eye = o.eye(o.angle_deg(k) + 0.5 * o.step_deg, self.between_rings());
+            let eye = o.eye(o.between_deg(k, 0.5), self.between_rings());
             for i in 0..self.warmup + self.per_view {
                 if i == self.warmup {
                     // Decoding ahead, started by the new view, must not run
@@ -289,14 +289,11 @@ impl Run<'_> {
     /// The last variant alone: one sample further every frame, its maps
     /// decoded ahead while the previous frame draws.
     fn moving(&self, renderers: &mut [Renderer], logs: &mut [PerfLog]) -> Result<()> {
-        let o = self.orbit;
+        let o = &self.orbit;
         let moving = self.variants.len() - 1;
         let last = o.samples.saturating_sub(1).max(1);
         for i in 0..self.warmup + self.views * self.per_view {
-            let eye = o.eye(
-                o.angle_deg(i % last) + 0.5 * o.step_deg,
-                self.between_rings(),
-            );
+            let eye = o.eye(o.between_deg(i % last, 0.5), self.between_rings());
             let start = Instant::now();
             let stats = renderers[self.which[moving]].frame(FrameMode::Pem, eye, o.view(eye))?;
             if i >= self.warmup {

@@ -27,6 +27,7 @@ pub mod options;
 pub mod passes;
 pub mod pem;
 pub mod perf;
+pub mod place;
 pub mod play;
 pub mod probe;
 pub mod relight;

@@ -156,7 +156,7 @@ fn progress_bar(len: u64) -> indicatif::ProgressBar {
 }
 
 /// The object the rows score: the first with an EM or glass table.
-fn reflector_name(scene: &inference::scene::Scene) -> Result<String> {
+pub fn reflector_name(scene: &inference::scene::Scene) -> Result<String> {
     let object = scene
         .objects
         .iter()

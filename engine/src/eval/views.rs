@@ -35,7 +35,7 @@ pub fn views(scene: &Scene, n: u32, elevations: &[f32]) -> Vec<View> {
         for &k in &samples {
             out.push(View {
                 category,
-                azimuth_deg: o.angle_deg(k) + offset * o.step_deg,
+                azimuth_deg: o.between_deg(k, offset),
                 elevation_deg: up,
             });
         }

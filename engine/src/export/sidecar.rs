@@ -50,6 +50,9 @@ pub struct OrbitJson {
     pub start_deg: f32,
     pub step_deg: f32,
     pub azimuth_lines: u32,
+    /// The lines' azimuths when placed unevenly (`[orbit] azimuths_deg`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub azimuths_deg: Option<Vec<f32>>,
     pub rings: u32,
     pub ring_step_deg: f32,
 }
@@ -134,6 +137,7 @@ impl Sidecar {
                 start_deg: o.start_deg,
                 step_deg: o.step_deg,
                 azimuth_lines: o.samples,
+                azimuths_deg: o.azimuths.clone(),
                 rings: o.rings.max(1),
                 ring_step_deg: o.ring_step_deg,
             },

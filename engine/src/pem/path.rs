@@ -12,8 +12,8 @@ const ON_ORBIT: f32 = 2.0 / 3.0;
 
 /// (azimuth, elevation) in degrees of frame `i` of `frames`.
 pub fn path_view(orbit: &Orbit, i: u32, frames: u32) -> (f32, f32) {
-    let first = orbit.start_deg;
-    let last = orbit.start_deg + orbit.step_deg * orbit.samples.saturating_sub(1) as f32;
+    let first = orbit.angle_deg(0);
+    let last = orbit.angle_deg(orbit.samples.saturating_sub(1));
     if frames <= 1 {
         return (first, 0.0);
     }
@@ -51,6 +51,7 @@ mod tests {
             samples: 100,
             rings: 1,
             ring_step_deg: 10.0,
+            azimuths: None,
         };
         let frames = default_frames(&o);
         assert_eq!(frames, 150);

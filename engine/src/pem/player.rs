@@ -133,7 +133,7 @@ impl PemPlayer {
             prefetch: source.reopen().ok().map(Prefetcher::new),
             source,
             grid: ViewGrid::from_orbit(&scene.orbit),
-            orbit: scene.orbit,
+            orbit: scene.orbit.clone(),
             last_angles: None,
             frame: 0,
             scratch: Vec::new(),
@@ -143,6 +143,11 @@ impl PemPlayer {
     /// Forgets every image's tracked state before they are destroyed.
     pub fn release(&self, executor: &mut Executor) {
         self.sets.release(executor);
+    }
+
+    /// Blends between these azimuth lines only (`None`: every line).
+    pub fn use_azimuth_lines(&mut self, lines: Option<&[u32]>) {
+        self.grid = std::mem::take(&mut self.grid).with_azimuths_used(lines);
     }
 
     /// The samples a frame from `eye` draws.

@@ -38,6 +38,7 @@ mod tests {
             samples: 100,
             rings: 1,
             ring_step_deg: 10.0,
+            azimuths: None,
         };
         let grid = ViewGrid::from_orbit(&orbit);
         for k in [0, 37, 99] {
@@ -67,6 +68,7 @@ mod tests {
             samples: 10,
             rings: 3,
             ring_step_deg: 10.0,
+            azimuths: None,
         };
         let grid = ViewGrid::from_orbit(&orbit);
         assert_eq!(grid.len(), orbit.sample_count());

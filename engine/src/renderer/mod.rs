@@ -233,6 +233,15 @@ impl Renderer {
         Some(self.pem.as_ref()?.blend(eye))
     }
 
+    /// Blends PEM frames between these azimuth lines of the scene's grid
+    /// only (`None`: all); no-op without PEM set-up. `engine place` uses
+    /// it to measure a sparse placement on a dense compile.
+    pub fn use_azimuth_lines(&mut self, lines: Option<&[u32]>) {
+        if let Some(p) = self.pem.as_mut() {
+            p.use_azimuth_lines(lines);
+        }
+    }
+
     pub fn size(&self) -> (u32, u32) {
         (self.width, self.height)
     }

@@ -98,7 +98,7 @@ mod tests {
         // A one-sample orbit still has views (all at its one azimuth).
         let one = crate::scene::Orbit {
             samples: 1,
-            ..orbit
+            ..orbit.clone()
         };
         assert!(solve_views(&one).iter().all(|p| p.azimuth_deg == 0.0));
         // Rings above 30° raise the highest views to the top ring.

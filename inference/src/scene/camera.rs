@@ -15,8 +15,10 @@ pub struct Camera {
 /// azimuth line `i` sits at `start_deg + i · step_deg`. With `rings` > 1 the
 /// viewpoint space is 2D: the circle repeated at elevations `j · ring_step_deg`
 /// above the orbit plane (seen from `center`), sample `k` at azimuth line
-/// `k % samples` of ring `k / samples`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// `k % samples` of ring `k / samples`. With `azimuths` the lines sit
+/// where those say (placed where the scene needs them); `start_deg` is
+/// then the first and `step_deg` their mean spacing.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Orbit {
     pub center: Vec3,
     pub radius: f32,
@@ -28,15 +30,35 @@ pub struct Orbit {
     /// Elevation rings (1: today's 1D orbit).
     pub rings: u32,
     pub ring_step_deg: f32,
+    /// Explicit azimuth lines, degrees, increasing (`samples` of them).
+    pub azimuths: Option<Vec<f32>>,
 }
 
 /// Keeps the eye off the poles, where a y-up look-at is undefined.
 const MAX_ELEVATION_DEG: f32 = 89.0;
 
 impl Orbit {
-    /// Azimuth of sample `sample` (not range-checked: off-manifold callers extrapolate).
+    /// Azimuth of line `sample` (not range-checked: off-manifold callers
+    /// extrapolate by `step_deg` past the last explicit line).
     pub fn angle_deg(&self, sample: u32) -> f32 {
-        self.start_deg + sample as f32 * self.step_deg
+        match self.azimuths.as_deref() {
+            Some([.., last]) if sample as usize >= self.azimuths_len() => {
+                last + (sample as usize + 1 - self.azimuths_len()) as f32 * self.step_deg
+            }
+            Some(lines) if !lines.is_empty() => lines[sample as usize],
+            _ => self.start_deg + sample as f32 * self.step_deg,
+        }
+    }
+
+    fn azimuths_len(&self) -> usize {
+        self.azimuths.as_ref().map_or(0, Vec::len)
+    }
+
+    /// The azimuth `t` of the way from line `line` to the next (the views
+    /// between samples).
+    pub fn between_deg(&self, line: u32, t: f32) -> f32 {
+        let a = self.angle_deg(line);
+        a + t * (self.angle_deg(line + 1) - a)
     }
 
     /// Eye position at azimuth `angle_deg` (0 = +z side of `center`, 90 = +x side).
@@ -138,7 +160,27 @@ mod tests {
             samples: 100,
             rings: 1,
             ring_step_deg: 10.0,
+            azimuths: None,
         }
+    }
+
+    #[test]
+    fn explicit_lines_give_angles_between_views_and_extrapolate() {
+        let o = Orbit {
+            azimuths: Some(vec![0.0, 10.0, 14.0]),
+            start_deg: 0.0,
+            step_deg: 7.0,
+            samples: 3,
+            ..orbit()
+        };
+        assert_eq!(
+            [0, 1, 2, 3, 4].map(|k| o.angle_deg(k)),
+            [0.0, 10.0, 14.0, 21.0, 28.0]
+        );
+        assert_eq!(o.between_deg(0, 0.5), 5.0);
+        assert_eq!(o.between_deg(1, 0.5), 12.0);
+        assert_eq!(orbit().between_deg(3, 0.5), 13.5);
+        assert!(o.sample_eye(2).is_ok() && o.sample_eye(3).is_err());
     }
 
     #[test]

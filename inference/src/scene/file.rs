@@ -46,12 +46,14 @@ pub struct OrbitFile {
     pub center: V3,
     pub radius: f32,
     pub height: f32,
-    #[serde(default)]
-    pub start_deg: f32,
-    #[serde(default = "one")]
-    pub step_deg: f32,
-    #[serde(default = "hundred")]
-    pub samples: u32,
+    /// Evenly spaced lines: `samples` azimuths `step_deg` apart from
+    /// `start_deg` [defaults 0°, 1°, 100]; or `azimuths_deg`, each given.
+    pub start_deg: Option<f32>,
+    pub step_deg: Option<f32>,
+    pub samples: Option<u32>,
+    /// Azimuth lines placed where the scene needs them (`engine place`),
+    /// increasing; replaces start_deg, step_deg and samples.
+    pub azimuths_deg: Option<Vec<f32>>,
     /// Elevation rings of the 2D viewpoint space (1: the 1D orbit).
     #[serde(default = "one_ring")]
     pub rings: u32,
@@ -207,12 +209,6 @@ pub struct GlassFile {
     pub view_spread_deg: Option<f32>,
 }
 
-fn one() -> f32 {
-    1.0
-}
-fn hundred() -> u32 {
-    100
-}
 fn one_ring() -> u32 {
     1
 }
@@ -230,4 +226,7 @@ fn default_em_resolution() -> u32 {
 }
 fn default_layers() -> Vec<EmLayer> {
     vec![EmLayer::Distant, EmLayer::Local]
+}
+fn one() -> f32 {
+    1.0
 }

@@ -11,12 +11,17 @@ use glam::Vec3;
 /// Weights below this count as "exactly on a sample": no blend.
 pub const ON_SAMPLE: f32 = 1e-4;
 
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ViewGrid {
     /// Orbit azimuths of the grid's lines, degrees, increasing.
     pub azimuths_deg: Vec<f32>,
     /// Elevations above the orbit plane, degrees, increasing.
     pub elevations_deg: Vec<f32>,
+    /// The azimuth lines views blend between (indices, increasing), when
+    /// only some are: `engine place` measures a subset of a dense grid
+    /// this way, sample indices unchanged. `None`: every line.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub azimuths_used: Option<Vec<u32>>,
 }
 
 /// The samples one view draws from, nearest first, weights summing to 1.
@@ -48,6 +53,32 @@ impl ViewGrid {
                 .map(|k| orbit.angle_deg(k))
                 .collect(),
             elevations_deg: orbit.ring_elevations(),
+            azimuths_used: None,
+        }
+    }
+
+    /// The same grid blending between `lines` only (azimuth line indices;
+    /// out-of-range ones dropped, sorted, deduplicated; empty or `None`
+    /// means every line).
+    pub fn with_azimuths_used(mut self, lines: Option<&[u32]>) -> Self {
+        let n = self.azimuths_deg.len() as u32;
+        self.azimuths_used = lines
+            .map(|l| {
+                let mut l: Vec<u32> = l.iter().copied().filter(|&i| i < n).collect();
+                l.sort_unstable();
+                l.dedup();
+                l
+            })
+            .filter(|l| !l.is_empty());
+        self
+    }
+
+    /// The azimuth lines in use, every `spacing`-th of them.
+    fn azimuth_lines(&self, spacing: u32) -> Vec<usize> {
+        let s = spacing.max(1) as usize;
+        match &self.azimuths_used {
+            Some(l) => l.iter().map(|&i| i as usize).step_by(s).collect(),
+            None => (0..self.azimuths_deg.len()).step_by(s).collect(),
         }
     }
 
@@ -90,8 +121,9 @@ impl ViewGrid {
     /// `blend` false, the nearest alone. Finite for every input.
     pub fn blend(&self, azimuth: f32, elevation: f32, spacing: u32, blend: bool) -> SampleBlend {
         let azimuth = unwrap_around(&self.azimuths_deg, azimuth);
-        let (a0, a1, ta) = bracket(&self.azimuths_deg, azimuth, spacing);
-        let (e0, e1, te) = bracket(&self.elevations_deg, elevation, spacing);
+        let (a0, a1, ta) = bracket(&self.azimuths_deg, &self.azimuth_lines(spacing), azimuth);
+        let elevation_lines = every(self.elevations_deg.len(), spacing);
+        let (e0, e1, te) = bracket(&self.elevations_deg, &elevation_lines, elevation);
         let mut samples: Vec<(u32, f32)> = Vec::with_capacity(4);
         for (i_el, we) in [(e0, 1.0 - te), (e1, te)] {
             for (i_az, wa) in [(a0, 1.0 - ta), (a1, ta)] {
@@ -124,19 +156,24 @@ impl ViewGrid {
     pub fn cell_size(&self, azimuth: f32, elevation: f32, spacing: u32) -> (f32, f32) {
         let azimuth = unwrap_around(&self.azimuths_deg, azimuth);
         (
-            span(&self.azimuths_deg, azimuth, spacing),
-            span(&self.elevations_deg, elevation, spacing),
+            span(&self.azimuths_deg, &self.azimuth_lines(spacing), azimuth),
+            span(
+                &self.elevations_deg,
+                &every(self.elevations_deg.len(), spacing),
+                elevation,
+            ),
         )
     }
 }
 
-/// The spacing of the used lines around `x`.
-fn span(lines: &[f32], x: f32, spacing: u32) -> f32 {
-    let used: Vec<f32> = lines
-        .iter()
-        .step_by(spacing.max(1) as usize)
-        .copied()
-        .collect();
+/// Every `spacing`-th of `n` lines.
+fn every(n: usize, spacing: u32) -> Vec<usize> {
+    (0..n).step_by(spacing.max(1) as usize).collect()
+}
+
+/// The spacing of the `used` lines around `x`.
+fn span(lines: &[f32], used: &[usize], x: f32) -> f32 {
+    let used: Vec<f32> = used.iter().filter_map(|&i| lines.get(i).copied()).collect();
     if used.len() < 2 {
         return 0.0;
     }
@@ -154,17 +191,16 @@ fn unwrap_around(lines: &[f32], azimuth: f32) -> f32 {
     middle + (azimuth - middle + 180.0).rem_euclid(360.0) - 180.0
 }
 
-/// The used lines around `x` (every `spacing`-th, the grid's own ends
-/// kept at multiples of `spacing`) and the fraction of the way from the
-/// lower to the upper one; clamped at the ends; NaN counts as the start.
-fn bracket(lines: &[f32], x: f32, spacing: u32) -> (u32, u32, f32) {
-    let s = spacing.max(1) as usize;
-    let used: Vec<usize> = (0..lines.len()).step_by(s).collect();
-    let Some(&last) = used.last() else {
+/// The `used` lines (indices into `lines`, increasing) around `x` and
+/// the fraction of the way from the lower to the upper one; clamped at
+/// the used ends; NaN counts as the start.
+fn bracket(lines: &[f32], used: &[usize], x: f32) -> (u32, u32, f32) {
+    let used: Vec<usize> = used.iter().copied().filter(|&i| i < lines.len()).collect();
+    let (Some(&first), Some(&last)) = (used.first(), used.last()) else {
         return (0, 0, 0.0);
     };
-    if !x.is_finite() || x <= lines[0] || used.len() == 1 {
-        return (0, 0, 0.0);
+    if !x.is_finite() || x <= lines[first] || used.len() == 1 {
+        return (first as u32, first as u32, 0.0);
     }
     if x >= lines[last] {
         return (last as u32, last as u32, 0.0);
@@ -188,6 +224,7 @@ mod tests {
         ViewGrid {
             azimuths_deg: (0..100).map(|k| k as f32).collect(),
             elevations_deg: vec![0.0],
+            azimuths_used: None,
         }
     }
 
@@ -212,6 +249,7 @@ mod tests {
         let g = ViewGrid {
             azimuths_deg: vec![0.0, 4.0, 10.0],
             elevations_deg: vec![0.0, 15.0, 30.0],
+            azimuths_used: None,
         };
         assert_eq!(g.len(), 9);
         assert_eq!(g.coords(5), (2, 1));
@@ -244,6 +282,7 @@ mod tests {
         let single = ViewGrid {
             azimuths_deg: vec![5.0],
             elevations_deg: vec![0.0],
+            azimuths_used: None,
         };
         assert_eq!(single.blend(50.0, 3.0, 1, true), SampleBlend::one(0));
     }
@@ -258,5 +297,35 @@ mod tests {
         assert_eq!(g.blend(99.0, 0.0, 4, true), SampleBlend::one(96));
         assert_eq!(g.cell_size(13.0, 0.0, 4), (4.0, 0.0));
         assert_eq!(g.cell_size(-20.0, 0.0, 1), (1.0, 0.0));
+    }
+
+    #[test]
+    fn a_subset_of_lines_blends_between_its_neighbours_with_indices_kept() {
+        let g = orbit_grid().with_azimuths_used(Some(&[90, 10, 0, 16, 10, 500]));
+        assert_eq!(g.azimuths_used.as_deref(), Some(&[0, 10, 16, 90][..]));
+        let b = g.blend(13.0, 0.0, 1, true);
+        assert_eq!(b.indices().collect::<Vec<_>>(), [10, 16]);
+        assert!((b.samples[0].1 - 0.5).abs() < 1e-4, "{b:?}");
+        // On a used line alone; on an unused one, blended; clamped at the
+        // used ends, not the grid's.
+        assert_eq!(g.blend(16.0, 0.0, 1, true), SampleBlend::one(16));
+        assert_eq!(g.blend(5.0, 0.0, 1, true).samples.len(), 2);
+        assert_eq!(g.blend(99.0, 0.0, 1, true), SampleBlend::one(90));
+        assert_eq!(g.cell_size(40.0, 0.0, 1), (74.0, 0.0));
+        // Spacing counts used lines; no subset means every line.
+        assert_eq!(
+            g.blend(8.0, 0.0, 2, true).indices().collect::<Vec<_>>(),
+            [0, 16]
+        );
+        assert_eq!(g.blend(50.0, 0.0, 2, true), SampleBlend::one(16));
+        let all = orbit_grid().with_azimuths_used(Some(&[]));
+        assert_eq!(all, orbit_grid());
+        for az in [f32::NAN, -3.0, 1e9] {
+            assert!(
+                g.blend(az, 0.0, 1, true)
+                    .indices()
+                    .all(|k| [0, 10, 16, 90].contains(&k))
+            );
+        }
     }
 }

@@ -12,6 +12,7 @@ mod load;
 pub mod material;
 pub mod mesh;
 pub mod obj;
+pub mod placed;
 pub mod room;
 pub mod shipped;
 pub mod texture;
@@ -20,6 +21,8 @@ pub mod texture;
 mod em_tests;
 #[cfg(test)]
 mod glass_tests;
+#[cfg(test)]
+mod orbit_tests;
 #[cfg(test)]
 mod tests;
 
@@ -92,6 +95,13 @@ impl Scene {
     /// [`SHIPPED`]) or a path to a `.toml` file. Relative mesh paths are
     /// relative to the scene file.
     pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
+        let (text, source) = Scene::text(name_or_path)?;
+        Scene::from_toml(&text, &source)
+    }
+
+    /// The text of a built-in scene or a scene file, and the path it is
+    /// known by (built-ins: `assets/scenes/<name>.toml`).
+    pub fn text(name_or_path: &str) -> Result<(String, PathBuf), SceneError> {
         let p = Path::new(name_or_path);
         let is_path = p.extension().is_some_and(|e| e == "toml") || p.components().count() > 1;
         if !is_path {
@@ -105,7 +115,7 @@ impl Scene {
                 });
             };
             let source = Path::new("assets/scenes").join(format!("{name_or_path}.toml"));
-            return Scene::from_toml(text, &source);
+            return Ok((text.to_owned(), source));
         }
         let text = std::fs::read_to_string(p).map_err(|e| match e.kind() {
             std::io::ErrorKind::NotFound => SceneError::NoScene {
@@ -114,7 +124,7 @@ impl Scene {
             },
             _ => SceneError::io(p, e),
         })?;
-        Scene::from_toml(&text, p)
+        Ok((text, p.to_owned()))
     }
 
     /// Parses scene text; `path` is used for error messages and relative mesh paths.

@@ -50,6 +50,11 @@ pub fn scene_key(scene: &Scene) -> Key {
                     h.write_u32(o.rings);
                     h.f32(o.ring_step_deg);
                 }
+                // Explicit lines: every one (even orbits keep their keys).
+                if let Some(lines) = &o.azimuths {
+                    h.str("azimuths");
+                    lines.iter().for_each(|&a| h.f32(a));
+                }
             }),
         )
         .with(

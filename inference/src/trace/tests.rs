@@ -72,6 +72,7 @@ pub(super) fn scene(objects: Vec<(&str, Mesh, Material)>) -> Scene {
             samples: 4,
             rings: 1,
             ring_step_deg: 10.0,
+            azimuths: None,
         },
         lights: vec![],
         directional_lights: vec![],

@@ -16,6 +16,7 @@ fn main() -> ExitCode {
         Some(Command::Trace(args)) => (cmd::trace::run(args), false),
         Some(Command::Infer(args)) => (cmd::infer::run(args), args.validate),
         Some(Command::Eval(args)) => (cmd::eval::run(args), args.validate),
+        Some(Command::Place(args)) => (cmd::place::run(args), args.validate),
         Some(Command::Encode(args)) => (cmd::encode::run(args), false),
         Some(Command::CodecReport(args)) => (cmd::codec_report::run(args), args.validate),
         Some(Command::Compile(args)) => (cmd::compile::run(args), args.validate),

@@ -12,7 +12,7 @@ use glam::Vec3;
 
 use super::camera::{Camera, Orbit};
 use super::error::SceneError;
-use super::file::{RoomFile, SceneFile};
+use super::file::{OrbitFile, RoomFile, SceneFile};
 use super::light::AreaLight;
 use super::material::Material;
 use super::{Object, Scene, room};
@@ -172,13 +172,8 @@ impl Loader<'_> {
 
     fn orbit(&self, file: &SceneFile) -> Result<Orbit, SceneError> {
         let o = &file.orbit;
-        if !(1..=MAX_SAMPLES).contains(&o.samples) {
-            return Err(self.err(
-                "orbit.samples",
-                format!("{} (expected 1 to {MAX_SAMPLES})", o.samples),
-            ));
-        }
-        if !(1..=MAX_RINGS).contains(&o.rings) || o.samples * o.rings > MAX_SAMPLES {
+        let lines = self.azimuth_lines(o)?;
+        if !(1..=MAX_RINGS).contains(&o.rings) || lines.samples * o.rings > MAX_SAMPLES {
             return Err(self.err(
                 "orbit.rings",
                 format!(
@@ -201,11 +196,63 @@ impl Loader<'_> {
             center: self.vec3("orbit.center", o.center)?,
             radius: self.positive("orbit.radius", o.radius)?,
             height: self.finite("orbit.height", o.height)?,
-            start_deg: self.finite("orbit.start_deg", o.start_deg)?,
-            step_deg: self.finite("orbit.step_deg", o.step_deg)?,
-            samples: o.samples,
+            start_deg: lines.start_deg,
+            step_deg: lines.step_deg,
+            samples: lines.samples,
             rings: o.rings,
             ring_step_deg: o.ring_step_deg,
+            azimuths: lines.azimuths,
+        })
+    }
+
+    /// The orbit's azimuth lines: even (`start_deg`, `step_deg`, `samples`)
+    /// or explicit (`azimuths_deg`: finite, increasing), never both.
+    fn azimuth_lines(&self, o: &OrbitFile) -> Result<AzimuthLines, SceneError> {
+        let Some(list) = &o.azimuths_deg else {
+            let samples = o.samples.unwrap_or(100);
+            if !(1..=MAX_SAMPLES).contains(&samples) {
+                return Err(self.err(
+                    "orbit.samples",
+                    format!("{samples} (expected 1 to {MAX_SAMPLES})"),
+                ));
+            }
+            return Ok(AzimuthLines {
+                start_deg: self.finite("orbit.start_deg", o.start_deg.unwrap_or(0.0))?,
+                step_deg: self.finite("orbit.step_deg", o.step_deg.unwrap_or(1.0))?,
+                samples,
+                azimuths: None,
+            });
+        };
+        if o.samples.is_some() || o.start_deg.is_some() || o.step_deg.is_some() {
+            return Err(self.err(
+                "orbit.azimuths_deg",
+                "given with start_deg, step_deg or samples (expected either the explicit lines \
+                 or the even ones)"
+                    .to_string(),
+            ));
+        }
+        let increasing = list.windows(2).all(|w| w[0] < w[1]);
+        let n = list.len() as u32;
+        if !(1..=MAX_SAMPLES).contains(&n) || !list.iter().all(|a| a.is_finite()) || !increasing {
+            return Err(self.err(
+                "orbit.azimuths_deg",
+                format!(
+                    "{} lines (expected 1 to {MAX_SAMPLES} finite azimuths in degrees, each \
+                     above the one before)",
+                    list.len()
+                ),
+            ));
+        }
+        let (first, last) = (list[0], list[list.len() - 1]);
+        Ok(AzimuthLines {
+            start_deg: first,
+            step_deg: if n > 1 {
+                (last - first) / (n - 1) as f32
+            } else {
+                1.0
+            },
+            samples: n,
+            azimuths: Some(list.clone()),
         })
     }
 
@@ -236,4 +283,12 @@ impl Loader<'_> {
         }
         Ok((min, max))
     }
+}
+
+/// An orbit's azimuth lines as the loader found them.
+struct AzimuthLines {
+    start_deg: f32,
+    step_deg: f32,
+    samples: u32,
+    azimuths: Option<Vec<f32>>,
 }

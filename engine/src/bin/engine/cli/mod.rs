@@ -12,10 +12,12 @@ use std::path::PathBuf;
 mod codec;
 mod compile;
 mod export;
+mod place;
 mod relight;
 pub use codec::{CodecReportArgs, EncodeArgs};
 pub use compile::CompileArgs;
 pub use export::ExportArgs;
+pub use place::PlaceArgs;
 pub use relight::RelightArgs;
 
 #[derive(Parser, Debug)]
@@ -55,6 +57,13 @@ pub enum Command {
     /// views on the orbit, between samples and above the orbit plane;
     /// writes eval.json and tradeoff.png.
     Eval(EvalArgs),
+    /// Choose where a 1D orbit needs its samples: refine from a few even
+    /// samples, splitting the interval whose middle view (blended from its
+    /// ends, on the dense compile) scores worst against the tracer, until
+    /// every middle reaches --target-db or --max-samples are placed; scores
+    /// an even placement of as many samples the same way; writes
+    /// placement.json and placement.png.
+    Place(PlaceArgs),
     /// Write every sample's inferred maps as KTX2 files other engines load
     /// (RGBA float32; cube maps with all their MIP levels) and maps.json
     /// (each sample's viewpoint, each map's EM geometry).

@@ -8,6 +8,7 @@ pub mod encode;
 pub mod eval;
 pub mod export;
 pub mod infer;
+pub mod place;
 pub mod play;
 pub mod relight;
 pub mod trace;

@@ -1,0 +1,40 @@
+//! `engine place`'s command line.
+
+use super::parse_size;
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args, Debug, Clone)]
+pub struct PlaceArgs {
+    /// A built-in scene's name (teapot) or the path of a .toml scene file
+    /// with a 1D orbit; its samples are the dense lines placement chooses from.
+    #[arg(long, default_value = "teapot")]
+    pub scene: String,
+    /// Where the scene's dense compile lives (compiled there if missing) [default: out/<scene>].
+    #[arg(long)]
+    pub data: Option<PathBuf>,
+    /// Output folder for placement.json, placement.png and the traced views [default: <data>/place].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Reflector PSNR every view half way between placed samples should reach, dB.
+    #[arg(long, default_value_t = 42.0, allow_hyphen_values = true)]
+    pub target_db: f64,
+    /// At most this many samples (the budget) [default: the dense lines].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(2..))]
+    pub max_samples: Option<u32>,
+    /// Samples placed evenly before measuring, both ends included.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(2..))]
+    pub start: u32,
+    /// Samples per pixel of the traced views (as `engine eval --spp`).
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub spp: u32,
+    /// Frame size as WIDTHxHEIGHT (the maps' inference size is best).
+    #[arg(long, default_value = "640x480", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Turn the Khronos validation layer on.
+    #[arg(long)]
+    pub validate: bool,
+    /// Vulkan device to use (substring of its name) [default: lavapipe].
+    #[arg(long, env = "ENGINE_DEVICE")]
+    pub device: Option<String>,
+}

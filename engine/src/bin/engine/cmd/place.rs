@@ -1,0 +1,24 @@
+//! `engine place`: where a 1D orbit needs its viewpoint samples.
+
+use crate::cli::{PlaceArgs, device};
+use anyhow::Result;
+use engine::options::RunPlace;
+use engine::place::{PlaceOptions, place};
+
+pub fn run(args: &PlaceArgs) -> Result<String> {
+    let run = RunPlace {
+        scene: args.scene.clone(),
+        out: args.data.clone(),
+        device: device(&args.device, args.validate),
+        size: args.size,
+        recompile: false,
+    };
+    let opts = PlaceOptions {
+        out: args.out.clone(),
+        target_db: args.target_db,
+        max_samples: args.max_samples.unwrap_or(u32::MAX),
+        start: args.start,
+        spp: args.spp,
+    };
+    place(&run, &opts)
+}

@@ -1,0 +1,185 @@
+//! `engine place`: how many viewpoint samples a 1D orbit needs, and where.
+//! On a dense compile (every line inferred), each candidate interval is
+//! scored by playing the view half way along it blended from its two ends
+//! only, against the traced view there; [`plan::place`] splits the worst
+//! until every interval reaches the target or the budget is spent. The
+//! same measurement scores an even placement with as many samples, so the
+//! report compares the two on equal terms.
+
+pub mod plan;
+mod report;
+
+pub use plan::{Interval, Plan, PlanOptions, Stop};
+pub use report::PlaceReport;
+
+use crate::eval::metrics;
+use crate::eval::reference::{References, View};
+use crate::options::{Mode, PemOptions, RunPlace};
+use crate::play::{FrameSource, Session, compile_context, setup_mode};
+use crate::renderer::Renderer;
+use anyhow::{Result, bail};
+use inference::scene::Scene;
+use inference::trace::TraceSettings;
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// What to place and how to measure it.
+#[derive(Clone, Debug)]
+pub struct PlaceOptions {
+    /// Where placement.json, placement.png and the references go
+    /// [default: `<data>/place`].
+    pub out: Option<PathBuf>,
+    pub target_db: f64,
+    pub max_samples: u32,
+    pub start: u32,
+    /// Samples per pixel of the traced views.
+    pub spp: u32,
+}
+
+/// Places the samples of `place`'s scene (compiled there densely first if
+/// missing); writes the report and chart; returns the printed summary.
+pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
+    let Session {
+        scene,
+        out: data,
+        mut renderer,
+        ..
+    } = Session::open(place)?;
+    if scene.orbit.rings > 1 {
+        bail!(
+            "{}: [orbit] rings = {}: `engine place` places the azimuth lines of a 1D orbit \
+             (rings = 1)",
+            scene.source.display(),
+            scene.orbit.rings
+        );
+    }
+    let out = opts.out.clone().unwrap_or_else(|| data.join("place"));
+    crate::util::files::claim_dir(&out)?;
+    let reflector = crate::eval::reflector_name(&scene)?;
+    let ctx = compile_context(place, &scene, &data);
+    let mut source = setup_mode(
+        &ctx,
+        &mut renderer,
+        Mode::LayeredPem,
+        &PemOptions::default(),
+        1,
+    )?;
+    let settings = TraceSettings {
+        width: place.size.0,
+        height: place.size.1,
+        spp: opts.spp,
+        progress: false,
+        ..TraceSettings::default()
+    };
+    let references = References::new(&scene, &out.join("reference"), settings)?;
+    let plan_opts = PlanOptions {
+        lines: scene.orbit.samples,
+        start: opts.start,
+        max_samples: opts.max_samples,
+        target_db: opts.target_db,
+    };
+    let progress = spinner();
+    let start = Instant::now();
+    let mut probe = Probe {
+        scene: &scene,
+        renderer: &mut renderer,
+        source: &mut source,
+        references: &references,
+        reflector: &reflector,
+    };
+    let mut seen = BTreeMap::new();
+    let mut measure = |from, to, at| {
+        progress.set_message(format!("lines {from}..{to}: view at line {at}"));
+        let db = probe.score(from, to, at);
+        progress.inc(1);
+        db
+    };
+    let plan = plan::place(&plan_opts, &mut seen, &mut measure)?;
+    let even_lines = plan::uniform(plan_opts.lines, plan.lines.len() as u32);
+    let even = plan::measure_intervals(&even_lines, &mut seen, &mut measure)?;
+    progress.finish_and_clear();
+    let report = PlaceReport::new(&scene, opts, plan, even_lines, even, start.elapsed());
+    report.write(&out)?;
+    let scene_file = placed_scene(&place.scene, &report, &out);
+    Ok(report.summary(&out) + &scene_file)
+}
+
+/// Writes `<name>_placed.toml` under `out`: the scene with the placed
+/// lines, checked to load from there; returns what to print (how to
+/// play it, or why it could not be written and the line to copy).
+fn placed_scene(scene_arg: &str, report: &PlaceReport, out: &std::path::Path) -> String {
+    let lines = &report.placed.azimuths_deg;
+    let name = format!("{}_placed", report.scene);
+    let path = out.join(format!("{name}.toml"));
+    let note = format!(
+        "placed by `engine place`: {} of {} samples, {}",
+        lines.len(),
+        report.dense_samples,
+        report.reason
+    );
+    let written = (|| -> Result<()> {
+        let (text, _) = Scene::text(scene_arg)?;
+        let Some(text) = inference::scene::placed::with_azimuths(&text, &name, lines, &note) else {
+            bail!("the scene file has no [orbit] table or no top-level name line to rewrite");
+        };
+        Scene::from_toml(&text, &path)?;
+        crate::util::files::write(&path, text.as_bytes())
+    })();
+    match written {
+        Ok(()) => format!(
+            "wrote {0}; play it with `engine --scene {0}`\n",
+            path.display()
+        ),
+        Err(e) => format!(
+            "no placed scene file ({e:#}); put `azimuths_deg = {lines:?}` in [orbit] instead of \
+             start_deg, step_deg and samples\n"
+        ),
+    }
+}
+
+fn spinner() -> indicatif::ProgressBar {
+    indicatif::ProgressBar::new_spinner().with_style(
+        indicatif::ProgressStyle::with_template(
+            "place {spinner} {pos} views scored, {msg} {elapsed}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+    )
+}
+
+/// Scores one view blended from two lines.
+struct Probe<'a, 's> {
+    scene: &'a Scene,
+    renderer: &'a mut Renderer,
+    source: &'a mut FrameSource<'s>,
+    references: &'a References<'a>,
+    reflector: &'a str,
+}
+
+impl Probe<'_, '_> {
+    /// Reflector PSNR (as `engine eval` scores it) of the frame at line
+    /// `at`'s azimuth blended from lines `from` and `to` alone.
+    fn score(&mut self, from: u32, to: u32, at: u32) -> Result<f64> {
+        let orbit = &self.scene.orbit;
+        let azimuth = orbit.angle_deg(at);
+        let reference = self
+            .references
+            .get(View::on_orbit(azimuth), self.reflector)?;
+        self.renderer.use_azimuth_lines(Some(&[from, to]));
+        let eye = orbit.eye(azimuth, 0.0);
+        // The first frame brings the two samples' maps in; the second is scored.
+        self.source.frame(self.renderer, self.scene, eye)?;
+        self.renderer.settle();
+        let pixels = self.source.frame(self.renderer, self.scene, eye)?.1;
+        self.renderer.use_azimuth_lines(None);
+        let (width, height) = self.renderer.size();
+        let mask = &reference.mask;
+        match metrics::masked_psnr(&reference.beauty, &pixels, mask)? {
+            Some(db) => Ok(db),
+            None => bail!(
+                "view at azimuth {azimuth}° (line {at}): {} covers no pixel at {width}x{height}",
+                self.reflector
+            ),
+        }
+    }
+}

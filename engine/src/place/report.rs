@@ -1,0 +1,167 @@
+//! What `engine place` found, as placement.json, placement.png and text.
+
+use super::PlaceOptions;
+use super::plan::{Interval, Plan, Stop, worst};
+use crate::eval::plot::{ChartSpec, LegendPosition, Series, xy_chart};
+use crate::util::stats::median;
+use anyhow::Result;
+use inference::scene::Scene;
+use std::path::Path;
+use std::time::Duration;
+
+/// One placement's lines and the scores of its intervals' middles.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Placement {
+    pub samples: u32,
+    pub lines: Vec<u32>,
+    pub azimuths_deg: Vec<f32>,
+    /// Lowest and median interval score, dB (reflector PSNR half way).
+    pub worst_db: f64,
+    pub median_db: f64,
+    pub intervals: Vec<Interval>,
+    /// Azimuth of each interval's scored view, degrees.
+    pub probes_deg: Vec<f32>,
+}
+
+impl Placement {
+    fn new(scene: &Scene, lines: Vec<u32>, intervals: Vec<Interval>) -> Placement {
+        let scores: Vec<f64> = intervals.iter().map(|i| i.psnr_db).collect();
+        Placement {
+            samples: lines.len() as u32,
+            azimuths_deg: lines.iter().map(|&l| scene.orbit.angle_deg(l)).collect(),
+            lines,
+            worst_db: worst(&intervals),
+            median_db: if scores.is_empty() {
+                f64::INFINITY
+            } else {
+                median(&scores)
+            },
+            probes_deg: intervals
+                .iter()
+                .map(|i| scene.orbit.angle_deg(i.probe))
+                .collect(),
+            intervals,
+        }
+    }
+}
+
+/// placement.json.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PlaceReport {
+    pub scene: String,
+    /// Lines of the dense compile the samples were chosen from.
+    pub dense_samples: u32,
+    pub target_db: f64,
+    pub max_samples: u32,
+    pub start: u32,
+    pub spp: u32,
+    pub stop: Stop,
+    /// Why it stopped where it did, in words.
+    pub reason: String,
+    pub placed: Placement,
+    /// An even placement with as many samples, scored the same way.
+    pub even: Placement,
+    /// Every interval measured while refining, in order.
+    pub measured: Vec<Interval>,
+    pub minutes: f64,
+}
+
+impl PlaceReport {
+    pub fn new(
+        scene: &Scene,
+        opts: &PlaceOptions,
+        plan: Plan,
+        even_lines: Vec<u32>,
+        even: Vec<Interval>,
+        took: Duration,
+    ) -> PlaceReport {
+        let placed = Placement::new(scene, plan.lines, plan.intervals);
+        let reason = match plan.stop {
+            Stop::TargetMet => format!(
+                "every interval's middle reaches {} dB with {} of {} samples",
+                opts.target_db, placed.samples, scene.orbit.samples
+            ),
+            Stop::Budget => format!(
+                "the budget of {} samples is spent; the worst interval ({:.2} dB) is below {} dB",
+                opts.max_samples, placed.worst_db, opts.target_db
+            ),
+        };
+        PlaceReport {
+            scene: scene.name.clone(),
+            dense_samples: scene.orbit.samples,
+            target_db: opts.target_db,
+            max_samples: opts.max_samples,
+            start: opts.start,
+            spp: opts.spp,
+            stop: plan.stop,
+            reason,
+            even: Placement::new(scene, even_lines, even),
+            placed,
+            measured: plan.measured,
+            minutes: took.as_secs_f64() / 60.0,
+        }
+    }
+
+    /// placement.json and placement.png under `out`.
+    pub fn write(&self, out: &Path) -> Result<()> {
+        crate::util::files::write_json(&out.join("placement.json"), self)?;
+        self.chart(&out.join("placement.png"))
+    }
+
+    fn chart(&self, path: &Path) -> Result<()> {
+        let series = |name: String, p: &Placement| Series {
+            name,
+            points: p
+                .probes_deg
+                .iter()
+                .zip(&p.intervals)
+                .map(|(&x, i)| (f64::from(x), i.psnr_db))
+                .collect(),
+            labels: Vec::new(),
+            connect: true,
+        };
+        let mut spec = ChartSpec::new(
+            &format!("Where {} needs its samples", self.scene),
+            "azimuth of the view half way between samples (degrees)",
+            "reflector PSNR half way between samples (dB)",
+        );
+        spec.legend = LegendPosition::LowerLeft;
+        spec.series = vec![
+            series(
+                format!("placed, {} samples", self.placed.samples),
+                &self.placed,
+            ),
+            series(format!("even, {} samples", self.even.samples), &self.even),
+        ];
+        spec.series.retain(|s| !s.points.is_empty());
+        if spec.series.is_empty() {
+            return Ok(());
+        }
+        xy_chart(path, &spec)
+    }
+
+    /// What `engine place` prints.
+    pub fn summary(&self, out: &Path) -> String {
+        let p = &self.placed;
+        let e = &self.even;
+        format!(
+            "{}: {} samples placed of {} ({}): worst {:.2} dB, median {:.2} dB half way between \
+             samples; an even placement of {} samples: worst {:.2} dB, median {:.2} dB\n\
+             lines {:?}\n{} intervals measured in {:.1} min; wrote {} and {}\n",
+            self.scene,
+            p.samples,
+            self.dense_samples,
+            self.reason,
+            p.worst_db,
+            p.median_db,
+            e.samples,
+            e.worst_db,
+            e.median_db,
+            p.lines,
+            self.measured.len() + e.intervals.len(),
+            self.minutes,
+            out.join("placement.json").display(),
+            out.join("placement.png").display(),
+        )
+    }
+}

@@ -1,0 +1,110 @@
+//! `engine place` end to end on the tiny scene with 5 dense samples: it
+//! refines from the two ends, splits where blending scored worst, stops at
+//! the budget, compares with an even placement, and writes a placed scene
+//! file that compiles and plays only its own samples.
+
+mod common;
+
+use common::{output_text, run_engine, tiny_scene};
+use std::path::Path;
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8")
+}
+
+fn num(v: &serde_json::Value) -> f64 {
+    v.as_f64().unwrap_or_else(|| panic!("not a number: {v}"))
+}
+
+#[test]
+fn placement_splits_the_worst_interval_and_its_scene_plays() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let tiny = tiny_scene(dir.path());
+    let text = std::fs::read_to_string(&tiny).expect("tiny scene");
+    let dense = dir.path().join("dense.toml");
+    std::fs::write(&dense, text.replacen("samples = 3", "samples = 5", 1)).expect("write");
+    let (data, out) = (dir.path().join("data"), dir.path().join("place"));
+    let o = run_engine(&[
+        "place",
+        "--scene",
+        s(&dense),
+        "--size",
+        "64x48",
+        "--data",
+        s(&data),
+        "--out",
+        s(&out),
+        "--start",
+        "2",
+        "--max-samples",
+        "3",
+        "--target-db",
+        "99",
+        "--spp",
+        "4",
+        "--validate",
+    ]);
+    let log = output_text(&o);
+    assert!(
+        o.status.success() && log.contains("validation messages: 0"),
+        "{log}"
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("placement.json")).expect("json"))
+            .expect("JSON");
+    assert_eq!(report["stop"], "budget", "{report}");
+    let lines: Vec<u64> = report["placed"]["lines"]
+        .as_array()
+        .expect("lines")
+        .iter()
+        .filter_map(|l| l.as_u64())
+        .collect();
+    assert_eq!(lines, [0, 2, 4], "{report}");
+    // The whole span was scored first (at line 2), then each half.
+    let measured = report["measured"].as_array().expect("measured");
+    let probes: Vec<u64> = measured
+        .iter()
+        .filter_map(|m| m["probe"].as_u64())
+        .collect();
+    assert_eq!(probes, [2, 1, 3], "{report}");
+    let db: Vec<f64> = measured.iter().map(|m| num(&m["psnr_db"])).collect();
+    assert!(db.iter().all(|d| d.is_finite() && *d > 10.0), "{db:?}");
+    // Blending over half the span is better on both halves.
+    assert!(db[1] > db[0] && db[2] > db[0], "{db:?}");
+    // The even placement of 3 samples is the same here: the same scores.
+    assert_eq!(report["even"]["lines"], report["placed"]["lines"]);
+    assert_eq!(
+        num(&report["even"]["worst_db"]),
+        num(&report["placed"]["worst_db"])
+    );
+    assert!(out.join("placement.png").is_file());
+    assert_placed_scene_plays(&out.join("teapot_placed.toml"), &dir.path().join("play"));
+}
+
+/// The placed scene compiles its 3 samples only (eyes at dense lines 0, 2
+/// and 4) and plays with validation on.
+fn assert_placed_scene_plays(scene: &Path, out: &Path) {
+    let text = std::fs::read_to_string(scene).expect("placed scene written");
+    assert!(text.contains("azimuths_deg = [0.0, 2.0, 4.0]"), "{text}");
+    let o = run_engine(&[
+        "--scene",
+        s(scene),
+        "--size",
+        "64x48",
+        "--frames",
+        "4",
+        "--warmup",
+        "1",
+        "--out",
+        s(out),
+        "--validate",
+    ]);
+    let log = output_text(&o);
+    assert!(
+        o.status.success() && log.contains("validation messages: 0"),
+        "{log}"
+    );
+    let infer = out.join("infer");
+    assert!(infer.join("sample_0002").is_dir(), "{log}");
+    assert!(!infer.join("sample_0003").exists(), "{log}");
+}

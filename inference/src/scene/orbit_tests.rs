@@ -1,0 +1,69 @@
+//! `[orbit] azimuths_deg`: explicit azimuth lines (placed by `engine
+//! place`) load, key the orbit, and are checked by field.
+
+use super::*;
+
+const EVEN: &str = "start_deg = 0.0\nstep_deg = 1.0\nsamples = 100\n";
+
+/// The shipped teapot scene with its even lines replaced by `lines`.
+fn with_lines(lines: &str) -> Result<Scene, SceneError> {
+    let text = super::shipped::shipped("teapot").expect("shipped teapot scene");
+    assert!(
+        text.contains(EVEN),
+        "test bug: the teapot's even lines changed"
+    );
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("placed.toml");
+    std::fs::write(&path, text.replacen(EVEN, lines, 1)).expect("write scene");
+    Scene::load(&path.to_string_lossy())
+}
+
+#[test]
+fn explicit_lines_load_as_the_orbit_samples() {
+    let s = with_lines("azimuths_deg = [0.0, 12.0, 25.0, 31.0, 99.0]\n").expect("loads");
+    let o = &s.orbit;
+    assert_eq!((o.samples, o.sample_count()), (5, 5));
+    assert_eq!(
+        [0, 1, 2, 3, 4].map(|k| o.angle_deg(k)),
+        [0.0, 12.0, 25.0, 31.0, 99.0]
+    );
+    assert_eq!((o.start_deg, o.step_deg), (0.0, 99.0 / 4.0));
+    assert_eq!(o.between_deg(2, 0.5), 28.0);
+    let grid = ViewGrid::from_orbit(o);
+    assert_eq!(grid.azimuths_deg, [0.0, 12.0, 25.0, 31.0, 99.0]);
+    // Sample 3's eye is the even orbit's line 31.
+    let even = Scene::load("teapot").expect("teapot");
+    let eye = |s: &Scene, k| s.orbit.sample_eye(k).expect("in range");
+    assert!(eye(&s, 3).abs_diff_eq(eye(&even, 31), 1e-6));
+}
+
+#[test]
+fn explicit_lines_key_the_orbit_and_even_orbits_keep_their_keys() {
+    let key = |s: &Scene| crate::trace::cache::scene_key(s);
+    let even = Scene::load("teapot").expect("teapot");
+    let a = with_lines("azimuths_deg = [0.0, 50.0, 99.0]\n").expect("loads");
+    let b = with_lines("azimuths_deg = [0.0, 51.0, 99.0]\n").expect("loads");
+    assert_eq!(key(&a).changes(&key(&even)), ["orbit"]);
+    assert_eq!(key(&a).changes(&key(&b)), ["orbit"]);
+    let same = with_lines(EVEN).expect("loads");
+    assert_eq!(key(&same), key(&even));
+}
+
+#[test]
+fn bad_lines_name_the_field() {
+    for bad in [
+        "azimuths_deg = []\n",
+        "azimuths_deg = [0.0, 10.0, 10.0]\n",
+        "azimuths_deg = [20.0, 10.0]\n",
+        "azimuths_deg = [0.0, nan]\n",
+        "azimuths_deg = [0.0, inf]\n",
+        "azimuths_deg = [0.0, 10.0]\nsamples = 2\n",
+        "azimuths_deg = [0.0, 10.0]\nstep_deg = 1.0\n",
+    ] {
+        let e = with_lines(bad).expect_err(bad).to_string();
+        assert!(
+            e.contains("orbit.azimuths_deg") && e.contains("placed.toml"),
+            "{bad}: {e}"
+        );
+    }
+}
