@@ -31,7 +31,7 @@ fn deferred_and_multipass_frames_agree() {
             "{name}: A x vs render {a_vs_render:.1} dB"
         );
         let device = validated_device();
-        let orbit = scene.orbit;
+        let orbit = scene.orbit.clone();
         let frame = |compositing, eye| {
             let mut r = Renderer::new(&device, &scene, 96, 72).expect("renderer");
             let settings = PemSettings {

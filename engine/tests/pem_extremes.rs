@@ -38,7 +38,7 @@ fn compile_maps(scene_path: &Path, out: &Path) {
 
 /// The eyes at the extremes, each with what makes it one.
 fn extreme_eyes(scene: &Scene, centroid: Vec3) -> [(&'static str, Vec3); 10] {
-    let orbit = scene.orbit;
+    let orbit = scene.orbit.clone();
     let (room_min, room_max) = scene.bounds();
     [
         ("first sample", orbit.sample_eye(0).expect("sample")),
@@ -131,7 +131,7 @@ fn pem_frames_stay_finite_at_the_extremes() {
     let centroid = teapot.mesh.area_weighted_centroid();
     let device = validated_device();
     let mut renderer = Renderer::new(&device, &scene, 64, 48).expect("renderer");
-    let orbit = scene.orbit;
+    let orbit = scene.orbit.clone();
     let eyes = extreme_eyes(&scene, centroid);
     let multipass = PemSettings {
         compositing: Compositing::Multipass,
