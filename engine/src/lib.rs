@@ -2,7 +2,8 @@
 //! the layers below it; the `engine` binary's commands sit above all):
 //!
 //! ```text
-//!  play · bench · eval · compile · codec_report   drivers, typed options (options)
+//!  play · bench · eval · place · compile           drivers, typed options (options)
+//!  · codec_report
 //!  · export · video                                 results for other programs and people
 //!  renderer · pem · probe                          what a frame and a probe render are
 //!  passes                                          one file per pass

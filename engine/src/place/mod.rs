@@ -112,12 +112,7 @@ fn placed_scene(scene_arg: &str, report: &PlaceReport, out: &std::path::Path) ->
     let lines = &report.placed.azimuths_deg;
     let name = format!("{}_placed", report.scene);
     let path = out.join(format!("{name}.toml"));
-    let note = format!(
-        "placed by `engine place`: {} of {} samples, {}",
-        lines.len(),
-        report.dense_samples,
-        report.reason
-    );
+    let note = format!("placed by `engine place`: {}", report.reason);
     let written = (|| -> Result<()> {
         let (text, _) = Scene::text(scene_arg)?;
         let Some(text) = inference::scene::placed::with_azimuths(&text, &name, lines, &note) else {
