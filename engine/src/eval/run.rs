@@ -103,8 +103,11 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
         if !row.label.contains(' ') {
             pictures.extend(picture.map(|p| (row.label.clone(), p)));
         }
+        let samples = matches!(row.mode, Mode::LayeredPem | Mode::SpherePem | Mode::Ptm)
+            .then(|| scene.orbit.sample_count());
         table_rows.push(EvalRow {
             map_bytes,
+            samples,
             ..table_row(row, &results, opts.views)
         });
     }
@@ -438,6 +441,7 @@ fn table_row(row: &Row, results: &[ViewResult], views: u32) -> EvalRow {
             above: views,
         }),
         map_bytes: None,
+        samples: None,
         above,
     }
 }

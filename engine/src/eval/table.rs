@@ -71,6 +71,10 @@ pub struct EvalRow {
     /// Bytes of maps this mode reads (on disk or uploaded), when known.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub map_bytes: Option<u64>,
+    /// Viewpoint samples the maps hold (the row's sample budget), for
+    /// modes that read per-sample maps.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub samples: Option<u32>,
     /// Scores at each elevation above the plane (the `*_above` fields are
     /// the first's).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -216,8 +220,8 @@ impl EvalTable {
     pub fn to_markdown(&self) -> String {
         let mut out = String::from(
             "| mode | settings | PSNR on (dB) | PSNR between (dB) | PSNR above (dB) \
-             | FLIP on | FLIP between | FLIP above | ms/frame | map bytes |\n\
-             |---|---|--:|--:|--:|--:|--:|--:|--:|--:|\n",
+             | FLIP on | FLIP between | FLIP above | ms/frame | map bytes | samples |\n\
+             |---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n",
         );
         for row in &self.rows {
             let settings = if row.settings.is_empty() {
@@ -234,7 +238,7 @@ impl EvalTable {
             };
             let _ = writeln!(
                 out,
-                "| {} | {} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {:.2} | {} |",
+                "| {} | {} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {:.2} | {} | {} |",
                 cell(&row.mode),
                 cell(&settings),
                 psnr_cell(row.psnr_on_db),
@@ -246,6 +250,8 @@ impl EvalTable {
                 row.frame_ms,
                 row.map_bytes
                     .map_or_else(|| "—".to_owned(), |b| b.to_string()),
+                row.samples
+                    .map_or_else(|| "—".to_owned(), |n| n.to_string()),
             );
         }
         out
@@ -301,6 +307,7 @@ mod tests {
             frame_ms_p95: None,
             views: None,
             map_bytes: None,
+            samples: None,
             above: Vec::new(),
         }
     }
@@ -353,6 +360,7 @@ mod tests {
             above: 4,
         });
         r.map_bytes = Some(1 << 20);
+        r.samples = Some(23);
         let table = table_of(vec![row("pem"), r]);
         let value = serde_json::to_value(&table)?;
         assert_eq!(
@@ -361,6 +369,8 @@ mod tests {
         );
         assert_eq!(value["rows"][1]["frame_ms_p95"], json!(4.0));
         assert_eq!(value["rows"][1]["map_bytes"], json!(1 << 20));
+        assert_eq!(value["rows"][1]["samples"], json!(23));
+        assert!(value["rows"][0].get("samples").is_none());
 
         let dir = tempfile::tempdir()?;
         let path = dir.path().join("eval.json");
