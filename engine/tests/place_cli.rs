@@ -108,3 +108,20 @@ fn assert_placed_scene_plays(scene: &Path, out: &Path) {
     assert!(infer.join("sample_0002").is_dir(), "{log}");
     assert!(!infer.join("sample_0003").exists(), "{log}");
 }
+
+#[test]
+fn a_2d_viewpoint_space_is_refused_before_anything_compiles() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let data = dir.path().join("data");
+    let o = run_engine(&["place", "--scene", "teapot_rings", "--data", s(&data)]);
+    let log = output_text(&o);
+    assert!(!o.status.success(), "{log}");
+    assert!(
+        log.contains("rings = 4") && log.contains("1D orbit"),
+        "{log}"
+    );
+    assert!(
+        !data.join("trace").exists() && !data.join("infer").exists(),
+        "{log}"
+    );
+}
