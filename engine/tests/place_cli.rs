@@ -125,3 +125,30 @@ fn a_2d_viewpoint_space_is_refused_before_anything_compiles() {
         "{log}"
     );
 }
+
+#[test]
+fn a_budget_below_the_start_lines_is_refused_before_anything_compiles() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let data = dir.path().join("data");
+    let o = run_engine(&[
+        "place",
+        "--scene",
+        "teapot",
+        "--data",
+        s(&data),
+        "--start",
+        "5",
+        "--max-samples",
+        "3",
+    ]);
+    let log = output_text(&o);
+    assert!(!o.status.success(), "{log}");
+    assert!(
+        log.contains("--max-samples") && log.contains("teapot.toml"),
+        "{log}"
+    );
+    assert!(
+        !data.join("trace").exists() && !data.join("infer").exists(),
+        "{log}"
+    );
+}

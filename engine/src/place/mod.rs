@@ -17,7 +17,7 @@ use crate::eval::reference::{References, View};
 use crate::options::{Mode, PemOptions, RunPlace};
 use crate::play::{FrameSource, Session, compile_context, setup_mode};
 use crate::renderer::Renderer;
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use inference::scene::Scene;
 use inference::trace::TraceSettings;
 use std::collections::BTreeMap;
@@ -54,6 +54,15 @@ pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
             scene.orbit.rings
         );
     }
+    let plan_opts = PlanOptions {
+        lines: scene.orbit.samples,
+        start: opts.start,
+        max_samples: opts.max_samples,
+        target_db: opts.target_db,
+    };
+    plan_opts
+        .validate()
+        .with_context(|| format!("{}: [orbit]", scene.source.display()))?;
     let out = opts.out.clone().unwrap_or_else(|| data.join("place"));
     crate::util::files::claim_dir(&out)?;
     let reflector = crate::eval::reflector_name(&scene)?;
@@ -73,12 +82,6 @@ pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
         ..TraceSettings::default()
     };
     let references = References::new(&scene, &out.join("reference"), settings)?;
-    let plan_opts = PlanOptions {
-        lines: scene.orbit.samples,
-        start: opts.start,
-        max_samples: opts.max_samples,
-        target_db: opts.target_db,
-    };
     let progress = spinner();
     let start = Instant::now();
     let mut probe = Probe {

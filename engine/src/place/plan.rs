@@ -19,6 +19,26 @@ pub struct PlanOptions {
     pub target_db: f64,
 }
 
+impl PlanOptions {
+    /// An error naming what cannot be placed: fewer than 2 lines or start
+    /// lines, a budget below the start lines, a target that is no number.
+    pub fn validate(&self) -> Result<()> {
+        if self.lines < 2 || self.start < 2 || self.max_samples < self.start.min(self.lines) {
+            bail!(
+                "placement over {} lines from {} start lines with at most {}: expected at least \
+                 2 lines, 2 start lines and a budget (--max-samples) of at least the start lines",
+                self.lines,
+                self.start,
+                self.max_samples
+            );
+        }
+        if !self.target_db.is_finite() {
+            bail!("--target-db {}: expected a finite number", self.target_db);
+        }
+        Ok(())
+    }
+}
+
 /// One interval between neighbouring placed lines and the score of the
 /// view half way along it (`probe`), blended from its two ends.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -123,18 +143,7 @@ pub fn place(
     seen: &mut BTreeMap<(u32, u32), Interval>,
     mut measure: impl FnMut(u32, u32, u32) -> Result<f64>,
 ) -> Result<Plan> {
-    if opts.lines < 2 || opts.start < 2 || opts.max_samples < opts.start.min(opts.lines) {
-        bail!(
-            "placement over {} lines from {} start lines with at most {}: expected at least 2 \
-             lines, 2 start lines and a budget of at least the start lines",
-            opts.lines,
-            opts.start,
-            opts.max_samples
-        );
-    }
-    if !opts.target_db.is_finite() {
-        bail!("target {} dB: expected a finite number", opts.target_db);
-    }
+    opts.validate()?;
     let mut lines = uniform(opts.lines, opts.start);
     let mut order: Vec<Interval> = Vec::new();
     loop {
