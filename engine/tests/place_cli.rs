@@ -38,6 +38,8 @@ fn placement_splits_the_worst_interval_and_its_scene_plays() {
         "2",
         "--max-samples",
         "3",
+        "--max-bytes",
+        "1000000000000",
         "--target-db",
         "99",
         "--spp",
@@ -78,7 +80,50 @@ fn placement_splits_the_worst_interval_and_its_scene_plays() {
         num(&report["placed"]["worst_db"])
     );
     assert!(out.join("placement.png").is_file());
+    assert_byte_budget(&report, &dense, &data);
     assert_placed_scene_plays(&out.join("teapot_placed.toml"), &dir.path().join("play"));
+}
+
+/// The byte budget takes its bytes per sample from the dense container
+/// (5 samples) and estimates the placed 3 from it; a budget below two
+/// samples' worth is refused, naming what fits, with no placement written.
+fn assert_byte_budget(report: &serde_json::Value, dense: &Path, data: &Path) {
+    let container = std::fs::metadata(data.join("teapot.ptxc"))
+        .expect("dense container")
+        .len() as f64;
+    let per_sample = num(&report["max_bytes"]["per_sample"]);
+    assert!((per_sample * 5.0 - container).abs() < 1.0, "{report}");
+    let estimated = num(&report["estimated_bytes"]);
+    assert!(
+        (estimated - (per_sample * 3.0).round()).abs() < 0.5,
+        "{report}"
+    );
+    let small = ((per_sample * 1.5) as u64).to_string();
+    let out = data.join("small_budget");
+    let o = run_engine(&[
+        "place",
+        "--scene",
+        s(dense),
+        "--size",
+        "64x48",
+        "--data",
+        s(data),
+        "--out",
+        s(&out),
+        "--start",
+        "2",
+        "--max-bytes",
+        &small,
+        "--spp",
+        "4",
+    ]);
+    let log = output_text(&o);
+    assert!(!o.status.success(), "{log}");
+    assert!(
+        log.contains(&format!("--max-bytes {small}")) && log.contains("so 1 sample fit"),
+        "{log}"
+    );
+    assert!(!out.join("placement.json").exists(), "{log}");
 }
 
 /// The placed scene compiles its 3 samples only (eyes at dense lines 0, 2

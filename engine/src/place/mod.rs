@@ -32,6 +32,9 @@ pub struct PlaceOptions {
     pub out: Option<PathBuf>,
     pub target_db: f64,
     pub max_samples: u32,
+    /// At most this many container bytes, estimated from the dense
+    /// container's bytes per sample ([`plan::samples_within_bytes`]).
+    pub max_bytes: Option<u64>,
     pub start: u32,
     /// Samples per pixel of the traced views.
     pub spp: u32,
@@ -54,7 +57,7 @@ pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
             scene.orbit.rings
         );
     }
-    let plan_opts = PlanOptions {
+    let mut plan_opts = PlanOptions {
         lines: scene.orbit.samples,
         start: opts.start,
         max_samples: opts.max_samples,
@@ -81,6 +84,10 @@ pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
         progress: false,
         ..TraceSettings::default()
     };
+    let bytes = Bytes::of(&renderer, &scene, opts.max_bytes)?;
+    if let Some(b) = &bytes {
+        b.limit(&mut plan_opts)?;
+    }
     let references = References::new(&scene, &out.join("reference"), settings)?;
     let progress = spinner();
     let start = Instant::now();
@@ -102,10 +109,56 @@ pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
     let even_lines = plan::uniform(plan_opts.lines, plan.lines.len() as u32);
     let even = plan::measure_intervals(&even_lines, &mut seen, &mut measure)?;
     progress.finish_and_clear();
-    let report = PlaceReport::new(&scene, opts, plan, even_lines, even, start.elapsed());
+    let report = PlaceReport::new(&scene, opts, bytes, plan, even_lines, even, start.elapsed());
     report.write(&out)?;
     let scene_file = placed_scene(&place.scene, &report, &out);
     Ok(report.summary(&out) + &scene_file)
+}
+
+/// A budget of container bytes and what it buys at the dense container's
+/// bytes per sample.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct Bytes {
+    pub max: u64,
+    pub per_sample: f64,
+    pub samples: u32,
+}
+
+impl Bytes {
+    /// None without `--max-bytes`; an error when the maps play from EXR
+    /// files (no container to take bytes per sample from).
+    fn of(renderer: &Renderer, scene: &Scene, max: Option<u64>) -> Result<Option<Bytes>> {
+        let Some(max) = max else { return Ok(None) };
+        let Some(dense) = renderer.map_bytes else {
+            bail!(
+                "--max-bytes {max}: {}'s dense maps play from EXR files, not a container, so there                  are no bytes per sample to budget with; encode them first (`engine encode`) or                  use --max-samples",
+                scene.name
+            );
+        };
+        let lines = scene.orbit.samples;
+        Ok(Some(Bytes {
+            max,
+            per_sample: dense as f64 / f64::from(lines.max(1)),
+            samples: plan::samples_within_bytes(max, dense, lines),
+        }))
+    }
+
+    /// Caps `plan`'s budget at the samples that fit; an error naming what
+    /// fits when that is below the start lines.
+    fn limit(&self, plan: &mut PlanOptions) -> Result<()> {
+        plan.max_samples = plan.max_samples.min(self.samples);
+        plan.validate().with_context(|| {
+            format!(
+                "--max-bytes {}: the dense container holds {:.0} B a sample, so {} fit",
+                self.max,
+                self.per_sample,
+                match self.samples {
+                    1 => "1 sample".to_string(),
+                    n => format!("{n} samples"),
+                }
+            )
+        })
+    }
 }
 
 /// Writes `<name>_placed.toml` under `out`: the scene with the placed

@@ -87,6 +87,18 @@ pub fn worst(intervals: &[Interval]) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
+/// How many samples fit in `max_bytes` of container, from the dense
+/// container's `dense_bytes` over its `dense_lines` samples. The encoder
+/// codes at a fixed ratio, so a container's bytes grow in proportion to
+/// the samples it holds and the dense bytes per sample carry over.
+pub fn samples_within_bytes(max_bytes: u64, dense_bytes: u64, dense_lines: u32) -> u32 {
+    if dense_bytes == 0 {
+        return u32::MAX;
+    }
+    let fit = u128::from(max_bytes) * u128::from(dense_lines) / u128::from(dense_bytes);
+    u32::try_from(fit).unwrap_or(u32::MAX)
+}
+
 /// `count` lines spread evenly over `lines`, both ends included.
 pub fn uniform(lines: u32, count: u32) -> Vec<u32> {
     let (n, c) = (lines.max(1), count.clamp(1, lines.max(1)));
@@ -216,6 +228,16 @@ mod tests {
             (plan.lines[0], *plan.lines.last().expect("lines")),
             (0, 100)
         );
+    }
+
+    #[test]
+    fn a_byte_budget_holds_the_samples_whose_share_of_the_dense_bytes_fits() {
+        // 100 dense samples in 4,000,000 B: 40,000 B a sample.
+        assert_eq!(samples_within_bytes(1_000_000, 4_000_000, 100), 25);
+        assert_eq!(samples_within_bytes(999_999, 4_000_000, 100), 24);
+        assert_eq!(samples_within_bytes(39_999, 4_000_000, 100), 0);
+        assert_eq!(samples_within_bytes(u64::MAX, 1, 100), u32::MAX);
+        assert_eq!(samples_within_bytes(10, 0, 100), u32::MAX);
     }
 
     #[test]

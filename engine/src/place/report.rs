@@ -1,7 +1,7 @@
 //! What `engine place` found, as placement.json, placement.png and text.
 
-use super::PlaceOptions;
 use super::plan::{Interval, Plan, Stop, worst};
+use super::{Bytes, PlaceOptions};
 use crate::eval::plot::{ChartSpec, LegendPosition, Series, xy_chart};
 use crate::util::stats::median;
 use anyhow::Result;
@@ -53,6 +53,14 @@ pub struct PlaceReport {
     pub dense_samples: u32,
     pub target_db: f64,
     pub max_samples: u32,
+    /// The byte budget (`--max-bytes`), what a sample costs in the dense
+    /// container and how many samples that buys.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_bytes: Option<Bytes>,
+    /// The placed samples' container bytes at the dense bytes per sample
+    /// (with `--max-bytes`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub estimated_bytes: Option<u64>,
     pub start: u32,
     pub spp: u32,
     pub stop: Stop,
@@ -70,6 +78,7 @@ impl PlaceReport {
     pub fn new(
         scene: &Scene,
         opts: &PlaceOptions,
+        bytes: Option<Bytes>,
         plan: Plan,
         even_lines: Vec<u32>,
         even: Vec<Interval>,
@@ -82,15 +91,28 @@ impl PlaceReport {
                 opts.target_db, placed.samples, scene.orbit.samples
             ),
             Stop::Budget => format!(
-                "the budget of {} samples is spent; the worst interval ({:.2} dB) is below {} dB",
-                opts.max_samples, placed.worst_db, opts.target_db
+                "the budget of {} samples{} is spent; the worst interval ({:.2} dB) is below {} dB",
+                placed.samples,
+                match bytes {
+                    Some(b) if b.samples <= opts.max_samples => format!(
+                        " ({} B at {:.0} B a sample in the dense container)",
+                        b.max, b.per_sample
+                    ),
+                    _ => String::new(),
+                },
+                placed.worst_db,
+                opts.target_db
             ),
         };
+        let estimated_bytes =
+            bytes.map(|b| (b.per_sample * f64::from(placed.samples)).round() as u64);
         PlaceReport {
             scene: scene.name.clone(),
             dense_samples: scene.orbit.samples,
             target_db: opts.target_db,
             max_samples: opts.max_samples,
+            max_bytes: bytes,
+            estimated_bytes,
             start: opts.start,
             spp: opts.spp,
             stop: plan.stop,
@@ -147,7 +169,7 @@ impl PlaceReport {
         format!(
             "{}: {} samples placed of {} ({}): worst {:.2} dB, median {:.2} dB half way between \
              samples; an even placement of {} samples: worst {:.2} dB, median {:.2} dB\n\
-             lines {:?}\n{} intervals measured in {:.1} min; wrote {} and {}\n",
+             lines {:?}{}\n{} intervals measured in {:.1} min; wrote {} and {}\n",
             self.scene,
             p.samples,
             self.dense_samples,
@@ -158,6 +180,10 @@ impl PlaceReport {
             e.worst_db,
             e.median_db,
             p.lines,
+            match self.estimated_bytes {
+                Some(b) => format!(" (~{b} B of container)"),
+                None => String::new(),
+            },
             self.measured.len() + e.intervals.len(),
             self.minutes,
             out.join("placement.json").display(),

@@ -22,6 +22,10 @@ pub struct PlaceArgs {
     /// At most this many samples (the budget) [default: the dense lines].
     #[arg(long, value_parser = clap::value_parser!(u32).range(2..))]
     pub max_samples: Option<u32>,
+    /// At most this many bytes of map container, at the dense container's
+    /// bytes per sample (the codec codes at a fixed ratio) [default: no limit].
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    pub max_bytes: Option<u64>,
     /// Samples placed evenly before measuring, both ends included.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(2..))]
     pub start: u32,

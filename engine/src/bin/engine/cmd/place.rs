@@ -17,6 +17,7 @@ pub fn run(args: &PlaceArgs) -> Result<String> {
         out: args.out.clone(),
         target_db: args.target_db,
         max_samples: args.max_samples.unwrap_or(u32::MAX),
+        max_bytes: args.max_bytes,
         start: args.start,
         spp: args.spp,
     };
