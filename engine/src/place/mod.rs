@@ -131,7 +131,9 @@ impl Bytes {
         let Some(max) = max else { return Ok(None) };
         let Some(dense) = renderer.map_bytes else {
             bail!(
-                "--max-bytes {max}: {}'s dense maps play from EXR files, not a container, so there                  are no bytes per sample to budget with; encode them first (`engine encode`) or                  use --max-samples",
+                "--max-bytes {max}: {}'s dense maps play from EXR files, not a container, so there \
+                 are no bytes per sample to budget with; encode them first (`engine encode`) or \
+                 use --max-samples",
                 scene.name
             );
         };
