@@ -127,7 +127,7 @@ fn assert_byte_budget(report: &serde_json::Value, dense: &Path, data: &Path) {
 }
 
 /// The placed scene compiles its 3 samples only (eyes at dense lines 0, 2
-/// and 4) and plays with validation on.
+/// and 4), stacking offset views, and plays with validation on.
 fn assert_placed_scene_plays(scene: &Path, out: &Path) {
     let text = std::fs::read_to_string(scene).expect("placed scene written");
     assert!(text.contains("azimuths_deg = [0.0, 2.0, 4.0]"), "{text}");
@@ -152,6 +152,13 @@ fn assert_placed_scene_plays(scene: &Path, out: &Path) {
     let infer = out.join("infer");
     assert!(infer.join("sample_0002").is_dir(), "{log}");
     assert!(!infer.join("sample_0003").exists(), "{log}");
+    // Its solves stack views traced 1° (the dense spacing) either side of
+    // each sample, as the scored maps' solves did, not its own neighbours.
+    assert!(text.contains("neighbour_deg = 1.0"), "{text}");
+    for side in ["-1.000", "+1.000"] {
+        let traced = out.join(format!("trace/sample_0002_az{side}.exr"));
+        assert!(traced.is_file(), "{} missing\n{log}", traced.display());
+    }
 }
 
 #[test]

@@ -111,7 +111,7 @@ pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
     progress.finish_and_clear();
     let report = PlaceReport::new(&scene, opts, bytes, plan, even_lines, even, start.elapsed());
     report.write(&out)?;
-    let scene_file = placed_scene(&place.scene, &report, &out);
+    let scene_file = placed_scene(&place.scene, &scene, &report, &out);
     Ok(report.summary(&out) + &scene_file)
 }
 
@@ -166,16 +166,36 @@ impl Bytes {
 /// Writes `<name>_placed.toml` under `out`: the scene with the placed
 /// lines, checked to load from there; returns what to print (how to
 /// play it, or why it could not be written and the line to copy).
-fn placed_scene(scene_arg: &str, report: &PlaceReport, out: &std::path::Path) -> String {
+///
+/// The scores were measured on maps whose solves stacked the dense lines'
+/// neighbours; a placed sample's neighbours lie further off, so objects
+/// that stack neighbouring samples stack views at the dense spacing
+/// instead, as the maps that were scored did.
+fn placed_scene(
+    scene_arg: &str,
+    dense: &Scene,
+    report: &PlaceReport,
+    out: &std::path::Path,
+) -> String {
+    use inference::scene::placed::{with_azimuths, with_neighbour_deg};
     let lines = &report.placed.azimuths_deg;
     let name = format!("{}_placed", report.scene);
     let path = out.join(format!("{name}.toml"));
     let note = format!("placed by `engine place`: {}", report.reason);
+    let stacks_samples = dense
+        .objects
+        .iter()
+        .any(|o| o.neighbour_weight() > 0.0 && o.neighbour_deg().is_none());
     let written = (|| -> Result<()> {
         let (text, _) = Scene::text(scene_arg)?;
-        let Some(text) = inference::scene::placed::with_azimuths(&text, &name, lines, &note) else {
+        let Some(mut text) = with_azimuths(&text, &name, lines, &note) else {
             bail!("the scene file has no [orbit] table or no top-level name line to rewrite");
         };
+        if stacks_samples {
+            let spacing = dense.orbit.step_deg;
+            let why = format!("as the scored maps did: the {} lines' spacing", dense.name);
+            text = with_neighbour_deg(&text, spacing, &why);
+        }
         Scene::from_toml(&text, &path)?;
         crate::util::files::write(&path, text.as_bytes())
     })();

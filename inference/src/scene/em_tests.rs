@@ -72,3 +72,24 @@ fn the_neighbour_weight_is_zero_unless_asked_and_checked() {
         );
     }
 }
+
+#[test]
+fn the_neighbour_offset_is_off_unless_asked_and_checked() {
+    let deg = |s: &Scene| s.object("teapot").expect("teapot").neighbour_deg();
+    let s = Scene::load("teapot").expect("the built-in teapot scene loads");
+    assert_eq!(
+        deg(&s),
+        None,
+        "the shipped teapot stacks its neighbouring samples"
+    );
+    let line = setting_line("neighbour_weight =");
+    let with = |d: &str| load_edited(&line, &format!("{line}neighbour_deg = {d}\n"));
+    assert_eq!(deg(&with("1.0").expect("loads")), Some(1.0));
+    for bad in ["0", "-1", "nan", "90"] {
+        let e = with(bad).err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(
+            e.contains(".em.neighbour_deg") && e.contains("expected degrees"),
+            "{bad}: {e}"
+        );
+    }
+}

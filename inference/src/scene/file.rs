@@ -196,6 +196,7 @@ pub struct EmFile {
     pub lod_bias: f32,
     #[serde(default)]
     pub neighbour_weight: f32,
+    pub neighbour_deg: Option<f32>,
 }
 
 /// `[objects.glass]`; see `scene::glass::GlassSettings` for the meanings.

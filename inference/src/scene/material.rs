@@ -38,12 +38,19 @@ pub struct EmSettings {
     /// poorly to the views between samples; their neighbours constrain
     /// the texels only nearby views reach.
     pub neighbour_weight: f32,
+    /// With stacking on, the stacked views lie this many degrees either
+    /// side of each sample on its ring, traced for the purpose, instead of
+    /// at the neighbouring samples. A placed orbit's neighbours lie 1–25°
+    /// apart; views that far off fit a map worse than they teach it.
+    pub neighbour_deg: Option<f32>,
 }
 
 /// The LOD biases a scene may ask for.
 pub const LOD_BIASES: std::ops::RangeInclusive<f32> = -4.0..=2.0;
 /// The neighbour weights a scene may ask for.
 pub const NEIGHBOUR_WEIGHTS: std::ops::RangeInclusive<f32> = 0.0..=1.0;
+/// The offsets of stacked views a scene may ask for, degrees.
+pub const NEIGHBOUR_DEGS: std::ops::RangeInclusive<f32> = 0.01..=45.0;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -61,6 +68,7 @@ impl Default for EmSettings {
             layers: vec![EmLayer::Distant, EmLayer::Local],
             lod_bias: 0.0,
             neighbour_weight: 0.0,
+            neighbour_deg: None,
         }
     }
 }

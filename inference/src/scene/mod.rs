@@ -88,6 +88,13 @@ impl Object {
     pub fn neighbour_weight(&self) -> f32 {
         self.em.as_ref().map_or(0.0, |em| em.neighbour_weight)
     }
+
+    /// How far either side of a sample the views stacked into its EM
+    /// solves lie (`[objects.em] neighbour_deg`); None stacks the
+    /// neighbouring samples' views.
+    pub fn neighbour_deg(&self) -> Option<f32> {
+        self.em.as_ref().and_then(|em| em.neighbour_deg)
+    }
 }
 
 impl Scene {

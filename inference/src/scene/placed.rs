@@ -2,7 +2,8 @@
 //! ones (`engine place`): the `[orbit]` table's even lines (`start_deg`,
 //! `step_deg`, `samples`, or earlier `azimuths_deg`) become one
 //! `azimuths_deg` line, the name gains a suffix; every comment and other
-//! line is kept as written.
+//! line is kept as written. EM tables that stack neighbouring views can
+//! be told to stack views a fixed offset away instead.
 
 /// Keys of `[orbit]` that say where its azimuth lines are.
 const LINE_KEYS: [&str; 4] = ["start_deg", "step_deg", "samples", "azimuths_deg"];
@@ -42,6 +43,31 @@ pub fn with_azimuths(text: &str, name: &str, azimuths_deg: &[f32], note: &str) -
     (found_orbit && found_name).then(|| out.join("\n") + "\n")
 }
 
+/// `text` with every `[objects.em]` table that sets `neighbour_weight`
+/// stacking views `deg` either side of each sample (`neighbour_deg`);
+/// every earlier `neighbour_deg` line of an EM table goes.
+pub fn with_neighbour_deg(text: &str, deg: f32, note: &str) -> String {
+    let mut out = Vec::new();
+    let mut em_table = false;
+    for line in text.lines() {
+        let trimmed = line.trim_start();
+        if trimmed.starts_with('[') {
+            em_table = trimmed.trim_start_matches('[').starts_with("objects.em]");
+            out.push(line.to_owned());
+            continue;
+        }
+        let key = trimmed.split('=').next().unwrap_or("").trim();
+        if em_table && key == "neighbour_deg" {
+            continue;
+        }
+        out.push(line.to_owned());
+        if em_table && key == "neighbour_weight" {
+            out.push(format!("neighbour_deg = {deg:?}  # {note}"));
+        }
+    }
+    out.join("\n") + "\n"
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -68,6 +94,29 @@ mod tests {
         let again = with_azimuths(&placed, "teapot_placed", &[0.0, 99.0], "again").expect("again");
         let s = Scene::from_toml(&again, Path::new("t.toml")).expect("loads");
         assert_eq!(s.orbit.samples, 2);
+    }
+
+    #[test]
+    fn em_tables_that_stack_neighbours_get_the_offset_once() {
+        let text = crate::scene::shipped::shipped("teapot").expect("teapot");
+        let placed = with_neighbour_deg(text, 1.0, "the dense lines' spacing");
+        let s = Scene::from_toml(&placed, Path::new("t.toml")).expect("loads");
+        let teapot = s.object("teapot").expect("teapot");
+        assert_eq!(teapot.neighbour_deg(), Some(1.0));
+        assert!(placed.contains("# the dense lines' spacing"));
+        let again = with_neighbour_deg(&placed, 2.5, "again");
+        assert_eq!(again.matches("neighbour_deg =").count(), 1, "{again}");
+        let s = Scene::from_toml(&again, Path::new("t.toml")).expect("loads");
+        assert_eq!(
+            s.object("teapot").expect("teapot").neighbour_deg(),
+            Some(2.5)
+        );
+        // Without a weight nothing is stacked, so nothing is added.
+        let bare = "[objects.em]\nresolution = 64\nneighbour_deg = 3.0\n";
+        assert_eq!(
+            with_neighbour_deg(bare, 1.0, "n"),
+            "[objects.em]\nresolution = 64\n"
+        );
     }
 
     #[test]

@@ -46,6 +46,14 @@ impl Job<'_> {
             MapLayer::Sphere | MapLayer::Ptm => 0.0,
         }
     }
+    /// Where this job's stacked views lie, when it stacks any: the
+    /// object's `neighbour_deg` either side of the sample, or (None) the
+    /// neighbouring samples.
+    pub fn neighbour_deg(&self) -> Option<f32> {
+        (self.neighbour_weight() > 0.0)
+            .then(|| self.object.neighbour_deg())
+            .flatten()
+    }
 }
 
 /// The maps the scene asks for: per reflective object with EM settings,
@@ -122,6 +130,12 @@ pub fn map_key(trace: &Key, job: &Job, options: &SolveOptions, size: (u32, u32))
     if job.neighbour_weight() > 0.0 {
         h.str("neighbours");
         h.f32(job.neighbour_weight());
+        // Added with offset views: maps stacking their neighbouring
+        // samples keep their keys.
+        if let Some(deg) = job.neighbour_deg() {
+            h.str("offset views");
+            h.f32(deg);
+        }
     }
     for p in &job.object.mesh.positions {
         h.v3(*p);

@@ -146,10 +146,13 @@ impl<'a> Plan<'a> {
         let size = (self.settings.width, self.settings.height);
         let key = map_key(trace_key, job, &self.options_for(job), size);
         // The neighbours' traces are inputs too. Their eyes follow from
-        // this sample's, but not whether the arc ends beside it: a 1D
-        // orbit's trace keys leave out the sample count.
+        // this sample's (placed lines are all in every trace key), but not
+        // whether the arc ends beside it: a 1D orbit's trace keys leave out
+        // the sample count. Offset views follow from the sample's eye and
+        // the offset, which the map key holds.
         let lines = self.scene.orbit.samples.max(1);
-        match (job.neighbour_weight() > 0.0, missing_neighbours(k, lines)) {
+        let stacks_samples = job.neighbour_weight() > 0.0 && job.neighbour_deg().is_none();
+        match (stacks_samples, missing_neighbours(k, lines)) {
             (true, missing) if missing != 0 => key.with("neighbours missing", missing),
             _ => key,
         }
@@ -296,9 +299,8 @@ mod tests {
         Scene::load(&path.to_string_lossy()).expect("scene loads")
     }
 
-    #[test]
-    fn a_sample_whose_neighbour_the_arc_now_cuts_off_is_stale() {
-        let request = InferRequest {
+    fn request() -> InferRequest {
+        InferRequest {
             samples: vec![],
             skip_fresh: true,
             sphere: false,
@@ -309,7 +311,12 @@ mod tests {
             trace_dir: "t".into(),
             infer_dir: "i".into(),
             device: Default::default(),
-        };
+        }
+    }
+
+    #[test]
+    fn a_sample_whose_neighbour_the_arc_now_cuts_off_is_stale() {
+        let request = request();
         let (long, short) = (scene("samples = 100"), scene("samples = 3"));
         let (long, short) = (
             Plan::new(&long, &request).expect("plan"),
@@ -326,5 +333,43 @@ mod tests {
             let layered = long.jobs[job].neighbour_weight() > 0.0;
             assert_eq!(key(&long, 2) != key(&short, 2), layered, "sample 2");
         }
+    }
+
+    /// The keys of sample `k`'s stacking maps on the teapot with
+    /// `samples`, stacking views `offset` degrees away or (None) the
+    /// neighbouring samples.
+    fn stacking_keys(samples: &str, k: u32, offset: Option<f32>) -> Vec<u64> {
+        let weight = "neighbour_weight = 1.0";
+        let text = inference::scene::shipped::shipped("teapot").expect("teapot.toml");
+        let mut text = text.replacen("samples = 100", samples, 1);
+        if let Some(d) = offset {
+            text = text.replacen(weight, &format!("{weight}\nneighbour_deg = {d:?}"), 1);
+        }
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("t.toml");
+        std::fs::write(&path, text).expect("write");
+        let scene = Scene::load(&path.to_string_lossy()).expect("scene loads");
+        let request = request();
+        let plan = Plan::new(&scene, &request).expect("plan");
+        let trace = plan.trace_key(k).expect("trace key");
+        let jobs = plan.jobs.iter().filter(|j| j.neighbour_weight() > 0.0);
+        jobs.map(|j| plan.key(k, &trace, j).hash()).collect()
+    }
+
+    #[test]
+    fn offset_views_key_their_offset_and_not_where_the_arc_ends() {
+        let ring = stacking_keys("samples = 3", 2, None);
+        let (one, two) = (
+            stacking_keys("samples = 3", 2, Some(1.0)),
+            stacking_keys("samples = 3", 2, Some(2.0)),
+        );
+        assert!(!ring.is_empty() && ring.iter().zip(&one).all(|(r, o)| r != o));
+        assert!(
+            one.iter().zip(&two).all(|(a, b)| a != b),
+            "the offset is keyed"
+        );
+        // Sample 2 ends a 3-line arc but not a 100-line one: its offset
+        // views are the same either way, so is its key.
+        assert_eq!(one, stacking_keys("samples = 100", 2, Some(1.0)));
     }
 }

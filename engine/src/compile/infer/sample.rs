@@ -8,7 +8,7 @@ use super::report::{LayerReport, SampleReport, finite_or_max};
 use super::targets::{composite_pixels, specular_pixels, target_pixels};
 use super::{InferRequest, Job, Plan};
 use crate::compile::trace::traced_layers;
-use crate::maps::{MapLayer, map_path, sample_dir, traced_stem};
+use crate::maps::{MapLayer, map_path, sample_dir, sample_name, traced_stem};
 use crate::probe::VulkanProbe;
 use crate::util::files::claim_dir;
 use anyhow::{Context, Result};
@@ -72,19 +72,14 @@ impl<'a> SampleRun<'a> {
         bar: &indicatif::ProgressBar,
     ) -> Result<(SampleReport, String)> {
         let own = self.sample_trace(k)?;
-        // Read once per sample, whichever of its jobs stack them.
-        let around = if jobs
-            .iter()
-            .any(|&i| self.plan.jobs[i].neighbour_weight() > 0.0)
-        {
-            let lines = self.plan.scene.orbit.samples.max(1);
-            ring_neighbours(k, lines)
-                .into_iter()
-                .map(|n| Ok((n, self.sample_trace(n)?)))
-                .collect::<Result<Vec<_>>>()?
-        } else {
-            Vec::new()
-        };
+        // Traced once per sample, whichever of its jobs stack them.
+        let mut around: Vec<(Option<f32>, Vec<StackedTrace>)> = Vec::new();
+        for job in jobs.iter().map(|&i| &self.plan.jobs[i]) {
+            let deg = job.neighbour_deg();
+            if job.neighbour_weight() > 0.0 && !around.iter().any(|(d, _)| *d == deg) {
+                around.push((deg, self.stacked_traces(k, deg)?));
+            }
+        }
         let dir = sample_dir(&self.req.infer_dir, k);
         claim_dir(&dir)?;
         let report_path = dir.join("report.json");
@@ -94,7 +89,11 @@ impl<'a> SampleRun<'a> {
         for &i in jobs {
             let job = &self.plan.jobs[i];
             bar.set_message(format!("sample {k} {}", job.name()));
-            let (layer, warm) = self.infer_job(k, job, &own, &around)?;
+            let stacked = around
+                .iter()
+                .find(|(d, _)| *d == job.neighbour_deg())
+                .map_or(&[][..], |(_, t)| t);
+            let (layer, warm) = self.infer_job(k, job, &own, stacked)?;
             lines += &layer_line(k, &layer);
             report = SampleReport::merged(Some(report), k, vec![layer], warm, &order);
             crate::util::files::write_json(&report_path, &report)?;
@@ -116,6 +115,47 @@ impl<'a> SampleRun<'a> {
             &stem,
         )?;
         Ok(SampleTrace { eye, layers, key })
+    }
+
+    /// The views stacked into sample `k`'s solves: its neighbouring
+    /// samples' (`deg` None), or views traced `deg` degrees either side of
+    /// it on its ring (files `sample_KKKK_az±D`).
+    fn stacked_traces(&self, k: u32, deg: Option<f32>) -> Result<Vec<StackedTrace>> {
+        let orbit = &self.plan.scene.orbit;
+        let Some(deg) = deg else {
+            return ring_neighbours(k, orbit.samples.max(1))
+                .into_iter()
+                .map(|n| {
+                    let trace = self.sample_trace(n)?;
+                    Ok(StackedTrace {
+                        tag: u64::from(n),
+                        trace,
+                    })
+                })
+                .collect();
+        };
+        let (azimuth, elevation) = orbit.sample_angles(k);
+        [-deg, deg]
+            .into_iter()
+            .enumerate()
+            .map(|(side, offset)| {
+                let eye = orbit.eye(azimuth + offset, elevation);
+                let name = format!("{}_az{offset:+.3}", sample_name(k));
+                let (layers, key) = traced_layers(
+                    &self.tracer,
+                    &self.plan.scene_key,
+                    eye,
+                    &self.plan.settings,
+                    &self.req.trace_dir.join(name),
+                )?;
+                // Above every sample index; unique per sample, side and offset.
+                let tag = 1 << 63 | u64::from(k) << 33 | (side as u64) << 32;
+                Ok(StackedTrace {
+                    tag: tag | u64::from(offset.to_bits()),
+                    trace: SampleTrace { eye, layers, key },
+                })
+            })
+            .collect()
     }
 
     /// The map sample `k`'s solve of `job` starts from: the previous
@@ -141,15 +181,14 @@ impl<'a> SampleRun<'a> {
     }
 
     /// One map: probe renders, solve, baselines; the map, its pictures and
-    /// its key record written. `around` holds the neighbouring samples'
-    /// traces when a job stacks them. Returns its report and whether it
+    /// its key record written. `around` holds the traces the job stacks. Returns its report and whether it
     /// was warm-started.
     fn infer_job(
         &mut self,
         k: u32,
         job: &Job,
         own: &SampleTrace,
-        around: &[(u32, SampleTrace)],
+        around: &[StackedTrace],
     ) -> Result<(LayerReport, bool)> {
         let (width, height) = self.req.size;
         let pixel_count = width as usize * height as usize;
@@ -158,7 +197,7 @@ impl<'a> SampleRun<'a> {
         let eye = own.eye;
         let pixels = job_target_pixels(job, &own.layers, pixel_count)?;
         let key = self.plan.key(k, &own.key, job);
-        let geometry = self.probe_geometry(k, eye, job, &key);
+        let geometry = self.probe_geometry(u64::from(k), eye, job, &key);
         let layout = job.layer.layout(job.resolution);
         let previous = self.warm_start(k, job, &layout)?;
         let target = Target {
@@ -170,7 +209,7 @@ impl<'a> SampleRun<'a> {
         let stacked = stacked_views(job, &neighbours, target);
         let views = Views {
             own: View {
-                id: view_id(job, k),
+                id: view_id(job, u64::from(k)),
                 geometry: &geometry,
                 target,
                 weight: 1.0,
@@ -221,13 +260,13 @@ impl<'a> SampleRun<'a> {
     }
 
     /// The views stacked into a sample's solve of an EM layer beside its
-    /// own (`[objects.em] neighbour_weight`): the samples `around` it, each
+    /// own (`[objects.em] neighbour_weight`): the traces `around` it, each
     /// with its own traced target and probe geometry.
     fn neighbour_views(
         &self,
         job: &Job,
         key: &Key,
-        around: &[(u32, SampleTrace)],
+        around: &[StackedTrace],
     ) -> Result<Vec<NeighbourView>> {
         if job.neighbour_weight() <= 0.0 {
             return Ok(Vec::new());
@@ -235,20 +274,24 @@ impl<'a> SampleRun<'a> {
         let (width, height) = self.req.size;
         around
             .iter()
-            .map(|(n, t)| {
+            .map(|a| {
                 Ok(NeighbourView {
-                    sample: *n,
-                    geometry: self.probe_geometry(*n, t.eye, job, key),
-                    pixels: job_target_pixels(job, &t.layers, width as usize * height as usize)?,
+                    tag: a.tag,
+                    geometry: self.probe_geometry(a.tag, a.trace.eye, job, key),
+                    pixels: job_target_pixels(
+                        job,
+                        &a.trace.layers,
+                        width as usize * height as usize,
+                    )?,
                 })
             })
             .collect()
     }
 
-    /// The probe renders' geometry of `job` at sample `k` seen from `eye`:
-    /// the object's mesh with its UVs or, for an EM, its per-vertex cube
-    /// lookups.
-    fn probe_geometry(&self, k: u32, eye: Vec3, job: &Job, key: &Key) -> ProbeGeometry {
+    /// The probe renders' geometry of `job` at view `tag` (a sample's
+    /// index, or a stacked view's tag) seen from `eye`: the object's mesh
+    /// with its UVs or, for an EM, its per-vertex cube lookups.
+    fn probe_geometry(&self, tag: u64, eye: Vec3, job: &Job, key: &Key) -> ProbeGeometry {
         let (width, height) = self.req.size;
         let mesh = &job.object.mesh;
         let lookup = match job.geometry {
@@ -256,7 +299,7 @@ impl<'a> SampleRun<'a> {
             None => Lookup::Uv(mesh.uvs.clone()),
         };
         ProbeGeometry {
-            key: key.hash() ^ u64::from(k),
+            key: key.hash() ^ tag,
             positions: mesh.positions.clone(),
             indices: mesh.indices.clone(),
             lookup,
@@ -274,9 +317,16 @@ struct SampleTrace {
     key: Key,
 }
 
-/// A neighbouring sample's view of an EM layer, stacked into a solve.
+/// A view stacked into a sample's solves: a neighbouring sample's or one
+/// traced beside it, tagged apart from every other view of the run.
+struct StackedTrace {
+    tag: u64,
+    trace: SampleTrace,
+}
+
+/// A stacked view of an EM layer, as its solve reads it.
 struct NeighbourView {
-    sample: u32,
+    tag: u64,
     geometry: ProbeGeometry,
     pixels: Vec<[f32; 4]>,
 }
@@ -291,7 +341,7 @@ fn stacked_views<'a>(
     neighbours
         .iter()
         .map(|n| View {
-            id: view_id(job, n.sample),
+            id: view_id(job, n.tag),
             geometry: &n.geometry,
             target: Target {
                 pixels: &n.pixels,
@@ -302,13 +352,13 @@ fn stacked_views<'a>(
         .collect()
 }
 
-/// The cache id of `job`'s rendering matrix at sample `n`'s view: within
-/// one run a job and a view fix the probe geometry and texture layout.
-fn view_id(job: &Job, n: u32) -> u64 {
+/// The cache id of `job`'s rendering matrix at view `tag`: within one run
+/// a job and a view fix the probe geometry and texture layout.
+fn view_id(job: &Job, tag: u64) -> u64 {
     use std::hash::{Hash, Hasher};
     let mut h = std::collections::hash_map::DefaultHasher::new();
     job.name().hash(&mut h);
-    n.hash(&mut h);
+    tag.hash(&mut h);
     h.finish()
 }
 

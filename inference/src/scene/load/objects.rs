@@ -14,7 +14,7 @@ use crate::scene::mesh::Mesh;
 use crate::scene::obj::load_obj;
 use crate::teapot::{self, DEFAULT_SEGMENTS, MAX_SEGMENTS, TeapotPart};
 
-use crate::scene::material::{EM_RESOLUTIONS, LOD_BIASES, NEIGHBOUR_WEIGHTS};
+use crate::scene::material::{EM_RESOLUTIONS, LOD_BIASES, NEIGHBOUR_DEGS, NEIGHBOUR_WEIGHTS};
 
 impl Loader<'_> {
     pub(super) fn object(
@@ -154,11 +154,20 @@ impl Loader<'_> {
             &NEIGHBOUR_WEIGHTS,
             "a weight",
         )?;
+        if let Some(deg) = em.neighbour_deg {
+            self.in_range(
+                format!("{field}.neighbour_deg"),
+                deg,
+                &NEIGHBOUR_DEGS,
+                "degrees either side of a sample",
+            )?;
+        }
         Ok(EmSettings {
             resolution: em.resolution,
             layers: em.layers.clone(),
             lod_bias: em.lod_bias,
             neighbour_weight: em.neighbour_weight,
+            neighbour_deg: em.neighbour_deg,
         })
     }
 }
