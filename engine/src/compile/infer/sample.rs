@@ -77,6 +77,10 @@ impl<'a> SampleRun<'a> {
         for job in jobs.iter().map(|&i| &self.plan.jobs[i]) {
             let deg = job.neighbour_deg();
             if job.neighbour_weight() > 0.0 && !around.iter().any(|(d, _)| *d == deg) {
+                bar.set_message(match deg {
+                    Some(d) => format!("sample {k}: views ±{d}° (traced when missing)"),
+                    None => format!("sample {k}: neighbouring samples' traces"),
+                });
                 around.push((deg, self.stacked_traces(k, deg)?));
             }
         }
