@@ -130,6 +130,12 @@ pub fn traced_stem(trace_dir: &Path, k: u32) -> PathBuf {
     trace_dir.join(sample_name(k))
 }
 
+/// `<trace>/view_az±A_el±E`: the stem of a traced view off the samples
+/// (azimuth and elevation above the orbit plane, degrees).
+pub fn view_stem(trace_dir: &Path, azimuth_deg: f32, elevation_deg: f32) -> PathBuf {
+    trace_dir.join(format!("view_az{azimuth_deg:+.3}_el{elevation_deg:+.3}"))
+}
+
 /// `<infer>/sample_KKKK`: the folder of sample `k`'s inferred maps.
 pub fn sample_dir(infer_dir: &Path, k: u32) -> PathBuf {
     infer_dir.join(sample_name(k))

@@ -3,7 +3,7 @@
 //! by what made it; and the traced layers a sample's inference needs,
 //! traced again when missing, stale or damaged.
 
-use crate::maps::traced_stem;
+use crate::maps::{traced_stem, view_stem};
 use crate::util::files::claim_dir;
 use anyhow::{Context, Result};
 use glam::Vec3;
@@ -46,10 +46,10 @@ pub fn trace(
         TraceViews::Free {
             azimuth_deg,
             elevation_deg,
-        } => {
-            let name = format!("view_az{azimuth_deg:+.3}_el{elevation_deg:+.3}");
-            vec![(out.join(name), scene.orbit.eye(azimuth_deg, elevation_deg))]
-        }
+        } => vec![(
+            view_stem(out, azimuth_deg, elevation_deg),
+            scene.orbit.eye(azimuth_deg, elevation_deg),
+        )],
     };
     claim_dir(out)?;
     let scene_key = cache::scene_key(scene);

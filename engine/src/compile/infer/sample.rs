@@ -8,7 +8,7 @@ use super::report::{LayerReport, SampleReport, finite_or_max};
 use super::targets::{composite_pixels, specular_pixels, target_pixels};
 use super::{InferRequest, Job, Plan};
 use crate::compile::trace::traced_layers;
-use crate::maps::{MapLayer, map_path, sample_dir, sample_name, traced_stem};
+use crate::maps::{MapLayer, map_path, sample_dir, traced_stem, view_stem};
 use crate::probe::VulkanProbe;
 use crate::util::files::claim_dir;
 use anyhow::{Context, Result};
@@ -122,42 +122,36 @@ impl<'a> SampleRun<'a> {
     }
 
     /// The views stacked into sample `k`'s solves: its neighbouring
-    /// samples' (`deg` None), or views traced `deg` degrees either side of
-    /// it on its ring (files `sample_KKKK_az±D`).
+    /// samples' (`deg` None), or the views `deg` degrees either side of it
+    /// on its ring — a sample's own trace where one sits there, else traced
+    /// as a free view (`view_az±A_el±E`, shared by the samples either side
+    /// of it when they lie 2·`deg` apart).
     fn stacked_traces(&self, k: u32, deg: Option<f32>) -> Result<Vec<StackedTrace>> {
         let orbit = &self.plan.scene.orbit;
+        let lines = orbit.samples.max(1);
         let Some(deg) = deg else {
-            return ring_neighbours(k, orbit.samples.max(1))
+            return ring_neighbours(k, lines)
                 .into_iter()
-                .map(|n| {
-                    let trace = self.sample_trace(n)?;
-                    Ok(StackedTrace {
-                        tag: u64::from(n),
-                        trace,
-                    })
-                })
+                .map(|n| StackedTrace::of(self.sample_trace(n)?))
                 .collect();
         };
         let (azimuth, elevation) = orbit.sample_angles(k);
-        [-deg, deg]
+        let ring = k / lines * lines;
+        [azimuth - deg, azimuth + deg]
             .into_iter()
-            .enumerate()
-            .map(|(side, offset)| {
-                let eye = orbit.eye(azimuth + offset, elevation);
-                let name = format!("{}_az{offset:+.3}", sample_name(k));
+            .map(|a| {
+                if let Some(line) = (0..lines).find(|&l| orbit.angle_deg(l) == a) {
+                    return StackedTrace::of(self.sample_trace(ring + line)?);
+                }
+                let eye = orbit.eye(a, elevation);
                 let (layers, key) = traced_layers(
                     &self.tracer,
                     &self.plan.scene_key,
                     eye,
                     &self.plan.settings,
-                    &self.req.trace_dir.join(name),
+                    &view_stem(&self.req.trace_dir, a, elevation),
                 )?;
-                // Above every sample index; unique per sample, side and offset.
-                let tag = 1 << 63 | u64::from(k) << 33 | (side as u64) << 32;
-                Ok(StackedTrace {
-                    tag: tag | u64::from(offset.to_bits()),
-                    trace: SampleTrace { eye, layers, key },
-                })
+                StackedTrace::of(SampleTrace { eye, layers, key })
             })
             .collect()
     }
@@ -201,7 +195,7 @@ impl<'a> SampleRun<'a> {
         let eye = own.eye;
         let pixels = job_target_pixels(job, &own.layers, pixel_count)?;
         let key = self.plan.key(k, &own.key, job);
-        let geometry = self.probe_geometry(u64::from(k), eye, job, &key);
+        let geometry = self.probe_geometry(eye_tag(eye), eye, job, &key);
         let layout = job.layer.layout(job.resolution);
         let previous = self.warm_start(k, job, &layout)?;
         let target = Target {
@@ -213,7 +207,7 @@ impl<'a> SampleRun<'a> {
         let stacked = stacked_views(job, &neighbours, target);
         let views = Views {
             own: View {
-                id: view_id(job, u64::from(k)),
+                id: view_id(job, eye_tag(eye)),
                 geometry: &geometry,
                 target,
                 weight: 1.0,
@@ -292,9 +286,9 @@ impl<'a> SampleRun<'a> {
             .collect()
     }
 
-    /// The probe renders' geometry of `job` at view `tag` (a sample's
-    /// index, or a stacked view's tag) seen from `eye`: the object's mesh
-    /// with its UVs or, for an EM, its per-vertex cube lookups.
+    /// The probe renders' geometry of `job` seen from `eye` (tagged `tag`):
+    /// the object's mesh with its UVs or, for an EM, its per-vertex cube
+    /// lookups.
     fn probe_geometry(&self, tag: u64, eye: Vec3, job: &Job, key: &Key) -> ProbeGeometry {
         let (width, height) = self.req.size;
         let mesh = &job.object.mesh;
@@ -322,10 +316,29 @@ struct SampleTrace {
 }
 
 /// A view stacked into a sample's solves: a neighbouring sample's or one
-/// traced beside it, tagged apart from every other view of the run.
+/// traced beside it, tagged by its eye.
 struct StackedTrace {
     tag: u64,
     trace: SampleTrace,
+}
+
+impl StackedTrace {
+    fn of(trace: SampleTrace) -> Result<Self> {
+        Ok(Self {
+            tag: eye_tag(trace.eye),
+            trace,
+        })
+    }
+}
+
+/// A view's tag within a run: its eye, so one view stacked into several
+/// samples' solves (or some sample's own) probes once while the matrix
+/// cache keeps it.
+fn eye_tag(eye: Vec3) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    eye.to_array().map(f32::to_bits).hash(&mut h);
+    h.finish()
 }
 
 /// A stacked view of an EM layer, as its solve reads it.
