@@ -39,8 +39,10 @@ impl PlanOptions {
     }
 }
 
-/// One interval between neighbouring placed lines and the score of the
-/// view half way along it (`probe`), blended from its two ends.
+/// One interval between neighbouring placed lines, the line in its middle
+/// it would split at (`probe`) and the score of a view there blended from
+/// its two ends (which view is the measurer's: `engine place` scores the
+/// one half a line past `probe`).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Interval {
     pub from: u32,
@@ -146,10 +148,10 @@ pub fn measure_intervals(
 }
 
 /// Starts from `opts.start` even lines and splits the worst interval at
-/// its middle (whose view was just measured, so the new sample is where
-/// the error was) until every interval reaches the target or the budget
-/// is spent. `measure(from, to, probe)` scores the view at line `probe`
-/// blended from lines `from` and `to`.
+/// its middle line (beside the view just measured, so the new sample is
+/// where the error was) until every interval reaches the target or the
+/// budget is spent. `measure(from, to, probe)` scores a view at line
+/// `probe` blended from lines `from` and `to`.
 pub fn place(
     opts: &PlanOptions,
     seen: &mut BTreeMap<(u32, u32), Interval>,

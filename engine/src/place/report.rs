@@ -38,7 +38,7 @@ impl Placement {
             },
             probes_deg: intervals
                 .iter()
-                .map(|i| scene.orbit.angle_deg(i.probe))
+                .map(|i| super::probe_azimuth(&scene.orbit, i.probe))
                 .collect(),
             intervals,
         }
