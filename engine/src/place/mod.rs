@@ -1,7 +1,7 @@
 //! `engine place`: how many viewpoint samples a 1D orbit needs, and where.
 //! On a dense compile (every line inferred), each candidate interval is
-//! scored by playing the view half way along it blended from its two ends
-//! only, against the traced view there; [`plan::place`] splits the worst
+//! scored by playing a held-out view near its middle ([`probe_azimuth`])
+//! blended from its two ends only, against the traced view there; [`plan::place`] splits the worst
 //! until every interval reaches the target or the budget is spent. The
 //! same measurement scores an even placement with as many samples, so the
 //! report compares the two on equal terms.

@@ -15,7 +15,8 @@ pub struct Placement {
     pub samples: u32,
     pub lines: Vec<u32>,
     pub azimuths_deg: Vec<f32>,
-    /// Lowest and median interval score, dB (reflector PSNR half way).
+    /// Lowest and median interval score, dB (reflector PSNR at each
+    /// interval's held-out view).
     pub worst_db: f64,
     pub median_db: f64,
     pub intervals: Vec<Interval>,
@@ -144,8 +145,8 @@ impl PlaceReport {
         };
         let mut spec = ChartSpec::new(
             &format!("Where {} needs its samples", self.scene),
-            "azimuth of the view half way between samples (degrees)",
-            "reflector PSNR half way between samples (dB)",
+            "azimuth of the held-out view between samples (degrees)",
+            "reflector PSNR between samples (dB)",
         );
         spec.legend = LegendPosition::LowerLeft;
         spec.series = vec![
@@ -167,8 +168,8 @@ impl PlaceReport {
         let p = &self.placed;
         let e = &self.even;
         format!(
-            "{}: {} samples placed of {} ({}): worst {:.2} dB, median {:.2} dB half way between \
-             samples; an even placement of {} samples: worst {:.2} dB, median {:.2} dB\n\
+            "{}: {} samples placed of {} ({}): worst {:.2} dB, median {:.2} dB between samples \
+             (held-out views); an even placement of {} samples: worst {:.2} dB, median {:.2} dB\n\
              lines {:?}{}\n{} intervals measured in {:.1} min; wrote {} and {}\n",
             self.scene,
             p.samples,
