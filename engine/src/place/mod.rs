@@ -1,10 +1,11 @@
 //! `engine place`: how many viewpoint samples a 1D orbit needs, and where.
 //! On a dense compile (every line inferred), each candidate interval is
 //! scored by playing a held-out view near its middle ([`probe_azimuth`])
-//! blended from its two ends only, against the traced view there; [`plan::place`] splits the worst
-//! until every interval reaches the target or the budget is spent. The
-//! same measurement scores an even placement with as many samples, so the
-//! report compares the two on equal terms.
+//! blended from its two ends only, against the traced view there;
+//! [`plan::place`] splits the worst until every interval reaches the
+//! target or the budget is spent. The same measurement scores an even
+//! placement with as many samples, so the report compares the two on
+//! equal terms.
 
 pub mod plan;
 mod report;
@@ -224,7 +225,7 @@ fn spinner() -> indicatif::ProgressBar {
 /// `at`: half a line past it — the interval's middle when its lines are
 /// an odd number apart — so no dense solve saw it. The line itself is a
 /// view the dense solves of its neighbours stacked (`neighbour_weight`),
-/// and a blend fitted there scored 2–5 dB above the views between lines
+/// and a blend fitted there scored 3–5 dB above the views between lines
 /// that `engine eval` and users see.
 pub fn probe_azimuth(orbit: &inference::scene::Orbit, at: u32) -> f32 {
     orbit.between_deg(at, 0.5)

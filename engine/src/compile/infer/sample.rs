@@ -58,7 +58,8 @@ impl<'a> SampleRun<'a> {
             tracer,
             projection: camera::projection(plan.scene, width, height),
             // A sample's solve of each job may stack three views: its own
-            // and one either side; the next sample reuses two of them.
+            // and one either side; the next sample reuses two of them
+            // (offset views: those that coincide, by eye).
             matrices: MatrixCache::new(3 * plan.jobs.len()),
         })
     }
@@ -132,7 +133,7 @@ impl<'a> SampleRun<'a> {
         let Some(deg) = deg else {
             return ring_neighbours(k, lines)
                 .into_iter()
-                .map(|n| StackedTrace::of(self.sample_trace(n)?))
+                .map(|n| Ok(StackedTrace::of(self.sample_trace(n)?)))
                 .collect();
         };
         let (azimuth, elevation) = orbit.sample_angles(k);
@@ -141,7 +142,7 @@ impl<'a> SampleRun<'a> {
             .into_iter()
             .map(|a| {
                 if let Some(line) = (0..lines).find(|&l| orbit.angle_deg(l) == a) {
-                    return StackedTrace::of(self.sample_trace(ring + line)?);
+                    return Ok(StackedTrace::of(self.sample_trace(ring + line)?));
                 }
                 let eye = orbit.eye(a, elevation);
                 let (layers, key) = traced_layers(
@@ -151,7 +152,7 @@ impl<'a> SampleRun<'a> {
                     &self.plan.settings,
                     &view_stem(&self.req.trace_dir, a, elevation),
                 )?;
-                StackedTrace::of(SampleTrace { eye, layers, key })
+                Ok(StackedTrace::of(SampleTrace { eye, layers, key }))
             })
             .collect()
     }
@@ -179,8 +180,8 @@ impl<'a> SampleRun<'a> {
     }
 
     /// One map: probe renders, solve, baselines; the map, its pictures and
-    /// its key record written. `around` holds the traces the job stacks. Returns its report and whether it
-    /// was warm-started.
+    /// its key record written. `around` holds the traces the job stacks.
+    /// Returns its report and whether it was warm-started.
     fn infer_job(
         &mut self,
         k: u32,
@@ -323,11 +324,11 @@ struct StackedTrace {
 }
 
 impl StackedTrace {
-    fn of(trace: SampleTrace) -> Result<Self> {
-        Ok(Self {
+    fn of(trace: SampleTrace) -> Self {
+        Self {
             tag: eye_tag(trace.eye),
             trace,
-        })
+        }
     }
 }
 
