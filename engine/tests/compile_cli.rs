@@ -120,3 +120,47 @@ fn the_shipped_compiled_scene_matches_its_inputs() {
     assert!(log.contains("teapot.ptxc: fresh"), "{log}");
     assert!(log.contains("floor.light.exr: fresh"), "{log}");
 }
+
+/// `neighbour_above_deg`: each sample's solves also stack a view traced
+/// above it at its azimuth, which changes the maps; the same scene without
+/// the line re-infers them (their keys differ) from the same sample traces.
+#[test]
+fn views_above_each_sample_are_traced_once_and_change_the_maps() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = tiny_scene(dir.path());
+    let plain = std::fs::read_to_string(&scene).expect("scene");
+    let weight = "neighbour_weight = 1.0";
+    assert!(plain.contains(weight), "teapot.toml lacks {weight:?}");
+    let above = plain.replacen(
+        weight,
+        &format!("{weight}\nneighbour_above_deg = [15.0]"),
+        1,
+    );
+    std::fs::write(&scene, above).expect("write scene");
+    let out = dir.path().join("out");
+    let log = ok(compile(&scene, &out, &[]));
+    let mut views: Vec<String> = std::fs::read_dir(out.join("trace"))
+        .expect("trace folder")
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.starts_with("view_") && n.ends_with(".exr"))
+        .collect();
+    views.sort();
+    let expected: Vec<String> = ["+0.000", "+1.000", "+2.000"]
+        .map(|a| format!("view_az{a}_el+15.000.exr"))
+        .to_vec();
+    assert_eq!(views, expected, "{log}");
+    let with_above = maps(&out);
+    assert_eq!(with_above.len(), 9, "3 samples × 3 maps");
+
+    std::fs::write(&scene, &plain).expect("write scene");
+    let log = ok(compile(&scene, &out, &[]));
+    let without = maps(&out);
+    // The layered PEM's two maps stack views; the PTM does not.
+    let changed: Vec<_> = with_above
+        .iter()
+        .filter(|(p, bytes)| without.get(*p) != Some(*bytes))
+        .map(|(p, _)| p.to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(changed.len(), 6, "{changed:?}\n{log}");
+    assert!(changed.iter().all(|p| !p.contains(".ptm")), "{changed:?}");
+}

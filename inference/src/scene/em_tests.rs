@@ -93,3 +93,35 @@ fn the_neighbour_offset_is_off_unless_asked_and_checked() {
         );
     }
 }
+
+#[test]
+fn views_above_are_off_unless_asked_and_checked() {
+    let above = |s: &Scene| {
+        s.object("teapot")
+            .expect("teapot")
+            .neighbour_above_deg()
+            .to_vec()
+    };
+    let s = Scene::load("teapot").expect("the built-in teapot scene loads");
+    assert!(
+        above(&s).is_empty(),
+        "the shipped teapot stacks no views above"
+    );
+    let line = setting_line("neighbour_weight =");
+    let with = |v: &str| load_edited(&line, &format!("{line}neighbour_above_deg = {v}\n"));
+    assert_eq!(above(&with("[15.0, -5]").expect("loads")), vec![15.0, -5.0]);
+    for bad in ["[0.0]", "[50]", "[10, 10]", "[1, 2, 3, 4, 5]", "[nan]"] {
+        let e = with(bad).err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(
+            e.contains(".em.neighbour_above_deg") && e.contains("expected"),
+            "{bad}: {e}"
+        );
+    }
+    // Without stacking the views would be traced for nothing.
+    let off = load_edited(
+        &line,
+        "neighbour_weight = 0.0\nneighbour_above_deg = [15.0]\n",
+    );
+    let e = off.err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(e.contains("needs `neighbour_weight` above 0"), "{e}");
+}

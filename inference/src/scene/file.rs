@@ -197,6 +197,8 @@ pub struct EmFile {
     #[serde(default)]
     pub neighbour_weight: f32,
     pub neighbour_deg: Option<f32>,
+    #[serde(default)]
+    pub neighbour_above_deg: Vec<f32>,
 }
 
 /// `[objects.glass]`; see `scene::glass::GlassSettings` for the meanings.

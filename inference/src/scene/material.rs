@@ -43,6 +43,11 @@ pub struct EmSettings {
     /// at the neighbouring samples. A placed orbit's neighbours lie 1–25°
     /// apart; views that far off fit a map worse than they teach it.
     pub neighbour_deg: Option<f32>,
+    /// With stacking on, also the views this many degrees above (negative:
+    /// below) each sample at its azimuth, traced for the purpose. A 1D
+    /// orbit's sample serves every elevation at its azimuth; views off the
+    /// plane constrain the texels only they reach.
+    pub neighbour_above_deg: Vec<f32>,
 }
 
 /// The LOD biases a scene may ask for.
@@ -51,6 +56,11 @@ pub const LOD_BIASES: std::ops::RangeInclusive<f32> = -4.0..=2.0;
 pub const NEIGHBOUR_WEIGHTS: std::ops::RangeInclusive<f32> = 0.0..=1.0;
 /// The offsets of stacked views a scene may ask for, degrees.
 pub const NEIGHBOUR_DEGS: std::ops::RangeInclusive<f32> = 0.01..=45.0;
+/// The elevations of stacked views above a sample a scene may ask for,
+/// degrees (not 0: that is the sample's own view).
+pub const NEIGHBOUR_ABOVE_DEGS: std::ops::RangeInclusive<f32> = -45.0..=45.0;
+/// At most this many views above each sample.
+pub const NEIGHBOUR_ABOVE_MAX: usize = 4;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -69,6 +79,7 @@ impl Default for EmSettings {
             lod_bias: 0.0,
             neighbour_weight: 0.0,
             neighbour_deg: None,
+            neighbour_above_deg: Vec::new(),
         }
     }
 }

@@ -95,6 +95,12 @@ impl Object {
     pub fn neighbour_deg(&self) -> Option<f32> {
         self.em.as_ref().and_then(|em| em.neighbour_deg)
     }
+
+    /// The elevations above each sample of the further views stacked into
+    /// its EM solves (`[objects.em] neighbour_above_deg`); empty for none.
+    pub fn neighbour_above_deg(&self) -> &[f32] {
+        self.em.as_ref().map_or(&[], |em| &em.neighbour_above_deg)
+    }
 }
 
 impl Scene {

@@ -15,6 +15,15 @@ use std::hash::Hasher;
 /// Bump when a change to inference changes the maps it makes.
 pub const INFERENCE_VERSION: u32 = 3;
 
+/// The views a job's solves stack beside the sample's own: `deg` either
+/// side on its ring (None: the neighbouring samples), then `above_deg`
+/// above it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Stack {
+    pub deg: Option<f32>,
+    pub above_deg: Vec<f32>,
+}
+
 /// One map of one reflector to infer.
 pub struct Job<'a> {
     pub object: &'a Object,
@@ -53,6 +62,26 @@ impl Job<'_> {
         (self.neighbour_weight() > 0.0)
             .then(|| self.object.neighbour_deg())
             .flatten()
+    }
+
+    /// The elevations above its sample of the further views this job
+    /// stacks (`[objects.em] neighbour_above_deg`); empty when it stacks
+    /// none.
+    pub fn neighbour_above_deg(&self) -> &[f32] {
+        if self.neighbour_weight() > 0.0 {
+            self.object.neighbour_above_deg()
+        } else {
+            &[]
+        }
+    }
+
+    /// Which views this job's solves stack beside the sample's own: jobs
+    /// with equal stacks share their traces.
+    pub fn stack(&self) -> Stack {
+        Stack {
+            deg: self.neighbour_deg(),
+            above_deg: self.neighbour_above_deg().to_vec(),
+        }
     }
 }
 
@@ -135,6 +164,13 @@ pub fn map_key(trace: &Key, job: &Job, options: &SolveOptions, size: (u32, u32))
         if let Some(deg) = job.neighbour_deg() {
             h.str("offset views");
             h.f32(deg);
+        }
+        // Added with views above: maps stacking none keep their keys.
+        if !job.neighbour_above_deg().is_empty() {
+            h.str("views above");
+            for &e in job.neighbour_above_deg() {
+                h.f32(e);
+            }
         }
     }
     for p in &job.object.mesh.positions {

@@ -336,15 +336,16 @@ mod tests {
     }
 
     /// The keys of sample `k`'s stacking maps on the teapot with
-    /// `samples`, stacking views `offset` degrees away or (None) the
-    /// neighbouring samples.
-    fn stacking_keys(samples: &str, k: u32, offset: Option<f32>) -> Vec<u64> {
+    /// `samples` and the `[objects.em]` lines `extra` (e.g. an offset:
+    /// without one it stacks the neighbouring samples).
+    fn stacking_keys(samples: &str, k: u32, extra: &str) -> Vec<u64> {
         let weight = "neighbour_weight = 1.0";
         let text = inference::scene::shipped::shipped("teapot").expect("teapot.toml");
-        let mut text = text.replacen("samples = 100", samples, 1);
-        if let Some(d) = offset {
-            text = text.replacen(weight, &format!("{weight}\nneighbour_deg = {d:?}"), 1);
-        }
+        let text = text.replacen("samples = 100", samples, 1).replacen(
+            weight,
+            &format!("{weight}\n{extra}"),
+            1,
+        );
         let dir = tempfile::tempdir().expect("temp dir");
         let path = dir.path().join("t.toml");
         std::fs::write(&path, text).expect("write");
@@ -358,10 +359,10 @@ mod tests {
 
     #[test]
     fn offset_views_key_their_offset_and_not_where_the_arc_ends() {
-        let ring = stacking_keys("samples = 3", 2, None);
+        let ring = stacking_keys("samples = 3", 2, "");
         let (one, two) = (
-            stacking_keys("samples = 3", 2, Some(1.0)),
-            stacking_keys("samples = 3", 2, Some(2.0)),
+            stacking_keys("samples = 3", 2, "neighbour_deg = 1.0"),
+            stacking_keys("samples = 3", 2, "neighbour_deg = 2.0"),
         );
         assert!(!ring.is_empty() && ring.iter().zip(&one).all(|(r, o)| r != o));
         assert!(
@@ -370,6 +371,24 @@ mod tests {
         );
         // Sample 2 ends a 3-line arc but not a 100-line one: its offset
         // views are the same either way, so is its key.
-        assert_eq!(one, stacking_keys("samples = 100", 2, Some(1.0)));
+        assert_eq!(
+            one,
+            stacking_keys("samples = 100", 2, "neighbour_deg = 1.0")
+        );
+    }
+
+    #[test]
+    fn views_above_key_their_elevations() {
+        let keys = |above: &str| stacking_keys("samples = 3", 1, above);
+        let none = keys("");
+        let (a, b) = (
+            keys("neighbour_above_deg = [15.0]"),
+            keys("neighbour_above_deg = [15.0, 30.0]"),
+        );
+        assert!(!none.is_empty());
+        for (x, y) in [(&none, &a), (&a, &b)] {
+            assert!(x.iter().zip(y).all(|(p, q)| p != q), "{x:?} vs {y:?}");
+        }
+        assert_eq!(a, keys("neighbour_above_deg = [15.0]"), "deterministic");
     }
 }

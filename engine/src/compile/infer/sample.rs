@@ -2,6 +2,7 @@
 //! written with its key record, the sample's report merged after each.
 
 use super::baselines::{StaticEm, static_em_psnr, static_ems};
+use super::jobs::Stack;
 use super::jobs::ring_neighbours;
 use super::pictures::{write_comparison, write_map_picture};
 use super::report::{LayerReport, SampleReport, finite_or_max};
@@ -57,10 +58,15 @@ impl<'a> SampleRun<'a> {
             static_ems: static_ems(device, plan.scene, width, height)?,
             tracer,
             projection: camera::projection(plan.scene, width, height),
-            // A sample's solve of each job may stack three views: its own
-            // and one either side; the next sample reuses two of them
-            // (offset views: those that coincide, by eye).
-            matrices: MatrixCache::new(3 * plan.jobs.len()),
+            // A sample's solve of each job may stack three views on its ring
+            // (its own and one either side; the next sample reuses two of
+            // them) and those above it.
+            matrices: MatrixCache::new(
+                plan.jobs
+                    .iter()
+                    .map(|j| 3 + j.neighbour_above_deg().len())
+                    .sum(),
+            ),
         })
     }
 
@@ -74,15 +80,13 @@ impl<'a> SampleRun<'a> {
     ) -> Result<(SampleReport, String)> {
         let own = self.sample_trace(k)?;
         // Traced once per sample, whichever of its jobs stack them.
-        let mut around: Vec<(Option<f32>, Vec<StackedTrace>)> = Vec::new();
+        let mut around: Vec<(Stack, Vec<StackedTrace>)> = Vec::new();
         for job in jobs.iter().map(|&i| &self.plan.jobs[i]) {
-            let deg = job.neighbour_deg();
-            if job.neighbour_weight() > 0.0 && !around.iter().any(|(d, _)| *d == deg) {
-                bar.set_message(match deg {
-                    Some(d) => format!("sample {k}: views ±{d}° (traced when missing)"),
-                    None => format!("sample {k}: neighbouring samples' traces"),
-                });
-                around.push((deg, self.stacked_traces(k, deg)?));
+            let stack = job.stack();
+            if job.neighbour_weight() > 0.0 && !around.iter().any(|(s, _)| *s == stack) {
+                bar.set_message(stack_message(k, &stack));
+                let traces = self.stacked_traces(k, &stack)?;
+                around.push((stack, traces));
             }
         }
         let dir = sample_dir(&self.req.infer_dir, k);
@@ -96,7 +100,7 @@ impl<'a> SampleRun<'a> {
             bar.set_message(format!("sample {k} {}", job.name()));
             let stacked = around
                 .iter()
-                .find(|(d, _)| *d == job.neighbour_deg())
+                .find(|(s, _)| *s == job.stack())
                 .map_or(&[][..], |(_, t)| t);
             let (layer, warm) = self.infer_job(k, job, &own, stacked)?;
             lines += &layer_line(k, &layer);
@@ -123,38 +127,48 @@ impl<'a> SampleRun<'a> {
     }
 
     /// The views stacked into sample `k`'s solves: its neighbouring
-    /// samples' (`deg` None), or the views `deg` degrees either side of it
-    /// on its ring — a sample's own trace where one sits there, else traced
-    /// as a free view (`view_az±A_el±E`, shared by the samples either side
-    /// of it when they lie 2·`deg` apart).
-    fn stacked_traces(&self, k: u32, deg: Option<f32>) -> Result<Vec<StackedTrace>> {
+    /// samples' (`stack.deg` None) or the views `deg` degrees either side
+    /// of it on its ring, then those `stack.above_deg` above it at its
+    /// azimuth. A sample's own trace where one sits at a view, else the
+    /// view traced as a free one (`view_az±A_el±E`, shared by the samples
+    /// either side of it when they lie 2·`deg` apart).
+    fn stacked_traces(&self, k: u32, stack: &Stack) -> Result<Vec<StackedTrace>> {
         let orbit = &self.plan.scene.orbit;
-        let lines = orbit.samples.max(1);
-        let Some(deg) = deg else {
-            return ring_neighbours(k, lines)
+        let (azimuth, elevation) = orbit.sample_angles(k);
+        let mut traces = match stack.deg {
+            None => ring_neighbours(k, orbit.samples.max(1))
                 .into_iter()
                 .map(|n| Ok(StackedTrace::of(self.sample_trace(n)?)))
-                .collect();
+                .collect::<Result<Vec<_>>>()?,
+            Some(deg) => [azimuth - deg, azimuth + deg]
+                .into_iter()
+                .map(|a| self.view_trace(a, elevation))
+                .collect::<Result<Vec<_>>>()?,
         };
-        let (azimuth, elevation) = orbit.sample_angles(k);
-        let ring = k / lines * lines;
-        [azimuth - deg, azimuth + deg]
-            .into_iter()
-            .map(|a| {
-                if let Some(line) = (0..lines).find(|&l| orbit.angle_deg(l) == a) {
-                    return Ok(StackedTrace::of(self.sample_trace(ring + line)?));
-                }
-                let eye = orbit.eye(a, elevation);
-                let (layers, key) = traced_layers(
-                    &self.tracer,
-                    &self.plan.scene_key,
-                    eye,
-                    &self.plan.settings,
-                    &view_stem(&self.req.trace_dir, a, elevation),
-                )?;
-                Ok(StackedTrace::of(SampleTrace { eye, layers, key }))
-            })
-            .collect()
+        for &e in &stack.above_deg {
+            traces.push(self.view_trace(azimuth, elevation + e)?);
+        }
+        Ok(traces)
+    }
+
+    /// The traced view at (`azimuth`, `elevation`): the trace of a sample
+    /// sitting there, else a free view's, traced when missing.
+    fn view_trace(&self, azimuth: f32, elevation: f32) -> Result<StackedTrace> {
+        let orbit = &self.plan.scene.orbit;
+        if let Some(k) =
+            (0..orbit.sample_count()).find(|&k| orbit.sample_angles(k) == (azimuth, elevation))
+        {
+            return Ok(StackedTrace::of(self.sample_trace(k)?));
+        }
+        let eye = orbit.eye(azimuth, elevation);
+        let (layers, key) = traced_layers(
+            &self.tracer,
+            &self.plan.scene_key,
+            eye,
+            &self.plan.settings,
+            &view_stem(&self.req.trace_dir, azimuth, elevation),
+        )?;
+        Ok(StackedTrace::of(SampleTrace { eye, layers, key }))
     }
 
     /// The map sample `k`'s solve of `job` starts from: the previous
@@ -398,6 +412,18 @@ fn job_target_pixels(
         MapLayer::Sphere => specular_pixels(layers, &job.object.name, pixel_count)?,
         MapLayer::Ptm => composite_pixels(layers, &job.object.name, pixel_count)?,
     })
+}
+
+/// The progress bar's message while sample `k`'s stacked views are found.
+fn stack_message(k: u32, stack: &Stack) -> String {
+    let ring = match stack.deg {
+        Some(d) => format!("views ±{d}°"),
+        None => "neighbouring samples' views".to_string(),
+    };
+    match stack.above_deg.as_slice() {
+        [] => format!("sample {k}: {ring} (traced when missing)"),
+        above => format!("sample {k}: {ring} and {above:?}° above (traced when missing)"),
+    }
 }
 
 /// One printed line per map inferred.

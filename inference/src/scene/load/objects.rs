@@ -14,7 +14,10 @@ use crate::scene::mesh::Mesh;
 use crate::scene::obj::load_obj;
 use crate::teapot::{self, DEFAULT_SEGMENTS, MAX_SEGMENTS, TeapotPart};
 
-use crate::scene::material::{EM_RESOLUTIONS, LOD_BIASES, NEIGHBOUR_DEGS, NEIGHBOUR_WEIGHTS};
+use crate::scene::material::{
+    EM_RESOLUTIONS, LOD_BIASES, NEIGHBOUR_ABOVE_DEGS, NEIGHBOUR_ABOVE_MAX, NEIGHBOUR_DEGS,
+    NEIGHBOUR_WEIGHTS,
+};
 
 impl Loader<'_> {
     pub(super) fn object(
@@ -162,12 +165,47 @@ impl Loader<'_> {
                 "degrees either side of a sample",
             )?;
         }
+        self.views_above(field, em)?;
         Ok(EmSettings {
             resolution: em.resolution,
             layers: em.layers.clone(),
             lod_bias: em.lod_bias,
             neighbour_weight: em.neighbour_weight,
             neighbour_deg: em.neighbour_deg,
+            neighbour_above_deg: em.neighbour_above_deg.clone(),
         })
+    }
+
+    /// `neighbour_above_deg`: a few distinct, non-zero elevations in range,
+    /// and stacking on (without it the views would be traced for nothing).
+    fn views_above(&self, field: &str, em: &EmFile) -> Result<(), SceneError> {
+        let above = &em.neighbour_above_deg;
+        let name = format!("{field}.neighbour_above_deg");
+        if above.is_empty() {
+            return Ok(());
+        }
+        if above.len() > NEIGHBOUR_ABOVE_MAX {
+            return Err(self.err(
+                name,
+                format!("{above:?} (expected at most {NEIGHBOUR_ABOVE_MAX} elevations)"),
+            ));
+        }
+        for (i, &e) in above.iter().enumerate() {
+            let what = "degrees above a sample, not 0";
+            self.in_range(name.clone(), e, &NEIGHBOUR_ABOVE_DEGS, what)?;
+            if e == 0.0 || above[..i].contains(&e) {
+                return Err(self.err(
+                    name,
+                    format!("{above:?} (expected distinct elevations other than 0)"),
+                ));
+            }
+        }
+        if em.neighbour_weight <= 0.0 {
+            return Err(self.err(
+                name,
+                format!("{above:?} needs `neighbour_weight` above 0 (the weight of stacked views)"),
+            ));
+        }
+        Ok(())
     }
 }
