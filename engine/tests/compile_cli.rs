@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{output_text as text, run_engine, tiny_scene};
+use common::{output_text as text, run_engine, tiny_scene, traced_views};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Output;
@@ -139,12 +139,7 @@ fn views_above_each_sample_are_traced_once_and_change_the_maps() {
     std::fs::write(&scene, above).expect("write scene");
     let out = dir.path().join("out");
     let log = ok(compile(&scene, &out, &[]));
-    let mut views: Vec<String> = std::fs::read_dir(out.join("trace"))
-        .expect("trace folder")
-        .filter_map(|e| e.ok()?.file_name().into_string().ok())
-        .filter(|n| n.starts_with("view_") && n.ends_with(".exr"))
-        .collect();
-    views.sort();
+    let views = traced_views(&out);
     let expected: Vec<String> = ["+0.000", "+1.000", "+2.000"]
         .map(|a| format!("view_az{a}_el+15.000.exr"))
         .to_vec();

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{output_text, run_engine, tiny_scene};
+use common::{output_text, run_engine, tiny_scene, traced_views};
 use std::path::Path;
 
 fn s(p: &Path) -> &str {
@@ -161,12 +161,7 @@ fn assert_placed_scene_plays(scene: &Path, out: &Path) {
     // each sample, as the scored maps' solves did, not its own neighbours;
     // samples 2° apart share the view between them: 4 views for 3 samples.
     assert!(text.contains("neighbour_deg = 1.0"), "{text}");
-    let mut views: Vec<String> = std::fs::read_dir(out.join("trace"))
-        .expect("trace folder")
-        .filter_map(|e| e.ok()?.file_name().into_string().ok())
-        .filter(|n| n.starts_with("view_") && n.ends_with(".exr"))
-        .collect();
-    views.sort();
+    let views = traced_views(out);
     let mut expected = ["-1.000", "+1.000", "+3.000", "+5.000"]
         .map(|a| format!("view_az{a}_el+0.000.exr"))
         .to_vec();

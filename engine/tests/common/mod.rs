@@ -115,3 +115,14 @@ pub fn output_text(o: &std::process::Output) -> String {
         String::from_utf8_lossy(&o.stderr)
     )
 }
+
+/// The free views a compile traced under `out/trace` (`view_*.exr`), sorted.
+pub fn traced_views(out: &Path) -> Vec<String> {
+    let mut views: Vec<String> = std::fs::read_dir(out.join("trace"))
+        .expect("trace folder")
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.starts_with("view_") && n.ends_with(".exr"))
+        .collect();
+    views.sort();
+    views
+}
