@@ -75,13 +75,13 @@ impl Job<'_> {
         }
     }
 
-    /// Which views this job's solves stack beside the sample's own: jobs
-    /// with equal stacks share their traces.
-    pub fn stack(&self) -> Stack {
-        Stack {
+    /// Which views this job's solves stack beside the sample's own (None
+    /// when it stacks none): jobs with equal stacks share their traces.
+    pub fn stack(&self) -> Option<Stack> {
+        (self.neighbour_weight() > 0.0).then(|| Stack {
             deg: self.neighbour_deg(),
             above_deg: self.neighbour_above_deg().to_vec(),
-        }
+        })
     }
 }
 

@@ -81,9 +81,8 @@ impl<'a> SampleRun<'a> {
         let own = self.sample_trace(k)?;
         // Traced once per sample, whichever of its jobs stack them.
         let mut around: Vec<(Stack, Vec<StackedTrace>)> = Vec::new();
-        for job in jobs.iter().map(|&i| &self.plan.jobs[i]) {
-            let stack = job.stack();
-            if job.neighbour_weight() > 0.0 && !around.iter().any(|(s, _)| *s == stack) {
+        for stack in jobs.iter().filter_map(|&i| self.plan.jobs[i].stack()) {
+            if !around.iter().any(|(s, _)| *s == stack) {
                 bar.set_message(stack_message(k, &stack));
                 let traces = self.stacked_traces(k, &stack)?;
                 around.push((stack, traces));
@@ -98,9 +97,10 @@ impl<'a> SampleRun<'a> {
         for &i in jobs {
             let job = &self.plan.jobs[i];
             bar.set_message(format!("sample {k} {}", job.name()));
+            let stack = job.stack();
             let stacked = around
                 .iter()
-                .find(|(s, _)| *s == job.stack())
+                .find(|(s, _)| Some(s) == stack.as_ref())
                 .map_or(&[][..], |(_, t)| t);
             let (layer, warm) = self.infer_job(k, job, &own, stacked)?;
             lines += &layer_line(k, &layer);
