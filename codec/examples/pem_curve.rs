@@ -1,9 +1,9 @@
 //! Ratio against texture PSNR on the real PEM (`engine infer --all`
-//! output), the codec at several ratios against x264 and x265 at the
+//! output), the codec at several ratios against x264, x265 and AV1 at the
 //! codec's bytes (MPEG-texture, `codec::report`), plus decode time.
 //!
 //! `cargo run --release -p codec --example pem_curve -- --dir /work/data/teapot/infer
-//!  [--samples N] [--layers 0,1,2] [--ratios 100,200,400,800,1600] [--x264] [--x265]
+//!  [--samples N] [--layers 0,1,2] [--ratios 100,200,400,800,1600] [--x264] [--x265] [--av1]
 //!  [--memo FILE] [--save DIR] [--texels] [--alpha-cap A] [--rd-points N]`
 //!
 //! `--memo FILE` keeps the baselines' (CRF → bytes, PSNR) measurements as
@@ -71,6 +71,7 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
             }
             "--x264" => a.codecs.push(VideoCodec::X264),
             "--x265" => a.codecs.push(VideoCodec::X265),
+            "--av1" => a.codecs.push(VideoCodec::Av1),
             "--memo" => a.memo = Some(v()?.into()),
             "--save" => a.save = Some(v()?.into()),
             "--texels" => a.opts.weighting = Weighting::Texels,

@@ -144,6 +144,36 @@ fn assert_playback_timing(report: &serde_json::Value, ffmpeg: bool) {
     if let Some(v) = video {
         assert!(v["bytes_read"].as_u64().is_some_and(|b| b > 0), "{v}");
     }
+    // x265 and AV1 beside x264 wherever ffmpeg has their encoders: a
+    // baseline at the codec's bytes and a random-access time each.
+    for (name, encoder) in [
+        ("mpeg-texture-x265", "libx265"),
+        ("mpeg-texture-av1", "libaom-av1"),
+    ] {
+        let expected = ffmpeg && ffmpeg_has_encoder(encoder);
+        let baseline = report["baselines"]
+            .as_array()
+            .and_then(|b| b.iter().find(|b| b["name"] == name));
+        assert_eq!(baseline.is_some(), expected, "{name}: {report}");
+        if let Some(b) = baseline {
+            assert!(b["psnr_db"].as_f64().is_some_and(|p| p > 10.0), "{b}");
+            assert!(b["crf"].as_u64().is_some(), "{b}");
+        }
+        let access = access.iter().find(|a| a["name"] == name);
+        assert_eq!(access.is_some(), expected, "{name}: {access:?}");
+    }
+}
+
+/// Whether the ffmpeg on PATH lists `encoder`.
+fn ffmpeg_has_encoder(encoder: &str) -> bool {
+    std::process::Command::new("ffmpeg")
+        .args(["-hide_banner", "-encoders"])
+        .output()
+        .is_ok_and(|o| {
+            String::from_utf8_lossy(&o.stdout)
+                .split_whitespace()
+                .any(|w| w == encoder)
+        })
 }
 
 /// Curves: the codec at two ratios, the baselines at its sizes.
@@ -178,6 +208,14 @@ fn assert_curves(report: &serde_json::Value, ffmpeg: bool) {
     if ffmpeg {
         assert!(!curve("mpeg-texture", "texture").is_empty());
         assert!(!curve("mpeg-view", "frames_vs_uncompressed").is_empty());
+        for (name, encoder) in [
+            ("mpeg-texture-x265", "libx265"),
+            ("mpeg-texture-av1", "libaom-av1"),
+        ] {
+            if ffmpeg_has_encoder(encoder) {
+                assert!(!curve(name, "texture").is_empty());
+            }
+        }
     }
 }
 

@@ -15,7 +15,17 @@ pub fn smallest_fitting_crf(
     target: u64,
     eval: &mut dyn FnMut(u32) -> Result<(u64, f64)>,
 ) -> Result<(u32, u64, f64)> {
-    let (mut lo, mut hi) = (0u32, 51u32);
+    smallest_fitting_crf_upto(51, target, eval)
+}
+
+/// [`smallest_fitting_crf`] over `0..=max_crf` (the encoder's range:
+/// [`VideoCodec::max_crf`]).
+pub fn smallest_fitting_crf_upto(
+    max_crf: u32,
+    target: u64,
+    eval: &mut dyn FnMut(u32) -> Result<(u64, f64)>,
+) -> Result<(u32, u64, f64)> {
+    let (mut lo, mut hi) = (0u32, max_crf);
     let mut best = eval(hi)?;
     let mut best_crf = hi;
     if best.0 <= target {
@@ -65,26 +75,72 @@ pub enum VideoCodec {
     X264,
     /// libx265 (HEVC Main 4:4:4 10), `yuv444p10le`, preset slow.
     X265,
+    /// libaom-av1 (AV1 High profile, 4:4:4 10-bit), `yuv444p10le`,
+    /// `-cpu-used 6` (SVT-AV1 codes 4:2:0 only).
+    Av1,
 }
 
 impl VideoCodec {
+    /// Every encoder, x264 first (the report's reference baseline).
+    pub const ALL: [VideoCodec; 3] = [VideoCodec::X264, VideoCodec::X265, VideoCodec::Av1];
+
+    /// ffmpeg's name of the encoder.
     pub fn name(self) -> &'static str {
         match self {
             VideoCodec::X264 => "libx264",
             VideoCodec::X265 => "libx265",
+            VideoCodec::Av1 => "libaom-av1",
         }
+    }
+    /// The baseline's name in reports.
+    pub fn baseline_name(self) -> &'static str {
+        match self {
+            VideoCodec::X264 => "mpeg-texture",
+            VideoCodec::X265 => "mpeg-texture-x265",
+            VideoCodec::Av1 => "mpeg-texture-av1",
+        }
+    }
+    /// The largest (coarsest) constant rate factor the encoder takes.
+    pub fn max_crf(self) -> u32 {
+        match self {
+            VideoCodec::X264 | VideoCodec::X265 => 51,
+            VideoCodec::Av1 => 63,
+        }
+    }
+    /// Whether the `ffmpeg` on PATH has this encoder.
+    pub fn available(self) -> bool {
+        let Ok(out) = Command::new("ffmpeg")
+            .args(["-hide_banner", "-encoders"])
+            .stderr(Stdio::null())
+            .output()
+        else {
+            return false;
+        };
+        String::from_utf8_lossy(&out.stdout)
+            .split_whitespace()
+            .any(|w| w == self.name())
     }
     /// Encoder arguments after `-c:v NAME` for a CRF and an I-frame period.
     fn args(self, crf: u32, gop: u32) -> Vec<String> {
-        let mut a: Vec<String> = ["-preset", "slow", "-pix_fmt", "yuv444p10le", "-crf"]
-            .map(String::from)
-            .to_vec();
+        let mut a: Vec<String> = match self {
+            VideoCodec::X264 | VideoCodec::X265 => vec!["-preset".into(), "slow".into()],
+            VideoCodec::Av1 => ["-cpu-used", "6", "-row-mt", "1", "-b:v", "0"]
+                .map(String::from)
+                .to_vec(),
+        };
+        a.extend(["-pix_fmt".into(), "yuv444p10le".into(), "-crf".into()]);
         a.push(crf.to_string());
         match self {
             VideoCodec::X264 => a.extend(["-g".into(), gop.to_string()]),
             VideoCodec::X265 => a.extend([
                 "-x265-params".into(),
                 format!("keyint={gop}:min-keyint={gop}:log-level=error"),
+            ]),
+            VideoCodec::Av1 => a.extend([
+                "-g".into(),
+                gop.to_string(),
+                "-keyint_min".into(),
+                gop.to_string(),
             ]),
         }
         a

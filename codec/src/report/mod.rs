@@ -12,10 +12,10 @@
 //!   `ffmpeg` is on PATH; otherwise skipped with a note. `mpeg-view` needs
 //!   the traced images and is the engine's to add through
 //!   [`ffmpeg_round_trip`] and [`smallest_fitting_crf`].
-//! * `mpeg-texture-x265`: the same with libx265 (HEVC 4:4:4, 10 bits), by
-//!   [`mpeg_texture_baselines_with`]; measurement runs only (the report
-//!   itself keeps x264), with [`mpeg_texture_baselines_memo`] to reuse CRF
-//!   sweeps.
+//! * `mpeg-texture-x265` and `mpeg-texture-av1`: the same with libx265
+//!   (HEVC 4:4:4, 10 bits) and libaom-av1 (AV1 4:4:4, 10 bits), each when
+//!   the installed ffmpeg has the encoder ([`VideoCodec::available`]);
+//!   [`mpeg_texture_baselines_memo`] reuses CRF sweeps in measurement runs.
 //!
 //! The `*_baselines` functions take several byte targets at once (for
 //! ratio-against-PSNR [`Curve`]s) and encode each knob setting once.
@@ -33,6 +33,7 @@ mod random_access;
 pub use decode_times::{path_decode_times, quantile};
 pub use ffmpeg::{
     VideoCodec, ffmpeg_available, ffmpeg_round_trip, ffmpeg_round_trip_with, smallest_fitting_crf,
+    smallest_fitting_crf_upto,
 };
 pub use jpeg::{jpeg_baseline, jpeg_baselines};
 pub use mpeg_texture::{
@@ -250,9 +251,16 @@ pub fn report(c: &Container, reference: &EncodeInput, opts: &ReportOptions) -> R
     }
     if opts.ffmpeg_baseline {
         if ffmpeg_available() {
-            match mpeg_texture_baseline(reference, bytes) {
-                Ok(b) => baselines.push(b),
-                Err(e) => notes.push(format!("mpeg-texture failed: {e}")),
+            for codec in VideoCodec::ALL {
+                if !codec.available() {
+                    let name = codec.baseline_name();
+                    notes.push(format!("ffmpeg has no {}: {name} skipped", codec.name()));
+                    continue;
+                }
+                match mpeg_texture_baseline(codec, reference, bytes) {
+                    Ok(b) => baselines.push(b),
+                    Err(e) => notes.push(format!("{} failed: {e}", codec.baseline_name())),
+                }
             }
         } else {
             notes.push("ffmpeg not on PATH: mpeg-texture and mpeg-view baselines skipped".into());

@@ -4,7 +4,7 @@
 
 use super::Baseline;
 use super::atlas::{QRange, atlas, from_atlas16, texture_peak, widen};
-use super::ffmpeg::{VideoCodec, ffmpeg_round_trip_with, smallest_fitting_crf};
+use super::ffmpeg::{VideoCodec, ffmpeg_round_trip_with, smallest_fitting_crf_upto};
 use crate::error::Result;
 use crate::input::{EncodeInput, ParamTexture};
 use crate::quality::PsnrAccum;
@@ -14,8 +14,12 @@ use crate::quality::PsnrAccum;
 /// pyramid's random-access granularity); alpha is not coded (taken as
 /// exact, which favours the baseline). The CRF is bisected to the largest
 /// total size within `target` bytes.
-pub(super) fn mpeg_texture_baseline(reference: &EncodeInput, target: u64) -> Result<Baseline> {
-    Ok(mpeg_texture_baselines(reference, &[target], &mut |_| {})?.remove(0))
+pub(super) fn mpeg_texture_baseline(
+    codec: VideoCodec,
+    reference: &EncodeInput,
+    target: u64,
+) -> Result<Baseline> {
+    Ok(mpeg_texture_baselines_with(codec, reference, &[target], &mut |_| {})?.remove(0))
 }
 
 /// [`mpeg_texture_baseline`] at several byte targets, each CRF encoded once
@@ -28,8 +32,8 @@ pub fn mpeg_texture_baselines(
     mpeg_texture_baselines_with(VideoCodec::X264, reference, targets, progress)
 }
 
-/// [`mpeg_texture_baselines`] with a choice of encoder (`mpeg-texture` for
-/// x264, `mpeg-texture-x265` for x265).
+/// [`mpeg_texture_baselines`] with a choice of encoder (named by
+/// [`VideoCodec::baseline_name`]).
 pub fn mpeg_texture_baselines_with(
     codec: VideoCodec,
     reference: &EncodeInput,
@@ -54,10 +58,7 @@ pub fn mpeg_texture_baselines_memo(
 ) -> Result<Vec<Baseline>> {
     let raw_total = reference.raw_bytes();
     let streams = video_streams(reference)?;
-    let name = match codec {
-        VideoCodec::X264 => "mpeg-texture",
-        VideoCodec::X265 => "mpeg-texture-x265",
-    };
+    let name = codec.baseline_name();
     let mut run = |crf: u32| -> Result<(u64, f64)> {
         if let Some(&r) = memo.get(&crf) {
             return Ok(r);
@@ -93,7 +94,8 @@ pub fn mpeg_texture_baselines_memo(
     };
     let mut out = Vec::new();
     for &target in targets {
-        let (best_crf, bytes, psnr_db) = smallest_fitting_crf(target, &mut run)?;
+        let (best_crf, bytes, psnr_db) =
+            smallest_fitting_crf_upto(codec.max_crf(), target, &mut run)?;
         out.push(Baseline {
             name: name.into(),
             ratio: raw_total as f64 / bytes as f64,

@@ -172,10 +172,7 @@ fn video_access_in(
         }
     }
     Ok(RandomAccess {
-        name: match codec {
-            VideoCodec::X264 => "mpeg-texture".into(),
-            VideoCodec::X265 => "mpeg-texture-x265".into(),
-        },
+        name: codec.baseline_name().into(),
         ms: median(&mut ms),
         bytes_read: median_u64(&mut bytes),
         samples: samples.len(),

@@ -76,26 +76,29 @@ pub(super) fn add_random_access(
                 .with_context(|| format!("random access in {}", file.display()))?,
         );
     }
-    let crf = report
-        .baselines
-        .iter()
-        .find(|b| b.name == "mpeg-texture")
-        .and_then(|b| b.crf);
-    match (ffmpeg, crf) {
-        (true, Some(crf)) => {
-            say(format!("random access: x264 at crf {crf}"));
-            report
-                .random_access
-                .push(codec::report::video_random_access(
-                    VideoCodec::X264,
-                    input,
-                    crf,
-                    &samples,
-                )?);
-        }
-        _ => report
+    if !ffmpeg {
+        report
             .notes
-            .push("random access: no mpeg-texture baseline (ffmpeg), pyramid only".into()),
+            .push("random access: no video baselines (ffmpeg), pyramid only".into());
+    }
+    // Each video baseline measured at the codec's bytes, at its CRF there.
+    let videos: Vec<(VideoCodec, u32)> = VideoCodec::ALL
+        .into_iter()
+        .filter_map(|codec| {
+            let b = report
+                .baselines
+                .iter()
+                .find(|b| b.name == codec.baseline_name())?;
+            Some((codec, b.crf?))
+        })
+        .collect();
+    for (codec, crf) in videos {
+        say(format!("random access: {} at crf {crf}", codec.name()));
+        report
+            .random_access
+            .push(codec::report::video_random_access(
+                codec, input, crf, &samples,
+            )?);
     }
     Ok(())
 }

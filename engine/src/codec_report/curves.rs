@@ -125,11 +125,21 @@ fn baseline_curves(
         codec::report::jpeg_baselines(input, sizes, &mut say_mut)?,
     ));
     if ffmpeg {
-        out.push(to_curve(
-            "mpeg-texture",
-            "texture",
-            codec::report::mpeg_texture_baselines(input, sizes, &mut say_mut)?,
-        ));
+        for codec in codec::report::VideoCodec::ALL {
+            if !codec.available() {
+                notes.push(format!(
+                    "curve: ffmpeg has no {}: {} skipped",
+                    codec.name(),
+                    codec.baseline_name()
+                ));
+                continue;
+            }
+            out.push(to_curve(
+                codec.baseline_name(),
+                "texture",
+                codec::report::mpeg_texture_baselines_with(codec, input, sizes, &mut say_mut)?,
+            ));
+        }
         match (views, bench) {
             (Some(v), Some(b)) => out.push(to_curve(
                 "mpeg-view",
