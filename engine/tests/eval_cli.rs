@@ -95,6 +95,62 @@ fn assert_methods_beat_static_em(rows: &[serde_json::Value], log: &str) {
     }
 }
 
+/// Seconds in the key record beside `file`, if any.
+fn record_seconds(record: &Path) -> Option<f64> {
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(record).ok()?).ok()?;
+    json["seconds"].as_f64()
+}
+
+/// Every `.key` record under `dir` (recursively).
+fn records(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    for entry in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+        let p = entry.path();
+        if p.is_dir() {
+            out.extend(records(&p));
+        } else if p.extension().is_some_and(|e| e == "key") {
+            out.push(p);
+        }
+    }
+    out
+}
+
+/// Rows that play the container state their compile minutes: its
+/// record's seconds, which sum the recorded seconds of every trace and of
+/// every map it holds plus the encode; the static EM's row and the sphere
+/// PEM's (its EXR maps) state none.
+fn assert_compile_minutes(rows: &[serde_json::Value], data: &Path) {
+    let traced: Vec<f64> = records(&data.join("trace"))
+        .iter()
+        .map(|r| record_seconds(r).unwrap_or_else(|| panic!("{}: no seconds", r.display())))
+        .collect();
+    let maps: Vec<f64> = records(&data.join("infer"))
+        .iter()
+        .filter(|r| r.to_string_lossy().ends_with(".exr.key"))
+        .filter(|r| !r.to_string_lossy().contains("specular_sphere"))
+        .map(|r| record_seconds(r).unwrap_or_else(|| panic!("{}: no seconds", r.display())))
+        .collect();
+    assert_eq!(traced.len(), 3, "one trace per sample");
+    assert_eq!(maps.len(), 3 * 3, "three maps per sample in the container");
+    let container = records(data)
+        .into_iter()
+        .find(|r| r.to_string_lossy().ends_with(".ptxc.key"))
+        .expect("container record");
+    let total = record_seconds(&container).expect("container seconds");
+    let inputs: f64 = traced.iter().chain(&maps).sum();
+    assert!(
+        inputs > 0.0 && total >= inputs,
+        "container {total} s, inputs {inputs} s"
+    );
+    for label in ["layered-pem", "layered-pem distant-only", "ptm"] {
+        let minutes = num(row(rows, label), "compile_minutes");
+        assert!((minutes - total / 60.0).abs() < 1e-9, "{label}: {minutes}");
+    }
+    for label in ["static-em", "sphere-pem"] {
+        assert!(row(rows, label).get("compile_minutes").is_none(), "{label}");
+    }
+}
+
 #[test]
 fn eval_ranks_the_methods_against_the_tracer() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -110,6 +166,7 @@ fn eval_ranks_the_methods_against_the_tracer() {
     assert_eq!(rows.len(), 5, "{table}");
     assert_views_above(rows);
     assert_methods_beat_static_em(rows, &log);
+    assert_compile_minutes(rows, &data);
     // The local layer pays between samples (+0.5 dB measured).
     let gain = num(row(rows, "layered-pem"), "psnr_between_db")
         - num(row(rows, "layered-pem distant-only"), "psnr_between_db");

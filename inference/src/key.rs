@@ -120,6 +120,10 @@ pub struct Record {
     pub key: Key,
     pub bytes: u64,
     pub crc32: u32,
+    /// Seconds of work that made the file, counting the files it was made
+    /// from where the writer says so (a compile's budget), when recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seconds: Option<f64>,
 }
 
 /// The `writer` of every record this engine writes.
@@ -198,6 +202,15 @@ pub fn read_verified(file: &std::path::Path) -> Result<Vec<u8>, String> {
 
 /// Records that `file` (already in place) was made from inputs with `key`.
 pub fn write_record(file: &std::path::Path, key: &Key) -> Result<(), crate::files::FileError> {
+    write_record_timed(file, key, None)
+}
+
+/// [`write_record`], also recording the `seconds` of work `file` took.
+pub fn write_record_timed(
+    file: &std::path::Path,
+    key: &Key,
+    seconds: Option<f64>,
+) -> Result<(), crate::files::FileError> {
     let io = |source| crate::files::FileError {
         path: file.to_owned(),
         source,
@@ -208,9 +221,15 @@ pub fn write_record(file: &std::path::Path, key: &Key) -> Result<(), crate::file
         key: key.clone(),
         bytes: bytes.len() as u64,
         crc32: crc32fast::hash(&bytes),
+        seconds: seconds.filter(|s| s.is_finite() && *s >= 0.0),
     };
     let json = serde_json::to_vec_pretty(&record).map_err(|e| io(e.into()))?;
     crate::files::write_bytes(&record_path(file), &json)
+}
+
+/// The seconds of work recorded beside `file`, when its record has them.
+pub fn recorded_seconds(file: &std::path::Path) -> Option<f64> {
+    read_record(file)?.seconds
 }
 
 /// Removes `file` and its record (a damaged cache entry, to be rebuilt).

@@ -145,8 +145,16 @@ pub struct Encoded {
 /// Encodes `input` at `target` into `out` (atomically, with a key record
 /// `key`), growing the budget until every texture decodes to at least
 /// [`MIN_TEXTURE_PSNR_DB`]. Refuses to replace a file that is not the
-/// engine's.
-pub fn encode_to(input: &EncodeInput, target: Target, out: &Path, key: &Key) -> Result<Encoded> {
+/// engine's. `inputs_s`, the seconds the maps cost to make when known
+/// (`compile::infer::inputs_budget`), plus the encode's own are recorded
+/// as the container's compile time.
+pub fn encode_to(
+    input: &EncodeInput,
+    target: Target,
+    out: &Path,
+    key: &Key,
+    inputs_s: Option<f64>,
+) -> Result<Encoded> {
     check_overwrite_keyed(out)?;
     let start = std::time::Instant::now();
     let raw = input.raw_bytes();
@@ -166,14 +174,15 @@ pub fn encode_to(input: &EncodeInput, target: Target, out: &Path, key: &Key) -> 
         let container = codec::Container::from_bytes(bytes.clone())?;
         let worst = worst_psnr(&container, input)?;
         if worst >= MIN_TEXTURE_PSNR_DB {
+            let seconds = start.elapsed().as_secs_f64();
             crate::util::files::write(out, &bytes)?;
-            inference::key::write_record(out, key)?;
+            inference::key::write_record_timed(out, key, inputs_s.map(|s| s + seconds))?;
             return Ok(Encoded {
                 bytes: report.bytes,
                 raw_bytes: report.raw_bytes,
                 ratio: report.ratio,
                 worst_psnr_db: worst,
-                seconds: start.elapsed().as_secs_f64(),
+                seconds,
                 note,
             });
         }

@@ -283,7 +283,8 @@ fn container_source(
     }
     let input = load_or_reinfer(ctx, req, dirs)?;
     let target = codec::Target::Ratio(encode::DEFAULT_RATIO);
-    let e = encode::encode_to(&input, target, &path, &key)?;
+    let budget = infer::inputs_budget(plan, &dirs.trace, &dirs.infer);
+    let e = encode::encode_to(&input, target, &path, &key, budget.seconds())?;
     eprintln!(
         "{}: {} bytes from {} raw (ratio {:.1}:1, worst texture {:.1} dB) in {:.1} s{}",
         path.display(),
@@ -294,7 +295,26 @@ fn container_source(
         e.seconds,
         e.note.map_or(String::new(), |n| format!(" ({n})"))
     );
+    eprintln!("{}", budget_line(&budget, e.seconds));
     MapSource::container(ctx.scene, &path)
+}
+
+/// What the container cost to compile, as its record keeps it.
+fn budget_line(budget: &infer::Budget, encode_s: f64) -> String {
+    let minutes = |s: f64| s / 60.0;
+    match budget.seconds() {
+        Some(s) => format!(
+            "compile time of these maps: {:.1} min (traces {:.1}, inference {:.1}, encode {:.1})",
+            minutes(s + encode_s),
+            minutes(budget.trace_s),
+            minutes(budget.infer_s),
+            minutes(encode_s)
+        ),
+        None => format!(
+            "compile time of these maps: unknown ({} inputs were made before times were recorded)",
+            budget.untimed
+        ),
+    }
 }
 
 /// The encoder's input; a map that fails to read (damaged since it was

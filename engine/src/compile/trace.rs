@@ -69,7 +69,7 @@ pub fn trace(
         let image = tracer.render(eye, settings)?;
         output::write_image(&stem, &image)
             .with_context(|| format!("writing {}", stem.display()))?;
-        cache::record(&stem, &key)?;
+        cache::record(&stem, &key, Some(image.elapsed.as_secs_f64()))?;
         report += &format!(
             "{}: {:.2} s, {} rays, {:.2} Mrays/s\n",
             output::with_suffix(&stem, ".exr").display(),
@@ -133,6 +133,6 @@ pub fn cached_or_traced(
     }
     let image = trace()?;
     output::write_image(stem, &image).with_context(|| format!("writing {}", stem.display()))?;
-    cache::record(stem, key)?;
+    cache::record(stem, key, Some(image.elapsed.as_secs_f64()))?;
     Ok((read()?, true))
 }

@@ -105,9 +105,11 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
         }
         let samples = matches!(row.mode, Mode::LayeredPem | Mode::SpherePem | Mode::Ptm)
             .then(|| scene.orbit.sample_count());
+        let compile_minutes = samples.and(renderer.map_compile_minutes);
         table_rows.push(EvalRow {
             map_bytes,
             samples,
+            compile_minutes,
             ..table_row(row, &results, opts.views)
         });
     }
@@ -442,6 +444,7 @@ fn table_row(row: &Row, results: &[ViewResult], views: u32) -> EvalRow {
         }),
         map_bytes: None,
         samples: None,
+        compile_minutes: None,
         above,
     }
 }

@@ -75,6 +75,10 @@ pub struct EvalRow {
     /// modes that read per-sample maps.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub samples: Option<u32>,
+    /// Minutes those maps took to compile (traces, inference and encode,
+    /// as the container's key record keeps them), when known.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub compile_minutes: Option<f64>,
     /// Scores at each elevation above the plane (the `*_above` fields are
     /// the first's).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -100,7 +104,7 @@ pub struct ViewCounts {
 
 impl EvalRow {
     /// The row's numbers by JSON field name, for checks and messages.
-    fn numbers(&self) -> [(&'static str, Option<f64>); 14] {
+    fn numbers(&self) -> [(&'static str, Option<f64>); 15] {
         [
             ("psnr_on_db", Some(self.psnr_on_db)),
             ("psnr_between_db", Some(self.psnr_between_db)),
@@ -116,6 +120,7 @@ impl EvalRow {
             ("flip_frame_above", self.flip_frame_above),
             ("frame_ms", Some(self.frame_ms)),
             ("frame_ms_p95", self.frame_ms_p95),
+            ("compile_minutes", self.compile_minutes),
         ]
     }
 }
@@ -129,7 +134,9 @@ impl EvalTable {
                 let Some(v) = value else { continue };
                 let range = match field {
                     f if f.starts_with("flip") => Some((0.0, 1.0)),
-                    f if f.starts_with("frame_ms") => Some((0.0, f64::INFINITY)),
+                    f if f.starts_with("frame_ms") || f == "compile_minutes" => {
+                        Some((0.0, f64::INFINITY))
+                    }
                     _ => None,
                 };
                 let ok = v.is_finite() && range.is_none_or(|(lo, hi)| (lo..=hi).contains(&v));
@@ -215,13 +222,15 @@ impl EvalTable {
 
     /// A GitHub Markdown table, one line per row in order: mode, settings as
     /// `name=value` pairs, PSNR (dB, 2 decimals; `≥ 100` at the cap), FLIP
-    /// (4 decimals), ms/frame (2 decimals), the bytes of the maps played
-    /// (`—` where none are counted). Ends with a newline.
+    /// (4 decimals), ms/frame (2 decimals), the bytes of the maps played,
+    /// their samples and compile minutes (`—` where none are counted).
+    /// Ends with a newline.
     pub fn to_markdown(&self) -> String {
         let mut out = String::from(
             "| mode | settings | PSNR on (dB) | PSNR between (dB) | PSNR above (dB) \
-             | FLIP on | FLIP between | FLIP above | ms/frame | map bytes | samples |\n\
-             |---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n",
+             | FLIP on | FLIP between | FLIP above | ms/frame | map bytes | samples \
+             | compile min |\n\
+             |---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n",
         );
         for row in &self.rows {
             let settings = if row.settings.is_empty() {
@@ -238,7 +247,7 @@ impl EvalTable {
             };
             let _ = writeln!(
                 out,
-                "| {} | {} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {:.2} | {} | {} |",
+                "| {} | {} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {:.2} | {} | {} | {} |",
                 cell(&row.mode),
                 cell(&settings),
                 psnr_cell(row.psnr_on_db),
@@ -252,6 +261,8 @@ impl EvalTable {
                     .map_or_else(|| "—".to_owned(), |b| b.to_string()),
                 row.samples
                     .map_or_else(|| "—".to_owned(), |n| n.to_string()),
+                row.compile_minutes
+                    .map_or_else(|| "—".to_owned(), |m| format!("{m:.1}")),
             );
         }
         out
@@ -308,6 +319,7 @@ mod tests {
             views: None,
             map_bytes: None,
             samples: None,
+            compile_minutes: None,
             above: Vec::new(),
         }
     }
@@ -361,6 +373,7 @@ mod tests {
         });
         r.map_bytes = Some(1 << 20);
         r.samples = Some(23);
+        r.compile_minutes = Some(12.5);
         let table = table_of(vec![row("pem"), r]);
         let value = serde_json::to_value(&table)?;
         assert_eq!(
@@ -370,7 +383,12 @@ mod tests {
         assert_eq!(value["rows"][1]["frame_ms_p95"], json!(4.0));
         assert_eq!(value["rows"][1]["map_bytes"], json!(1 << 20));
         assert_eq!(value["rows"][1]["samples"], json!(23));
+        assert_eq!(value["rows"][1]["compile_minutes"], json!(12.5));
         assert!(value["rows"][0].get("samples").is_none());
+        assert!(value["rows"][0].get("compile_minutes").is_none());
+        let markdown = table.to_markdown();
+        assert!(markdown.contains("| samples | compile min |"), "{markdown}");
+        assert!(markdown.contains("| 23 | 12.5 |"), "{markdown}");
 
         let dir = tempfile::tempdir()?;
         let path = dir.path().join("eval.json");

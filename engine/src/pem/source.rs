@@ -51,6 +51,16 @@ impl MapSource {
         }
     }
 
+    /// Seconds the container took to compile (its inputs' traces and maps
+    /// and its encode), as its key record keeps them; None when reading
+    /// EXR maps or when the record has none.
+    pub fn compile_seconds(&self) -> Option<f64> {
+        match &self.kind {
+            Kind::Container { path, .. } => inference::key::recorded_seconds(path),
+            Kind::Exr { .. } => None,
+        }
+    }
+
     /// Opens the container at `path`, checking it holds the maps this scene
     /// asks for, in the order `engine encode` writes them.
     pub fn container(scene: &Scene, path: &Path) -> Result<Self> {

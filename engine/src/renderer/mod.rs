@@ -109,6 +109,9 @@ pub struct Renderer {
     /// Bytes of the maps the last `set_pem` (container) or `set_rem`
     /// (source maps on the device) set up, for the eval table.
     pub map_bytes: Option<u64>,
+    /// Minutes the last `set_pem`'s container took to compile, as its key
+    /// record keeps them (None when unknown or reading EXR maps).
+    pub map_compile_minutes: Option<f64>,
 }
 
 impl Renderer {
@@ -152,6 +155,7 @@ impl Renderer {
             next_view: None,
             setup_timings: Vec::new(),
             map_bytes: None,
+            map_compile_minutes: None,
         };
         renderer.setup_timings = renderer.capture_static_ems(scene.camera.near, far)?;
         Ok(renderer)
@@ -183,6 +187,7 @@ impl Renderer {
             old.release(&mut self.executor);
         }
         self.map_bytes = source.container_bytes();
+        self.map_compile_minutes = source.compile_seconds().map(|s| s / 60.0);
         self.pem = Some(PemPlayer::new(
             &self.device,
             &mut self.executor,
@@ -212,6 +217,7 @@ impl Renderer {
             (COLOR_FORMAT, DEPTH_FORMAT),
         )?;
         self.map_bytes = Some(rem.bytes);
+        self.map_compile_minutes = None;
         self.rem = Some(rem);
         Ok(())
     }

@@ -188,8 +188,9 @@ pub fn freshness(stem: &Path, key: &Key) -> Freshness {
     crate::key::freshness(&super::output::with_suffix(stem, ".exr"), key)
 }
 
-/// Records `key` for `<stem>.exr` (after the images are in place).
-pub fn record(stem: &Path, key: &Key) -> Result<(), TraceError> {
+/// Records `key` for `<stem>.exr` (after the images are in place), with
+/// the `seconds` the trace took when known.
+pub fn record(stem: &Path, key: &Key, seconds: Option<f64>) -> Result<(), TraceError> {
     let exr = super::output::with_suffix(stem, ".exr");
-    crate::key::write_record(&exr, key).map_err(|e| TraceError::io(&exr, e.source))
+    crate::key::write_record_timed(&exr, key, seconds).map_err(|e| TraceError::io(&exr, e.source))
 }

@@ -7,7 +7,7 @@ use anyhow::{Result, bail};
 use glam::Vec3;
 use inference::em_geometry::{EmGeometry, bounding_ellipsoid};
 use inference::key::{Fnv, Key};
-use inference::scene::{EM_RESOLUTIONS, EmLayer, Object, Scene};
+use inference::scene::{EM_RESOLUTIONS, EmLayer, Object, Orbit, Scene};
 use inference::solve::SolveOptions;
 use inference::solve::layout::TextureShape;
 use std::hash::Hasher;
@@ -22,6 +22,37 @@ pub const INFERENCE_VERSION: u32 = 3;
 pub struct Stack {
     pub deg: Option<f32>,
     pub above_deg: Vec<f32>,
+}
+
+/// A view stacked into a sample's solves: another sample's trace, or a
+/// free view (`view_az±A_el±E`) at (azimuth, elevation) in degrees.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum StackedView {
+    Sample(u32),
+    Free(f32, f32),
+}
+
+/// The views stacked into sample `k`'s solves: its neighbouring samples'
+/// (`stack.deg` None) or the views `deg` degrees either side of it on its
+/// ring, then those `stack.above_deg` above it at its azimuth. A sample's
+/// own trace where one sits at a view, else a free view (shared by the
+/// samples either side of it when they lie 2·`deg` apart).
+pub fn stacked_views_of(orbit: &Orbit, k: u32, stack: &Stack) -> Vec<StackedView> {
+    let (azimuth, elevation) = orbit.sample_angles(k);
+    let at = |a: f32, e: f32| {
+        (0..orbit.sample_count())
+            .find(|&n| orbit.sample_angles(n) == (a, e))
+            .map_or(StackedView::Free(a, e), StackedView::Sample)
+    };
+    let mut views: Vec<StackedView> = match stack.deg {
+        None => ring_neighbours(k, orbit.samples.max(1))
+            .into_iter()
+            .map(StackedView::Sample)
+            .collect(),
+        Some(deg) => vec![at(azimuth - deg, elevation), at(azimuth + deg, elevation)],
+    };
+    views.extend(stack.above_deg.iter().map(|&e| at(azimuth, elevation + e)));
+    views
 }
 
 /// One map of one reflector to infer.

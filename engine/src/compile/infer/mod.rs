@@ -9,6 +9,7 @@
 //! merged after every map (an interrupted run loses no finished map).
 
 mod baselines;
+mod budget;
 mod diffuse;
 mod jobs;
 mod pictures;
@@ -17,6 +18,7 @@ mod sample;
 mod summary;
 pub(crate) mod targets;
 
+pub use budget::{Budget, inputs_budget};
 pub use diffuse::{DiffuseRequest, infer_diffuse};
 use jobs::missing_neighbours;
 pub use jobs::{INFERENCE_VERSION, Job, jobs_for, map_key};

@@ -2,8 +2,7 @@
 //! written with its key record, the sample's report merged after each.
 
 use super::baselines::{StaticEm, static_em_psnr, static_ems};
-use super::jobs::Stack;
-use super::jobs::ring_neighbours;
+use super::jobs::{Stack, StackedView, stacked_views_of};
 use super::pictures::{write_comparison, write_map_picture};
 use super::report::{LayerReport, SampleReport, finite_or_max};
 use super::targets::{composite_pixels, specular_pixels, target_pixels};
@@ -126,41 +125,21 @@ impl<'a> SampleRun<'a> {
         Ok(SampleTrace { eye, layers, key })
     }
 
-    /// The views stacked into sample `k`'s solves: its neighbouring
-    /// samples' (`stack.deg` None) or the views `deg` degrees either side
-    /// of it on its ring, then those `stack.above_deg` above it at its
-    /// azimuth. A sample's own trace where one sits at a view, else the
-    /// view traced as a free one (`view_az±A_el±E`, shared by the samples
-    /// either side of it when they lie 2·`deg` apart).
+    /// The traces of the views stacked into sample `k`'s solves
+    /// ([`stacked_views_of`]), free views traced when missing.
     fn stacked_traces(&self, k: u32, stack: &Stack) -> Result<Vec<StackedTrace>> {
-        let orbit = &self.plan.scene.orbit;
-        let (azimuth, elevation) = orbit.sample_angles(k);
-        let mut traces = match stack.deg {
-            None => ring_neighbours(k, orbit.samples.max(1))
-                .into_iter()
-                .map(|n| Ok(StackedTrace::of(self.sample_trace(n)?)))
-                .collect::<Result<Vec<_>>>()?,
-            Some(deg) => [azimuth - deg, azimuth + deg]
-                .into_iter()
-                .map(|a| self.view_trace(a, elevation))
-                .collect::<Result<Vec<_>>>()?,
-        };
-        for &e in &stack.above_deg {
-            traces.push(self.view_trace(azimuth, elevation + e)?);
-        }
-        Ok(traces)
+        stacked_views_of(&self.plan.scene.orbit, k, stack)
+            .into_iter()
+            .map(|v| match v {
+                StackedView::Sample(n) => Ok(StackedTrace::of(self.sample_trace(n)?)),
+                StackedView::Free(azimuth, elevation) => self.free_view_trace(azimuth, elevation),
+            })
+            .collect()
     }
 
-    /// The traced view at (`azimuth`, `elevation`): the trace of a sample
-    /// sitting there, else a free view's, traced when missing.
-    fn view_trace(&self, azimuth: f32, elevation: f32) -> Result<StackedTrace> {
-        let orbit = &self.plan.scene.orbit;
-        if let Some(k) =
-            (0..orbit.sample_count()).find(|&k| orbit.sample_angles(k) == (azimuth, elevation))
-        {
-            return Ok(StackedTrace::of(self.sample_trace(k)?));
-        }
-        let eye = orbit.eye(azimuth, elevation);
+    /// A free view's traced layers, traced when missing.
+    fn free_view_trace(&self, azimuth: f32, elevation: f32) -> Result<StackedTrace> {
+        let eye = self.plan.scene.orbit.eye(azimuth, elevation);
         let (layers, key) = traced_layers(
             &self.tracer,
             &self.plan.scene_key,
@@ -203,6 +182,7 @@ impl<'a> SampleRun<'a> {
         own: &SampleTrace,
         around: &[StackedTrace],
     ) -> Result<(LayerReport, bool)> {
+        let start = std::time::Instant::now();
         let (width, height) = self.req.size;
         let pixel_count = width as usize * height as usize;
         let name = job.name();
@@ -245,7 +225,9 @@ impl<'a> SampleRun<'a> {
         let dir = sample_dir(&self.req.infer_dir, k);
         let map = map_path(&self.req.infer_dir, k, &job.object.name, job.layer);
         write_map(&map, &layout, &result.map)?;
-        inference::key::write_record(&map, &key)?;
+        // The map's own work (its views' traces have their own records).
+        let seconds = Some(start.elapsed().as_secs_f64());
+        inference::key::write_record_timed(&map, &key, seconds)?;
         write_comparison(&dir.join(format!("{name}.png")), width, &pixels, &result)?;
         write_map_picture(&dir.join(format!("{name}.map.png")), &layout, &result.map)?;
         let mut report = LayerReport::from(&result);

@@ -40,6 +40,8 @@ pub fn run(args: &EncodeArgs) -> Result<String> {
         target,
         &args.out,
         &container_key(keys.iter(), target, orbit_grid(&scene.orbit)),
+        // The compile's budget needs its traces too: the main job records it.
+        None,
     )?;
     Ok(format!(
         "{}: {} textures x {} samples, {} bytes from {} raw (ratio {:.1}:1, worst texture {:.1} dB) in {:.1} s{}\n",
