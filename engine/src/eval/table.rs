@@ -442,11 +442,11 @@ mod tests {
         assert_eq!(
             lines[2],
             "| pem | blend=true, em_resolution=256, filter=trilinear | 31.25 | 29.50 | 24.13 \
-             | 0.0625 | 0.0700 | 0.1000 | 3.50 | — | — |"
+             | 0.0625 | 0.0700 | 0.1000 | 3.50 | — | — | — |"
         );
         assert!(lines[3].starts_with("| a\\|b | — | ≥ 100 | "));
         // Same number of cells on every line (escaped pipes are not separators).
         let cells = |l: &str| l.replace("\\|", "").matches('|').count();
-        assert!(lines.iter().all(|l| cells(l) == 12), "{md}");
+        assert!(lines.iter().all(|l| cells(l) == 13), "{md}");
     }
 }
