@@ -45,7 +45,7 @@ pub fn spread_samples(n: usize, count: usize) -> Vec<usize> {
 /// read; their memory stays allocated, as in a running player — the video
 /// is timed with its decoder open too), then every texture's leaf at that
 /// sample decoded (all faces and MIPs, f16), the textures dealt over
-/// `threads` threads. One untimed access first allocates that memory. The
+/// `threads` threads by size ([`deal_by_size`]). One untimed access first allocates that memory. The
 /// file's pages may sit in the OS cache.
 pub fn pyramid_random_access(
     path: &Path,
@@ -66,12 +66,9 @@ pub fn pyramid_random_access(
         let c = Container::open(path)?;
         caches.iter_mut().for_each(DecodeCache::clear);
         let textures: Vec<_> = c.textures().iter().zip(&mut outs).collect();
-        let per_thread = textures.len().div_ceil(threads).max(1);
-        let mut chunks: Vec<Vec<_>> = Vec::new();
-        let mut it = textures.into_iter().peekable();
-        while it.peek().is_some() {
-            chunks.push(it.by_ref().take(per_thread).collect());
-        }
+        let chunks = deal_by_size(textures, threads, |(t, _)| {
+            t.layout.texels() * t.layout.channels as usize
+        });
         std::thread::scope(|scope| -> Result<()> {
             let c = &c;
             let workers: Vec<_> = chunks
@@ -100,9 +97,28 @@ pub fn pyramid_random_access(
         bytes_read: median_u64(&mut bytes),
         samples: samples.len(),
         note: format!(
-            "fresh open (header, index) and emptied decode caches per sample; every texture's leaf, all faces and MIPs, to f16; textures dealt over {threads} thread(s)"
+            "fresh open (header, index) and emptied decode caches per sample; every texture's leaf, all faces and MIPs, to f16; textures dealt over {threads} thread(s) by size"
         ),
     })
+}
+
+/// Deals `items` over at most `threads` chunks, largest `work` first onto
+/// the chunk with the least work so far (longest-processing-time first):
+/// the cube maps then decode side by side instead of on one thread.
+fn deal_by_size<T>(mut items: Vec<T>, threads: usize, work: impl Fn(&T) -> usize) -> Vec<Vec<T>> {
+    items.sort_by_key(|t| std::cmp::Reverse(work(t)));
+    let mut chunks: Vec<(usize, Vec<T>)> = (0..threads.max(1)).map(|_| (0, Vec::new())).collect();
+    for item in items {
+        if let Some(least) = chunks.iter_mut().min_by_key(|(w, _)| *w) {
+            least.0 += work(&item);
+            least.1.push(item);
+        }
+    }
+    chunks
+        .into_iter()
+        .map(|(_, c)| c)
+        .filter(|c| !c.is_empty())
+        .collect()
 }
 
 /// Decodes sample `s` of each texture in `chunk` into its buffer.
@@ -291,6 +307,23 @@ fn median_u64(v: &mut [u64]) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn textures_are_dealt_largest_first_onto_the_least_loaded_thread() {
+        // The teapot's three: distant RGB and local RGBA cube maps, a small PTM.
+        let work = |&(_, w): &(char, usize)| w;
+        let chunks = deal_by_size(vec![('d', 300), ('l', 400), ('p', 50)], 2, work);
+        let names: Vec<Vec<char>> = chunks
+            .iter()
+            .map(|c| c.iter().map(|t| t.0).collect())
+            .collect();
+        assert_eq!(names, [vec!['l'], vec!['d', 'p']]);
+        // More threads than textures: one each, no empty chunk.
+        assert_eq!(deal_by_size(vec![('a', 1), ('b', 2)], 4, work).len(), 2);
+        // One thread: everything, largest first.
+        let one = deal_by_size(vec![('a', 1), ('b', 2)], 1, work);
+        assert_eq!(one, [vec![('b', 2), ('a', 1)]]);
+    }
 
     #[test]
     fn samples_are_spread_distinct_and_at_every_offset_of_a_block() {
