@@ -159,3 +159,30 @@ fn views_above_each_sample_are_traced_once_and_change_the_maps() {
     assert_eq!(changed.len(), 6, "{changed:?}\n{log}");
     assert!(changed.iter().all(|p| !p.contains(".ptm")), "{changed:?}");
 }
+
+/// `neighbour_above_spacing_deg`: views above on an azimuth grid, each
+/// shared by the samples nearest it: the tiny orbit's 3 samples (0°, 1°,
+/// 2°) on a 2° grid trace 2 views, not 3 (sample 1 ties and takes 2°).
+#[test]
+fn shared_views_above_are_traced_once_per_grid_azimuth() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = tiny_scene(dir.path());
+    let plain = std::fs::read_to_string(&scene).expect("scene");
+    let weight = "neighbour_weight = 1.0";
+    let shared = plain.replacen(
+        weight,
+        &format!("{weight}\nneighbour_above_deg = [15.0]\nneighbour_above_spacing_deg = 2.0"),
+        1,
+    );
+    std::fs::write(&scene, shared).expect("write scene");
+    let out = dir.path().join("out");
+    let log = ok(compile(&scene, &out, &[]));
+    let views = traced_views(&out);
+    assert_eq!(
+        views,
+        ["view_az+0.000_el+15.000.exr", "view_az+2.000_el+15.000.exr"],
+        "{log}"
+    );
+    assert_eq!(maps(&out).len(), 9, "3 samples × 3 maps");
+    assert!(log.contains("compile time of these maps:"), "{log}");
+}

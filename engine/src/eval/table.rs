@@ -419,7 +419,10 @@ mod tests {
         assert!(table_of(vec![bad]).validate().is_err());
         let mut bad = row("pem");
         bad.compile_minutes = Some(-1.0);
-        let e = table_of(vec![bad]).validate().err().map(|e| format!("{e:#}"));
+        let e = table_of(vec![bad])
+            .validate()
+            .err()
+            .map(|e| format!("{e:#}"));
         assert!(e.is_some_and(|e| e.contains("compile_minutes")));
         Ok(())
     }

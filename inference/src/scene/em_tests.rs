@@ -124,4 +124,25 @@ fn views_above_are_off_unless_asked_and_checked() {
     );
     let e = off.err().map(|e| e.to_string()).unwrap_or_default();
     assert!(e.contains("needs `neighbour_weight` above 0"), "{e}");
+    // Shared views above: a spacing in range, only beside elevations.
+    let spacing = |s: &Scene| {
+        s.object("teapot")
+            .and_then(|o| o.neighbour_above_spacing_deg())
+    };
+    assert_eq!(spacing(&Scene::load("teapot").expect("loads")), None);
+    let shared = with("[15.0]\nneighbour_above_spacing_deg = 4.0").expect("loads");
+    assert_eq!(spacing(&shared), Some(4.0));
+    for bad in ["0.0", "-4", "100", "nan"] {
+        let e = with(&format!("[15.0]\nneighbour_above_spacing_deg = {bad}"))
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(
+            e.contains(".em.neighbour_above_spacing_deg") && e.contains("expected"),
+            "{bad}: {e}"
+        );
+    }
+    let alone = load_edited(&line, &format!("{line}neighbour_above_spacing_deg = 4.0\n"));
+    let e = alone.err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(e.contains("needs `neighbour_above_deg`"), "{e}");
 }

@@ -199,6 +199,7 @@ pub struct EmFile {
     pub neighbour_deg: Option<f32>,
     #[serde(default)]
     pub neighbour_above_deg: Vec<f32>,
+    pub neighbour_above_spacing_deg: Option<f32>,
 }
 
 /// `[objects.glass]`; see `scene::glass::GlassSettings` for the meanings.

@@ -48,6 +48,11 @@ pub struct EmSettings {
     /// orbit's sample serves every elevation at its azimuth; views off the
     /// plane constrain the texels only they reach.
     pub neighbour_above_deg: Vec<f32>,
+    /// With views above, put them on an azimuth grid this many degrees
+    /// apart (from the orbit's first azimuth) instead of at every sample:
+    /// each sample stacks the grid views nearest its azimuth, so the
+    /// samples around one share its trace and its probe renders.
+    pub neighbour_above_spacing_deg: Option<f32>,
 }
 
 /// The LOD biases a scene may ask for.
@@ -61,6 +66,8 @@ pub const NEIGHBOUR_DEGS: std::ops::RangeInclusive<f32> = 0.01..=45.0;
 pub const NEIGHBOUR_ABOVE_DEGS: std::ops::RangeInclusive<f32> = -45.0..=45.0;
 /// At most this many views above each sample.
 pub const NEIGHBOUR_ABOVE_MAX: usize = 4;
+/// The azimuth spacings of shared views above a scene may ask for, degrees.
+pub const NEIGHBOUR_ABOVE_SPACINGS: std::ops::RangeInclusive<f32> = 0.01..=90.0;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -80,6 +87,7 @@ impl Default for EmSettings {
             neighbour_weight: 0.0,
             neighbour_deg: None,
             neighbour_above_deg: Vec::new(),
+            neighbour_above_spacing_deg: None,
         }
     }
 }

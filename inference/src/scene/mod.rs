@@ -101,6 +101,15 @@ impl Object {
     pub fn neighbour_above_deg(&self) -> &[f32] {
         self.em.as_ref().map_or(&[], |em| &em.neighbour_above_deg)
     }
+
+    /// The azimuth spacing of shared views above
+    /// (`[objects.em] neighbour_above_spacing_deg`); None puts them at
+    /// every sample.
+    pub fn neighbour_above_spacing_deg(&self) -> Option<f32> {
+        self.em
+            .as_ref()
+            .and_then(|em| em.neighbour_above_spacing_deg)
+    }
 }
 
 impl Scene {

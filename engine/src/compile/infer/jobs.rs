@@ -17,11 +17,13 @@ pub const INFERENCE_VERSION: u32 = 3;
 
 /// The views a job's solves stack beside the sample's own: `deg` either
 /// side on its ring (None: the neighbouring samples), then `above_deg`
-/// above it.
+/// above it, at its azimuth or (`above_spacing`) at the nearest azimuth of
+/// a grid that many degrees apart.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Stack {
     pub deg: Option<f32>,
     pub above_deg: Vec<f32>,
+    pub above_spacing: Option<f32>,
 }
 
 /// A view stacked into a sample's solves: another sample's trace, or a
@@ -34,9 +36,11 @@ pub enum StackedView {
 
 /// The views stacked into sample `k`'s solves: its neighbouring samples'
 /// (`stack.deg` None) or the views `deg` degrees either side of it on its
-/// ring, then those `stack.above_deg` above it at its azimuth. A sample's
-/// own trace where one sits at a view, else a free view (shared by the
-/// samples either side of it when they lie 2·`deg` apart).
+/// ring, then those `stack.above_deg` above it at its azimuth, or at the
+/// grid azimuth nearest it (`stack.above_spacing`). A sample's own trace
+/// where one sits at a view, else a free view (shared by the samples
+/// either side of it when they lie 2·`deg` apart, and by those nearest one
+/// grid azimuth).
 pub fn stacked_views_of(orbit: &Orbit, k: u32, stack: &Stack) -> Vec<StackedView> {
     let (azimuth, elevation) = orbit.sample_angles(k);
     let at = |a: f32, e: f32| {
@@ -51,8 +55,22 @@ pub fn stacked_views_of(orbit: &Orbit, k: u32, stack: &Stack) -> Vec<StackedView
             .collect(),
         Some(deg) => vec![at(azimuth - deg, elevation), at(azimuth + deg, elevation)],
     };
-    views.extend(stack.above_deg.iter().map(|&e| at(azimuth, elevation + e)));
+    let above = match stack.above_spacing {
+        Some(d) => nearest_on_grid(azimuth, orbit.sample_angles(0).0, d),
+        None => azimuth,
+    };
+    views.extend(stack.above_deg.iter().map(|&e| at(above, elevation + e)));
     views
+}
+
+/// The azimuth of the grid `start + i·spacing` nearest `azimuth` (ties
+/// away from the start); `azimuth` itself for a spacing that is not
+/// positive and finite.
+fn nearest_on_grid(azimuth: f32, start: f32, spacing: f32) -> f32 {
+    if !(spacing.is_finite() && spacing > 0.0) {
+        return azimuth;
+    }
+    start + ((azimuth - start) / spacing).round() * spacing
 }
 
 /// One map of one reflector to infer.
@@ -112,6 +130,7 @@ impl Job<'_> {
         (self.neighbour_weight() > 0.0).then(|| Stack {
             deg: self.neighbour_deg(),
             above_deg: self.neighbour_above_deg().to_vec(),
+            above_spacing: self.object.neighbour_above_spacing_deg(),
         })
     }
 }
@@ -202,6 +221,12 @@ pub fn map_key(trace: &Key, job: &Job, options: &SolveOptions, size: (u32, u32))
             for &e in job.neighbour_above_deg() {
                 h.f32(e);
             }
+            // Added with shared views above: views at every sample keep
+            // their keys.
+            if let Some(d) = job.object.neighbour_above_spacing_deg() {
+                h.str("above spacing");
+                h.f32(d);
+            }
         }
     }
     for p in &job.object.mesh.positions {
@@ -236,7 +261,10 @@ pub(super) fn missing_neighbours(k: u32, lines: u32) -> u64 {
 
 #[cfg(test)]
 mod tests {
-    use super::{jobs_for, map_key, missing_neighbours, ring_neighbours};
+    use super::{
+        Stack, StackedView, jobs_for, map_key, missing_neighbours, nearest_on_grid,
+        ring_neighbours, stacked_views_of,
+    };
     use inference::key::Key;
     use inference::scene::Scene;
     use inference::solve::SolveOptions;
@@ -298,5 +326,42 @@ mod tests {
         // A single sample has neither.
         assert_eq!(ring_neighbours(0, 1), Vec::<u32>::new());
         assert_eq!(missing_neighbours(0, 1), 0b11);
+    }
+
+    #[test]
+    fn shared_views_above_sit_on_the_grid_nearest_each_sample() {
+        assert_eq!(nearest_on_grid(5.0, 0.0, 4.0), 4.0);
+        assert_eq!(
+            nearest_on_grid(6.0, 0.0, 4.0),
+            8.0,
+            "ties away from the start"
+        );
+        assert_eq!(nearest_on_grid(-3.0, 1.0, 4.0), -3.0);
+        assert_eq!(nearest_on_grid(7.5, 0.0, f32::NAN), 7.5);
+        assert_eq!(nearest_on_grid(7.5, 0.0, 0.0), 7.5);
+        // The built-in orbit: samples 1° apart from 0°; a 4° grid puts
+        // samples 0-1 on 0°, 2-5 on 4°, and stacks the ring neighbours too.
+        let scene = Scene::load("teapot").expect("the built-in teapot scene loads");
+        let stack = Stack {
+            deg: None,
+            above_deg: vec![15.0],
+            above_spacing: Some(4.0),
+        };
+        let above = |k| stacked_views_of(&scene.orbit, k, &stack)[2..].to_vec();
+        assert_eq!(above(1), [StackedView::Free(0.0, 15.0)]);
+        assert_eq!(above(2), [StackedView::Free(4.0, 15.0)]);
+        assert_eq!(above(5), [StackedView::Free(4.0, 15.0)]);
+        assert_eq!(
+            stacked_views_of(&scene.orbit, 1, &stack)[..2],
+            [StackedView::Sample(0), StackedView::Sample(2)]
+        );
+        let per_sample = Stack {
+            above_spacing: None,
+            ..stack
+        };
+        assert_eq!(
+            stacked_views_of(&scene.orbit, 5, &per_sample)[2..],
+            [StackedView::Free(5.0, 15.0)]
+        );
     }
 }

@@ -392,5 +392,11 @@ mod tests {
             assert!(x.iter().zip(y).all(|(p, q)| p != q), "{x:?} vs {y:?}");
         }
         assert_eq!(a, keys("neighbour_above_deg = [15.0]"), "deterministic");
+        // Shared views above (a grid of azimuths) key their spacing.
+        let shared = keys("neighbour_above_deg = [15.0]\nneighbour_above_spacing_deg = 4.0");
+        assert!(
+            a.iter().zip(&shared).all(|(p, q)| p != q),
+            "{a:?} vs {shared:?}"
+        );
     }
 }

@@ -15,8 +15,8 @@ use crate::scene::obj::load_obj;
 use crate::teapot::{self, DEFAULT_SEGMENTS, MAX_SEGMENTS, TeapotPart};
 
 use crate::scene::material::{
-    EM_RESOLUTIONS, LOD_BIASES, NEIGHBOUR_ABOVE_DEGS, NEIGHBOUR_ABOVE_MAX, NEIGHBOUR_DEGS,
-    NEIGHBOUR_WEIGHTS,
+    EM_RESOLUTIONS, LOD_BIASES, NEIGHBOUR_ABOVE_DEGS, NEIGHBOUR_ABOVE_MAX,
+    NEIGHBOUR_ABOVE_SPACINGS, NEIGHBOUR_DEGS, NEIGHBOUR_WEIGHTS,
 };
 
 impl Loader<'_> {
@@ -173,6 +173,7 @@ impl Loader<'_> {
             neighbour_weight: em.neighbour_weight,
             neighbour_deg: em.neighbour_deg,
             neighbour_above_deg: em.neighbour_above_deg.clone(),
+            neighbour_above_spacing_deg: em.neighbour_above_spacing_deg,
         })
     }
 
@@ -181,6 +182,17 @@ impl Loader<'_> {
     fn views_above(&self, field: &str, em: &EmFile) -> Result<(), SceneError> {
         let above = &em.neighbour_above_deg;
         let name = format!("{field}.neighbour_above_deg");
+        if let Some(d) = em.neighbour_above_spacing_deg {
+            let spacing = format!("{field}.neighbour_above_spacing_deg");
+            let what = "degrees between shared views above";
+            self.in_range(spacing.clone(), d, &NEIGHBOUR_ABOVE_SPACINGS, what)?;
+            if above.is_empty() {
+                return Err(self.err(
+                    spacing,
+                    format!("{d} needs `neighbour_above_deg` (the elevations of the views)"),
+                ));
+            }
+        }
         if above.is_empty() {
             return Ok(());
         }
