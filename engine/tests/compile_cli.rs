@@ -121,22 +121,25 @@ fn the_shipped_compiled_scene_matches_its_inputs() {
     assert!(log.contains("floor.light.exr: fresh"), "{log}");
 }
 
+/// The tiny scene with `lines` after its `neighbour_weight` line, written
+/// in `dir`; returns its path and the text without them.
+fn tiny_scene_stacking(dir: &Path, lines: &str) -> (PathBuf, String) {
+    let scene = tiny_scene(dir);
+    let plain = std::fs::read_to_string(&scene).expect("scene");
+    let weight = "neighbour_weight = 1.0";
+    assert!(plain.contains(weight), "teapot.toml lacks {weight:?}");
+    let edited = plain.replacen(weight, &format!("{weight}\n{lines}"), 1);
+    std::fs::write(&scene, edited).expect("write scene");
+    (scene, plain)
+}
+
 /// `neighbour_above_deg`: each sample's solves also stack a view traced
 /// above it at its azimuth, which changes the maps; the same scene without
 /// the line re-infers them (their keys differ) from the same sample traces.
 #[test]
 fn views_above_each_sample_are_traced_once_and_change_the_maps() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let scene = tiny_scene(dir.path());
-    let plain = std::fs::read_to_string(&scene).expect("scene");
-    let weight = "neighbour_weight = 1.0";
-    assert!(plain.contains(weight), "teapot.toml lacks {weight:?}");
-    let above = plain.replacen(
-        weight,
-        &format!("{weight}\nneighbour_above_deg = [15.0]"),
-        1,
-    );
-    std::fs::write(&scene, above).expect("write scene");
+    let (scene, plain) = tiny_scene_stacking(dir.path(), "neighbour_above_deg = [15.0]");
     let out = dir.path().join("out");
     let log = ok(compile(&scene, &out, &[]));
     let views = traced_views(&out);
@@ -166,15 +169,10 @@ fn views_above_each_sample_are_traced_once_and_change_the_maps() {
 #[test]
 fn shared_views_above_are_traced_once_per_grid_azimuth() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let scene = tiny_scene(dir.path());
-    let plain = std::fs::read_to_string(&scene).expect("scene");
-    let weight = "neighbour_weight = 1.0";
-    let shared = plain.replacen(
-        weight,
-        &format!("{weight}\nneighbour_above_deg = [15.0]\nneighbour_above_spacing_deg = 2.0"),
-        1,
+    let (scene, _) = tiny_scene_stacking(
+        dir.path(),
+        "neighbour_above_deg = [15.0]\nneighbour_above_spacing_deg = 2.0",
     );
-    std::fs::write(&scene, shared).expect("write scene");
     let out = dir.path().join("out");
     let log = ok(compile(&scene, &out, &[]));
     let views = traced_views(&out);
