@@ -38,6 +38,7 @@ fn decode(c: &mut Criterion) {
             &ReportOptions {
                 jpeg_baseline: false,
                 ffmpeg_baseline: false,
+                videos: Vec::new(),
             },
         )
         .expect("report");

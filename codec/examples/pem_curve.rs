@@ -143,6 +143,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let opts = ReportOptions {
             jpeg_baseline: false,
             ffmpeg_baseline: false,
+            videos: Vec::new(),
         };
         let rep = report(&c, &input, &opts)?;
         println!(

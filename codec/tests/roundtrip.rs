@@ -371,6 +371,7 @@ fn report_has_the_json_fields() {
         &ReportOptions {
             jpeg_baseline: true,
             ffmpeg_baseline: false,
+            videos: Vec::new(),
         },
     )
     .unwrap();

@@ -117,6 +117,7 @@ fn report_matches_a_1d_container_to_a_2d_input_by_linear_index() {
     let opts = ReportOptions {
         jpeg_baseline: false,
         ffmpeg_baseline: false,
+        videos: Vec::new(),
     };
     let against_2d = report(&c, &two_d, &opts).unwrap();
     let against_1d = report(&c, &one_d, &opts).unwrap();

@@ -159,6 +159,9 @@ pub const PSNR_DEFINITION: &str = "10*log10(peak^2/MSE) on sign(x)*sqrt(|x|) of 
 pub struct ReportOptions {
     pub jpeg_baseline: bool,
     pub ffmpeg_baseline: bool,
+    /// The video encoders of the `mpeg-texture*` baselines (each only when
+    /// ffmpeg has it); all by default.
+    pub videos: Vec<VideoCodec>,
 }
 
 impl Default for ReportOptions {
@@ -166,6 +169,7 @@ impl Default for ReportOptions {
         Self {
             jpeg_baseline: true,
             ffmpeg_baseline: true,
+            videos: VideoCodec::ALL.to_vec(),
         }
     }
 }
@@ -251,7 +255,7 @@ pub fn report(c: &Container, reference: &EncodeInput, opts: &ReportOptions) -> R
     }
     if opts.ffmpeg_baseline {
         if ffmpeg_available() {
-            for codec in VideoCodec::ALL {
+            for &codec in &opts.videos {
                 if !codec.available() {
                     let name = codec.baseline_name();
                     notes.push(format!("ffmpeg has no {}: {name} skipped", codec.name()));

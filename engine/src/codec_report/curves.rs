@@ -40,7 +40,7 @@ pub(super) fn curves(
         &sizes,
         bench.as_deref(),
         views,
-        ffmpeg,
+        ffmpeg.then_some(&req.videos[..]),
         say,
         notes,
     )?);
@@ -68,6 +68,7 @@ fn codec_curves(
             &ReportOptions {
                 jpeg_baseline: false,
                 ffmpeg_baseline: false,
+                videos: Vec::new(),
             },
         )?;
         texture.push(rep.ratio, rep.psnr_db, rep.bytes);
@@ -95,13 +96,14 @@ fn codec_curves(
 }
 
 /// The baselines' curves at the codec's sizes (JPEG per texture; with
-/// ffmpeg, MPEG-texture and MPEG-view), and the curves' notes.
+/// ffmpeg — `videos`, the encoders asked for — MPEG-texture per encoder
+/// and MPEG-view), and the curves' notes.
 fn baseline_curves(
     input: &EncodeInput,
     sizes: &[u64],
     bench: Option<&FrameBench>,
     views: Option<&mut ViewFrames>,
-    ffmpeg: bool,
+    videos: Option<&[codec::report::VideoCodec]>,
     say: &dyn Fn(String),
     notes: &mut Vec<String>,
 ) -> Result<Vec<codec::report::Curve>> {
@@ -124,8 +126,8 @@ fn baseline_curves(
         "texture",
         codec::report::jpeg_baselines(input, sizes, &mut say_mut)?,
     ));
-    if ffmpeg {
-        for codec in codec::report::VideoCodec::ALL {
+    if let Some(videos) = videos {
+        for &codec in videos {
             if !codec.available() {
                 notes.push(format!(
                     "curve: ffmpeg has no {}: {} skipped",

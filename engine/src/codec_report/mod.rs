@@ -36,6 +36,9 @@ pub struct CodecReportRequest {
     /// Also the curves at `curve_ratios`.
     pub curve: bool,
     pub curve_ratios: Vec<f64>,
+    /// The video encoders of the MPEG-texture baselines, curves and
+    /// random access (each only when ffmpeg has it).
+    pub videos: Vec<codec::report::VideoCodec>,
     pub device: DeviceOptions,
 }
 
@@ -55,9 +58,15 @@ pub fn codec_report(scene: &Scene, req: &CodecReportRequest) -> Result<String> {
         progress.suspend(|| eprintln!("{m}"));
     };
     say("texture PSNR, decode time, JPEG and MPEG-texture baselines".into());
-    let mut report =
-        codec::report::report(&container, &input, &codec::report::ReportOptions::default())
-            .with_context(|| format!("measuring {}", req.file.display()))?;
+    let mut report = codec::report::report(
+        &container,
+        &input,
+        &codec::report::ReportOptions {
+            videos: req.videos.clone(),
+            ..Default::default()
+        },
+    )
+    .with_context(|| format!("measuring {}", req.file.display()))?;
     say("rendered frames".into());
     let mut bench = FrameBench::new(req, scene)?;
     add_rendered_frames(&mut report, bench.as_mut(), &container)?;

@@ -55,10 +55,36 @@ pub struct CodecReportArgs {
     /// Compression ratios of the curve points (against 32-bit floats).
     #[arg(long, value_delimiter = ',', default_value = "100,200,400,800,1600", value_parser = parse_ratio)]
     pub curve_ratios: Vec<f64>,
+    /// Video encoders of the MPEG-texture baselines, curves and random
+    /// access, each run only when the installed ffmpeg has it (x265 and AV1
+    /// take most of the report's time).
+    #[arg(long, value_delimiter = ',', default_value = "x264,x265,av1")]
+    pub video: Vec<VideoArg>,
     /// Turn the Khronos validation layer on for the rendered frames.
     #[arg(long)]
     pub validate: bool,
     /// Vulkan device to use (substring of its name) [default: lavapipe].
     #[arg(long, env = "ENGINE_DEVICE")]
     pub device: Option<String>,
+}
+
+/// A video encoder by its command-line name.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VideoArg {
+    /// libx264 (`mpeg-texture`).
+    X264,
+    /// libx265 (`mpeg-texture-x265`).
+    X265,
+    /// libaom-av1 (`mpeg-texture-av1`).
+    Av1,
+}
+
+impl From<VideoArg> for ::codec::report::VideoCodec {
+    fn from(v: VideoArg) -> Self {
+        match v {
+            VideoArg::X264 => Self::X264,
+            VideoArg::X265 => Self::X265,
+            VideoArg::Av1 => Self::Av1,
+        }
+    }
 }

@@ -17,6 +17,7 @@ pub fn run(args: &CodecReportArgs) -> Result<String> {
         frames_every: args.frames_every,
         curve: args.curve,
         curve_ratios: args.curve_ratios.clone(),
+        videos: args.video.iter().map(|&v| v.into()).collect(),
         device: device(&args.device, args.validate),
     };
     codec_report(&scene, &req)
