@@ -7,20 +7,11 @@ use std::process::{Command, Stdio};
 
 use crate::error::{CodecError, Result};
 
-/// Bisection for the smallest x264 CRF in `0..=51` whose stream fits
-/// `target` bytes (size falls as CRF rises); CRF 51 if none does. `eval`
-/// gives (bytes, PSNR) at a CRF; callers memoise it across targets.
-/// Returns (CRF, bytes, PSNR).
+/// Bisection for the smallest CRF in `0..=max_crf` (the encoder's range,
+/// [`VideoCodec::max_crf`]) whose stream fits `target` bytes (size falls
+/// as CRF rises); `max_crf` if none does. `eval` gives (bytes, PSNR) at a
+/// CRF; callers memoise it across targets. Returns (CRF, bytes, PSNR).
 pub fn smallest_fitting_crf(
-    target: u64,
-    eval: &mut dyn FnMut(u32) -> Result<(u64, f64)>,
-) -> Result<(u32, u64, f64)> {
-    smallest_fitting_crf_upto(51, target, eval)
-}
-
-/// [`smallest_fitting_crf`] over `0..=max_crf` (the encoder's range:
-/// [`VideoCodec::max_crf`]).
-pub fn smallest_fitting_crf_upto(
     max_crf: u32,
     target: u64,
     eval: &mut dyn FnMut(u32) -> Result<(u64, f64)>,

@@ -33,12 +33,9 @@ mod random_access;
 pub use decode_times::{path_decode_times, quantile};
 pub use ffmpeg::{
     VideoCodec, ffmpeg_available, ffmpeg_round_trip, ffmpeg_round_trip_with, smallest_fitting_crf,
-    smallest_fitting_crf_upto,
 };
 pub use jpeg::{jpeg_baseline, jpeg_baselines};
-pub use mpeg_texture::{
-    CrfMemo, GOP, mpeg_texture_baselines, mpeg_texture_baselines_memo, mpeg_texture_baselines_with,
-};
+pub use mpeg_texture::{CrfMemo, GOP, mpeg_texture_baselines_memo, mpeg_texture_baselines_with};
 pub use random_access::{
     Packet, RandomAccess, frames_to_show, parse_packets, pyramid_random_access, spread_samples,
     video_random_access,

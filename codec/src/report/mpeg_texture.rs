@@ -4,7 +4,7 @@
 
 use super::Baseline;
 use super::atlas::{QRange, atlas, from_atlas16, texture_peak, widen};
-use super::ffmpeg::{VideoCodec, ffmpeg_round_trip_with, smallest_fitting_crf_upto};
+use super::ffmpeg::{VideoCodec, ffmpeg_round_trip_with, smallest_fitting_crf};
 use crate::error::Result;
 use crate::input::{EncodeInput, ParamTexture};
 use crate::quality::PsnrAccum;
@@ -23,17 +23,8 @@ pub(super) fn mpeg_texture_baseline(
 }
 
 /// [`mpeg_texture_baseline`] at several byte targets, each CRF encoded once
-/// however many targets need it; `progress` hears of every encoding.
-pub fn mpeg_texture_baselines(
-    reference: &EncodeInput,
-    targets: &[u64],
-    progress: &mut dyn FnMut(String),
-) -> Result<Vec<Baseline>> {
-    mpeg_texture_baselines_with(VideoCodec::X264, reference, targets, progress)
-}
-
-/// [`mpeg_texture_baselines`] with a choice of encoder (named by
-/// [`VideoCodec::baseline_name`]).
+/// however many targets need it; `progress` hears of every encoding. The
+/// baseline is named by [`VideoCodec::baseline_name`].
 pub fn mpeg_texture_baselines_with(
     codec: VideoCodec,
     reference: &EncodeInput,
@@ -94,8 +85,7 @@ pub fn mpeg_texture_baselines_memo(
     };
     let mut out = Vec::new();
     for &target in targets {
-        let (best_crf, bytes, psnr_db) =
-            smallest_fitting_crf_upto(codec.max_crf(), target, &mut run)?;
+        let (best_crf, bytes, psnr_db) = smallest_fitting_crf(codec.max_crf(), target, &mut run)?;
         out.push(Baseline {
             name: name.into(),
             ratio: raw_total as f64 / bytes as f64,

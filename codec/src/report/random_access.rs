@@ -45,8 +45,8 @@ pub fn spread_samples(n: usize, count: usize) -> Vec<usize> {
 /// read; their memory stays allocated, as in a running player — the video
 /// is timed with its decoder open too), then every texture's leaf at that
 /// sample decoded (all faces and MIPs, f16), the textures dealt over
-/// `threads` threads by size ([`deal_by_size`]). One untimed access first allocates that memory. The
-/// file's pages may sit in the OS cache.
+/// `threads` threads by size ([`deal_by_size`]). One untimed access first
+/// allocates that memory. The file's pages may sit in the OS cache.
 pub fn pyramid_random_access(
     path: &Path,
     samples: &[usize],

@@ -155,7 +155,11 @@ pub(super) fn mpeg_view_baselines(
             tried.insert(crf, r);
             Ok(r)
         };
-        let (crf, bytes, psnr_db) = codec::report::smallest_fitting_crf(target, &mut eval)?;
+        let (crf, bytes, psnr_db) = codec::report::smallest_fitting_crf(
+            codec::report::VideoCodec::X264.max_crf(),
+            target,
+            &mut eval,
+        )?;
         out.push(codec::report::Baseline {
             name: name.into(),
             ratio: raw_bytes as f64 / bytes as f64,

@@ -60,17 +60,21 @@ pub fn inputs_budget(plan: &Plan, trace_dir: &Path, infer_dir: &Path) -> Budget 
             }
         }
     }
-    let mut budget = Budget::default();
-    for (files, total) in [
-        (traces.into_iter().collect::<Vec<_>>(), &mut budget.trace_s),
-        (maps, &mut budget.infer_s),
-    ] {
-        for file in files {
-            match recorded_seconds(&file) {
-                Some(s) => *total += s,
-                None => budget.untimed += 1,
-            }
-        }
+    let (trace_s, untimed_traces) = recorded(traces);
+    let (infer_s, untimed_maps) = recorded(maps);
+    Budget {
+        trace_s,
+        infer_s,
+        untimed: untimed_traces + untimed_maps,
     }
-    budget
+}
+
+/// The seconds recorded beside `files`, summed, and how many have none.
+fn recorded(files: impl IntoIterator<Item = PathBuf>) -> (f64, usize) {
+    files
+        .into_iter()
+        .fold((0.0, 0), |(s, n), f| match recorded_seconds(&f) {
+            Some(t) => (s + t, n),
+            None => (s, n + 1),
+        })
 }

@@ -88,3 +88,29 @@ impl From<VideoArg> for ::codec::report::VideoCodec {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::VideoArg;
+    use crate::cli::{Cli, Command};
+    use clap::Parser;
+
+    #[test]
+    fn video_encoders_default_to_all_and_parse_by_name() {
+        let video = |extra: &[&str]| {
+            let args = [&["engine", "codec-report", "f", "--json", "o"][..], extra].concat();
+            Cli::try_parse_from(args).map(|cli| match cli.command {
+                Some(Command::CodecReport(a)) => a.video,
+                _ => Vec::new(),
+            })
+        };
+        let all = [VideoArg::X264, VideoArg::X265, VideoArg::Av1];
+        assert_eq!(video(&[]).ok(), Some(all.to_vec()));
+        assert_eq!(video(&["--video", "x264"]).ok(), Some(vec![VideoArg::X264]));
+        assert_eq!(
+            video(&["--video", "av1,x265"]).ok(),
+            Some(vec![VideoArg::Av1, VideoArg::X265])
+        );
+        assert!(video(&["--video", "vp9"]).is_err());
+    }
+}

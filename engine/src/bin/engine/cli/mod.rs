@@ -443,22 +443,6 @@ mod tests {
         };
         assert!(!a.curve);
         assert_eq!(a.curve_ratios, vec![100.0, 200.0, 400.0, 800.0, 1600.0]);
-        use super::codec::VideoArg;
-        assert_eq!(a.video, [VideoArg::X264, VideoArg::X265, VideoArg::Av1]);
-        let video = |v: &str| {
-            Cli::try_parse_from(["engine", "codec-report", "f", "--json", "o", "--video", v]).map(
-                |cli| match cli.command {
-                    Some(Command::CodecReport(a)) => a.video,
-                    _ => Vec::new(),
-                },
-            )
-        };
-        assert_eq!(video("x264").ok(), Some(vec![VideoArg::X264]));
-        assert_eq!(
-            video("av1,x265").ok(),
-            Some(vec![VideoArg::Av1, VideoArg::X265])
-        );
-        assert!(video("vp9").is_err());
         let cli = Cli::try_parse_from([
             "engine",
             "codec-report",
