@@ -144,5 +144,22 @@ fn views_above_are_off_unless_asked_and_checked() {
     }
     let alone = load_edited(&line, &format!("{line}neighbour_above_spacing_deg = 4.0\n"));
     let e = alone.err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(e.contains("needs `neighbour_above_deg`"), "{e}"); // Their own weight: in range, only beside elevations; unset, none.
+    let weight = |s: &Scene| s.object("teapot").and_then(|o| o.neighbour_above_weight());
+    assert_eq!(weight(&shared), None);
+    let light = with("[15.0]\nneighbour_above_weight = 0.25").expect("loads");
+    assert_eq!(weight(&light), Some(0.25));
+    for bad in ["0.0", "-0.5", "1.5", "nan"] {
+        let e = with(&format!("[15.0]\nneighbour_above_weight = {bad}"))
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(
+            e.contains(".em.neighbour_above_weight") && e.contains("expected"),
+            "{bad}: {e}"
+        );
+    }
+    let alone = load_edited(&line, &format!("{line}neighbour_above_weight = 0.5\n"));
+    let e = alone.err().map(|e| e.to_string()).unwrap_or_default();
     assert!(e.contains("needs `neighbour_above_deg`"), "{e}");
 }

@@ -200,6 +200,7 @@ pub struct EmFile {
     #[serde(default)]
     pub neighbour_above_deg: Vec<f32>,
     pub neighbour_above_spacing_deg: Option<f32>,
+    pub neighbour_above_weight: Option<f32>,
 }
 
 /// `[objects.glass]`; see `scene::glass::GlassSettings` for the meanings.

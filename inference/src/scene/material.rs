@@ -53,6 +53,10 @@ pub struct EmSettings {
     /// each sample stacks the grid views nearest its azimuth, so the
     /// samples around one share its trace and its probe renders.
     pub neighbour_above_spacing_deg: Option<f32>,
+    /// With views above, their weight in the solves instead of
+    /// `neighbour_weight`: the views above pull a sample's maps toward
+    /// what the eye sees off the plane, at a cost on the plane.
+    pub neighbour_above_weight: Option<f32>,
 }
 
 /// The LOD biases a scene may ask for.
@@ -66,6 +70,9 @@ pub const NEIGHBOUR_DEGS: std::ops::RangeInclusive<f32> = 0.01..=45.0;
 pub const NEIGHBOUR_ABOVE_DEGS: std::ops::RangeInclusive<f32> = -45.0..=45.0;
 /// At most this many views above each sample.
 pub const NEIGHBOUR_ABOVE_MAX: usize = 4;
+/// The weights of views above a scene may ask for (not 0: the views would
+/// be traced for nothing).
+pub const NEIGHBOUR_ABOVE_WEIGHTS: std::ops::RangeInclusive<f32> = 0.01..=1.0;
 /// The azimuth spacings of shared views above a scene may ask for, degrees.
 pub const NEIGHBOUR_ABOVE_SPACINGS: std::ops::RangeInclusive<f32> = 0.01..=90.0;
 
@@ -88,6 +95,7 @@ impl Default for EmSettings {
             neighbour_deg: None,
             neighbour_above_deg: Vec::new(),
             neighbour_above_spacing_deg: None,
+            neighbour_above_weight: None,
         }
     }
 }

@@ -110,6 +110,13 @@ impl Object {
             .as_ref()
             .and_then(|em| em.neighbour_above_spacing_deg)
     }
+
+    /// The weight the scene gives the views above in the object's EM
+    /// solves (`[objects.em] neighbour_above_weight`); None when unset,
+    /// where they take `neighbour_weight`.
+    pub fn neighbour_above_weight(&self) -> Option<f32> {
+        self.em.as_ref().and_then(|em| em.neighbour_above_weight)
+    }
 }
 
 impl Scene {

@@ -124,6 +124,15 @@ impl Job<'_> {
         }
     }
 
+    /// The weight of the views above in this job's solve
+    /// (`[objects.em] neighbour_above_weight`, else `neighbour_weight`).
+    pub fn neighbour_above_weight(&self) -> f32 {
+        match self.object.neighbour_above_weight() {
+            Some(w) if self.neighbour_weight() > 0.0 => w,
+            _ => self.neighbour_weight(),
+        }
+    }
+
     /// Which views this job's solves stack beside the sample's own (None
     /// when it stacks none): jobs with equal stacks share their traces.
     pub fn stack(&self) -> Option<Stack> {
@@ -227,6 +236,12 @@ pub fn map_key(trace: &Key, job: &Job, options: &SolveOptions, size: (u32, u32))
                 h.str("above spacing");
                 h.f32(d);
             }
+            // Added with their own weight: views above at
+            // `neighbour_weight` keep their keys.
+            if let Some(w) = job.object.neighbour_above_weight() {
+                h.str("above weight");
+                h.f32(w);
+            }
         }
     }
     for p in &job.object.mesh.positions {
@@ -326,6 +341,32 @@ mod tests {
         // A single sample has neither.
         assert_eq!(ring_neighbours(0, 1), Vec::<u32>::new());
         assert_eq!(missing_neighbours(0, 1), 0b11);
+    }
+
+    #[test]
+    fn views_above_take_their_own_weight_in_the_layered_pems_solves() {
+        let text = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../assets/scenes/teapot.toml"
+        ))
+        .expect("teapot.toml");
+        let weights = |extra: &str| -> Vec<(f32, f32)> {
+            let dir = tempfile::tempdir().expect("temp dir");
+            let path = dir.path().join("t.toml");
+            let line = "neighbour_weight = 1.0";
+            let edited = text.replacen(line, &format!("neighbour_weight = 0.5\n{extra}"), 1);
+            std::fs::write(&path, edited).expect("write scene");
+            let scene = Scene::load(&path.to_string_lossy()).expect("scene loads");
+            let jobs = jobs_for(&scene, None, true).expect("jobs");
+            jobs.iter()
+                .map(|j| (j.neighbour_weight(), j.neighbour_above_weight()))
+                .collect()
+        };
+        // Distant, local, sphere, PTM: only the layered PEM's layers stack.
+        let set = weights("neighbour_above_deg = [12.0]\nneighbour_above_weight = 0.25");
+        assert_eq!(set, [(0.5, 0.25), (0.5, 0.25), (0.0, 0.0), (0.0, 0.0)]);
+        let unset = weights("neighbour_above_deg = [12.0]");
+        assert_eq!(unset, [(0.5, 0.5), (0.5, 0.5), (0.0, 0.0), (0.0, 0.0)]);
     }
 
     #[test]

@@ -128,17 +128,26 @@ impl<'a> SampleRun<'a> {
     /// The traces of the views stacked into sample `k`'s solves
     /// ([`stacked_views_of`]), free views traced when missing.
     fn stacked_traces(&self, k: u32, stack: &Stack) -> Result<Vec<StackedTrace>> {
-        stacked_views_of(&self.plan.scene.orbit, k, stack)
+        let views = stacked_views_of(&self.plan.scene.orbit, k, stack);
+        // The views above come last, one per elevation.
+        let first_above = views.len() - stack.above_deg.len();
+        views
             .into_iter()
-            .map(|v| match v {
-                StackedView::Sample(n) => Ok(StackedTrace::of(self.sample_trace(n)?)),
-                StackedView::Free(azimuth, elevation) => self.free_view_trace(azimuth, elevation),
+            .enumerate()
+            .map(|(i, v)| {
+                let trace = match v {
+                    StackedView::Sample(n) => self.sample_trace(n)?,
+                    StackedView::Free(azimuth, elevation) => {
+                        self.free_view_trace(azimuth, elevation)?
+                    }
+                };
+                Ok(StackedTrace::of(trace, i >= first_above))
             })
             .collect()
     }
 
     /// A free view's traced layers, traced when missing.
-    fn free_view_trace(&self, azimuth: f32, elevation: f32) -> Result<StackedTrace> {
+    fn free_view_trace(&self, azimuth: f32, elevation: f32) -> Result<SampleTrace> {
         let eye = self.plan.scene.orbit.eye(azimuth, elevation);
         let (layers, key) = traced_layers(
             &self.tracer,
@@ -147,7 +156,7 @@ impl<'a> SampleRun<'a> {
             &self.plan.settings,
             &view_stem(&self.req.trace_dir, azimuth, elevation),
         )?;
-        Ok(StackedTrace::of(SampleTrace { eye, layers, key }))
+        Ok(SampleTrace { eye, layers, key })
     }
 
     /// The map sample `k`'s solve of `job` starts from: the previous
@@ -272,6 +281,11 @@ impl<'a> SampleRun<'a> {
             .map(|a| {
                 Ok(NeighbourView {
                     tag: a.tag,
+                    weight: if a.above {
+                        job.neighbour_above_weight()
+                    } else {
+                        job.neighbour_weight()
+                    },
                     geometry: self.probe_geometry(a.tag, a.trace.eye, job, key),
                     pixels: job_target_pixels(
                         job,
@@ -317,13 +331,17 @@ struct SampleTrace {
 struct StackedTrace {
     tag: u64,
     trace: SampleTrace,
+    /// One of the views above the sample (`neighbour_above_deg`), weighted
+    /// by `neighbour_above_weight`.
+    above: bool,
 }
 
 impl StackedTrace {
-    fn of(trace: SampleTrace) -> Self {
+    fn of(trace: SampleTrace, above: bool) -> Self {
         Self {
             tag: eye_tag(trace.eye),
             trace,
+            above,
         }
     }
 }
@@ -341,12 +359,14 @@ fn eye_tag(eye: Vec3) -> u64 {
 /// A stacked view of an EM layer, as its solve reads it.
 struct NeighbourView {
     tag: u64,
+    /// Its rows' weight in the solve.
+    weight: f32,
     geometry: ProbeGeometry,
     pixels: Vec<[f32; 4]>,
 }
 
 /// The neighbours' views of `job` as the solve stacks them: each with the
-/// sample's target but its own traced pixels, at the job's weight.
+/// sample's target but its own traced pixels, at its weight.
 fn stacked_views<'a>(
     job: &Job,
     neighbours: &'a [NeighbourView],
@@ -361,7 +381,7 @@ fn stacked_views<'a>(
                 pixels: &n.pixels,
                 ..target
             },
-            weight: job.neighbour_weight(),
+            weight: n.weight,
         })
         .collect()
 }

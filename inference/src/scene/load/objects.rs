@@ -16,7 +16,7 @@ use crate::teapot::{self, DEFAULT_SEGMENTS, MAX_SEGMENTS, TeapotPart};
 
 use crate::scene::material::{
     EM_RESOLUTIONS, LOD_BIASES, NEIGHBOUR_ABOVE_DEGS, NEIGHBOUR_ABOVE_MAX,
-    NEIGHBOUR_ABOVE_SPACINGS, NEIGHBOUR_DEGS, NEIGHBOUR_WEIGHTS,
+    NEIGHBOUR_ABOVE_SPACINGS, NEIGHBOUR_ABOVE_WEIGHTS, NEIGHBOUR_DEGS, NEIGHBOUR_WEIGHTS,
 };
 
 impl Loader<'_> {
@@ -174,6 +174,7 @@ impl Loader<'_> {
             neighbour_deg: em.neighbour_deg,
             neighbour_above_deg: em.neighbour_above_deg.clone(),
             neighbour_above_spacing_deg: em.neighbour_above_spacing_deg,
+            neighbour_above_weight: em.neighbour_above_weight,
         })
     }
 
@@ -190,6 +191,16 @@ impl Loader<'_> {
                 return Err(self.err(
                     spacing,
                     format!("{d} needs `neighbour_above_deg` (the elevations of the views)"),
+                ));
+            }
+        }
+        if let Some(w) = em.neighbour_above_weight {
+            let weight = format!("{field}.neighbour_above_weight");
+            self.in_range(weight.clone(), w, &NEIGHBOUR_ABOVE_WEIGHTS, "a weight")?;
+            if above.is_empty() {
+                return Err(self.err(
+                    weight,
+                    format!("{w} needs `neighbour_above_deg` (the elevations of the views)"),
                 ));
             }
         }
