@@ -124,42 +124,43 @@ fn views_above_are_off_unless_asked_and_checked() {
     );
     let e = off.err().map(|e| e.to_string()).unwrap_or_default();
     assert!(e.contains("needs `neighbour_weight` above 0"), "{e}");
-    // Shared views above: a spacing in range, only beside elevations.
-    let spacing = |s: &Scene| {
-        s.object("teapot")
-            .and_then(|o| o.neighbour_above_spacing_deg())
-    };
-    assert_eq!(spacing(&Scene::load("teapot").expect("loads")), None);
-    let shared = with("[15.0]\nneighbour_above_spacing_deg = 4.0").expect("loads");
-    assert_eq!(spacing(&shared), Some(4.0));
-    for bad in ["0.0", "-4", "100", "nan"] {
-        let e = with(&format!("[15.0]\nneighbour_above_spacing_deg = {bad}"))
-            .err()
-            .map(|e| e.to_string())
-            .unwrap_or_default();
-        assert!(
-            e.contains(".em.neighbour_above_spacing_deg") && e.contains("expected"),
-            "{bad}: {e}"
-        );
+}
+
+#[test]
+fn shared_views_above_and_their_weight_are_checked() {
+    let line = setting_line("neighbour_weight =");
+    let with = |v: &str| load_edited(&line, &format!("{line}neighbour_above_deg = [15.0]\n{v}\n"));
+    let object = |s: Scene| s.object("teapot").cloned().expect("teapot");
+    let shipped = object(Scene::load("teapot").expect("loads"));
+    assert_eq!(shipped.neighbour_above_spacing_deg(), None);
+    let shared = object(with("neighbour_above_spacing_deg = 4.0").expect("loads"));
+    assert_eq!(shared.neighbour_above_spacing_deg(), Some(4.0));
+    assert_eq!(shared.neighbour_above_weight(), None);
+    let light = object(with("neighbour_above_weight = 0.25").expect("loads"));
+    assert_eq!(light.neighbour_above_weight(), Some(0.25));
+    // Each in range, and only beside the elevations of the views.
+    for (field, good, bad) in [
+        (
+            "neighbour_above_spacing_deg",
+            "4.0",
+            ["0.0", "-4", "100", "nan"],
+        ),
+        (
+            "neighbour_above_weight",
+            "0.5",
+            ["0.0", "-0.5", "1.5", "nan"],
+        ),
+    ] {
+        for v in bad {
+            let e = with(&format!("{field} = {v}")).err().map(|e| e.to_string());
+            let e = e.unwrap_or_default();
+            assert!(
+                e.contains(&format!(".em.{field}")) && e.contains("expected"),
+                "{v}: {e}"
+            );
+        }
+        let alone = load_edited(&line, &format!("{line}{field} = {good}\n"));
+        let e = alone.err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(e.contains("needs `neighbour_above_deg`"), "{field}: {e}");
     }
-    let alone = load_edited(&line, &format!("{line}neighbour_above_spacing_deg = 4.0\n"));
-    let e = alone.err().map(|e| e.to_string()).unwrap_or_default();
-    assert!(e.contains("needs `neighbour_above_deg`"), "{e}"); // Their own weight: in range, only beside elevations; unset, none.
-    let weight = |s: &Scene| s.object("teapot").and_then(|o| o.neighbour_above_weight());
-    assert_eq!(weight(&shared), None);
-    let light = with("[15.0]\nneighbour_above_weight = 0.25").expect("loads");
-    assert_eq!(weight(&light), Some(0.25));
-    for bad in ["0.0", "-0.5", "1.5", "nan"] {
-        let e = with(&format!("[15.0]\nneighbour_above_weight = {bad}"))
-            .err()
-            .map(|e| e.to_string())
-            .unwrap_or_default();
-        assert!(
-            e.contains(".em.neighbour_above_weight") && e.contains("expected"),
-            "{bad}: {e}"
-        );
-    }
-    let alone = load_edited(&line, &format!("{line}neighbour_above_weight = 0.5\n"));
-    let e = alone.err().map(|e| e.to_string()).unwrap_or_default();
-    assert!(e.contains("needs `neighbour_above_deg`"), "{e}");
 }
