@@ -166,21 +166,30 @@ fn views_above_each_sample_are_traced_once_and_change_the_maps() {
 /// `neighbour_above_spacing_deg`: views above on an azimuth grid, each
 /// shared by the samples nearest it: the tiny orbit's 3 samples (0°, 1°,
 /// 2°) on a 2° grid trace 2 views, not 3 (sample 1 ties and takes 2°).
+/// Then `neighbour_above_weight` re-solves the stacking maps from the same
+/// traces, and changes them.
 #[test]
 fn shared_views_above_are_traced_once_per_grid_azimuth() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let (scene, _) = tiny_scene_stacking(
-        dir.path(),
-        "neighbour_above_deg = [15.0]\nneighbour_above_spacing_deg = 2.0",
-    );
+    let lines = "neighbour_above_deg = [15.0]\nneighbour_above_spacing_deg = 2.0";
+    let (scene, _) = tiny_scene_stacking(dir.path(), lines);
     let out = dir.path().join("out");
     let log = ok(compile(&scene, &out, &[]));
-    let views = traced_views(&out);
-    assert_eq!(
-        views,
-        ["view_az+0.000_el+15.000.exr", "view_az+2.000_el+15.000.exr"],
-        "{log}"
-    );
-    assert_eq!(maps(&out).len(), 9, "3 samples × 3 maps");
+    let grid = ["view_az+0.000_el+15.000.exr", "view_az+2.000_el+15.000.exr"];
+    assert_eq!(traced_views(&out), grid, "{log}");
+    let full = maps(&out);
+    assert_eq!(full.len(), 9, "3 samples × 3 maps");
     assert!(log.contains("compile time of these maps:"), "{log}");
+
+    let light = format!("{lines}\nneighbour_above_weight = 0.25");
+    tiny_scene_stacking(dir.path(), &light);
+    let log = ok(compile(&scene, &out, &[]));
+    assert_eq!(traced_views(&out), grid, "no new views: {log}");
+    let changed: Vec<_> = maps(&out)
+        .into_iter()
+        .filter(|(p, bytes)| full.get(p) != Some(bytes))
+        .map(|(p, _)| p.to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(changed.len(), 6, "{changed:?}\n{log}");
+    assert!(changed.iter().all(|p| !p.contains(".ptm")), "{changed:?}");
 }
