@@ -397,7 +397,8 @@ mod tests {
         assert!(
             a.iter().zip(&shared).all(|(p, q)| p != q),
             "{a:?} vs {shared:?}"
-        ); // Their own weight is keyed; unset they keep `neighbour_weight`'s keys.
+        );
+        // Their own weight is keyed; unset they keep `neighbour_weight`'s keys.
         let light = keys("neighbour_above_deg = [15.0]\nneighbour_above_weight = 0.25");
         let full = keys("neighbour_above_deg = [15.0]\nneighbour_above_weight = 1.0");
         for other in [&light, &full] {
