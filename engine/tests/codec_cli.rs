@@ -13,6 +13,7 @@ fn engine(args: &[&str]) -> Output {
 
 fn small_scene(dir: &Path) -> String {
     let text = inference::scene::shipped("teapot").expect("built-in teapot");
+    let text = inference::scene::shipped::without_views_above(text);
     let text = text
         .lines()
         .map(|l| match l.trim() {

@@ -115,6 +115,7 @@ fn infers_em_layers_and_ptm_of_a_sample_and_reports() {
 /// The teapot scene with only `samples` orbit samples, written into `dir`.
 fn small_scene(dir: &std::path::Path, samples: u32) -> String {
     let text = inference::scene::shipped("teapot").expect("built-in teapot");
+    let text = inference::scene::shipped::without_views_above(text);
     let line = format!("samples = {samples}");
     let text = text
         .lines()

@@ -3,9 +3,11 @@
 
 use super::*;
 
-/// The shipped teapot scene with `from` replaced by `to`, from a temp file.
+/// The shipped teapot scene without its views above, with `from` replaced
+/// by `to`, from a temp file.
 fn load_edited(from: &str, to: &str) -> Result<Scene, SceneError> {
     let text = super::shipped::shipped("teapot").expect("shipped teapot scene");
+    let text = super::shipped::without_views_above(text);
     assert!(text.contains(from), "test bug: {from:?} not in teapot.toml");
     let dir = tempfile::tempdir().expect("temp dir");
     let path = dir.path().join("t.toml");
@@ -95,7 +97,7 @@ fn the_neighbour_offset_is_off_unless_asked_and_checked() {
 }
 
 #[test]
-fn views_above_are_off_unless_asked_and_checked() {
+fn views_above_are_read_and_checked() {
     let above = |s: &Scene| {
         s.object("teapot")
             .expect("teapot")
@@ -103,9 +105,10 @@ fn views_above_are_off_unless_asked_and_checked() {
             .to_vec()
     };
     let s = Scene::load("teapot").expect("the built-in teapot scene loads");
-    assert!(
-        above(&s).is_empty(),
-        "the shipped teapot stacks no views above"
+    assert_eq!(
+        above(&s),
+        vec![12.0, 24.0],
+        "the shipped teapot's views above"
     );
     let line = setting_line("neighbour_weight =");
     let with = |v: &str| load_edited(&line, &format!("{line}neighbour_above_deg = {v}\n"));
@@ -132,7 +135,10 @@ fn shared_views_above_and_their_weight_are_checked() {
     let with = |v: &str| load_edited(&line, &format!("{line}neighbour_above_deg = [15.0]\n{v}\n"));
     let object = |s: Scene| s.object("teapot").cloned().expect("teapot");
     let shipped = object(Scene::load("teapot").expect("loads"));
-    assert_eq!(shipped.neighbour_above_spacing_deg(), None);
+    assert_eq!(shipped.neighbour_above_spacing_deg(), Some(4.0));
+    assert_eq!(shipped.neighbour_above_weight(), Some(0.3));
+    let plain = object(load_edited(&line, &line).expect("loads"));
+    assert_eq!(plain.neighbour_above_spacing_deg(), None);
     let shared = object(with("neighbour_above_spacing_deg = 4.0").expect("loads"));
     assert_eq!(shared.neighbour_above_spacing_deg(), Some(4.0));
     assert_eq!(shared.neighbour_above_weight(), None);

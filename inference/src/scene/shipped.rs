@@ -25,3 +25,13 @@ pub fn shipped_names() -> String {
         .collect::<Vec<_>>()
         .join(", ")
 }
+
+/// Scene `text` without its `neighbour_above*` lines: the shipped teapot's
+/// stacking on the plane only, for small scenes derived from it (tests)
+/// that should not trace views above.
+pub fn without_views_above(text: &str) -> String {
+    let lines = text
+        .lines()
+        .filter(|l| !l.trim_start().starts_with("neighbour_above"));
+    lines.map(|l| format!("{l}\n")).collect()
+}

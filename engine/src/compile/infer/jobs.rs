@@ -296,6 +296,7 @@ mod tests {
             "/../assets/scenes/teapot.toml"
         ))
         .expect("teapot.toml");
+        let text = inference::scene::shipped::without_views_above(&text);
         let dir = tempfile::tempdir().expect("temp dir");
         let path = dir.path().join("t.toml");
         let without: String = text
@@ -350,6 +351,7 @@ mod tests {
             "/../assets/scenes/teapot.toml"
         ))
         .expect("teapot.toml");
+        let text = inference::scene::shipped::without_views_above(&text);
         let weights = |extra: &str| -> Vec<(f32, f32)> {
             let dir = tempfile::tempdir().expect("temp dir");
             let path = dir.path().join("t.toml");

@@ -297,6 +297,7 @@ mod tests {
         let dir = tempfile::tempdir().expect("temp dir");
         let path = dir.path().join("t.toml");
         let text = inference::scene::shipped::shipped("teapot").expect("teapot.toml");
+        let text = inference::scene::shipped::without_views_above(text);
         std::fs::write(&path, text.replacen("samples = 100", samples, 1)).expect("write");
         Scene::load(&path.to_string_lossy()).expect("scene loads")
     }
@@ -343,6 +344,7 @@ mod tests {
     fn stacking_keys(samples: &str, k: u32, extra: &str) -> Vec<u64> {
         let weight = "neighbour_weight = 1.0";
         let text = inference::scene::shipped::shipped("teapot").expect("teapot.toml");
+        let text = inference::scene::shipped::without_views_above(text);
         let text = text.replacen("samples = 100", samples, 1).replacen(
             weight,
             &format!("{weight}\n{extra}"),
