@@ -36,8 +36,8 @@ pub struct RenderingMatrix {
     pub rows_across_faces: usize,
 }
 
-/// Builds A for `geometry` over a texture of `layout`, calling `progress`
-/// with (done, total) after each render.
+/// Builds A for `geometry` over a texture of `layout` with the engine's
+/// probe schedule, calling `progress` with (done, total) after each render.
 pub fn build_matrix(
     renderer: &mut dyn ProbeRenderer,
     geometry: &ProbeGeometry,
@@ -46,6 +46,18 @@ pub fn build_matrix(
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<RenderingMatrix, ProbeError> {
     let schedule = ProbeSchedule::new(layout, shape);
+    build_matrix_with(renderer, geometry, layout, &schedule, progress)
+}
+
+/// As [`build_matrix`] with a given schedule (every texel of `layout` in
+/// exactly one set; the thesis's, to compare).
+pub fn build_matrix_with(
+    renderer: &mut dyn ProbeRenderer,
+    geometry: &ProbeGeometry,
+    layout: &TextureLayout,
+    schedule: &ProbeSchedule,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<RenderingMatrix, ProbeError> {
     let total = schedule.sets.len() + 1;
     let pixel_count = geometry.width as usize * geometry.height as usize;
 

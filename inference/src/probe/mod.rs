@@ -8,7 +8,7 @@ mod schedule;
 #[cfg(test)]
 mod tests;
 
-pub use matrix::{RenderingMatrix, VerifyReport, build_matrix, verify_matrix};
+pub use matrix::{RenderingMatrix, VerifyReport, build_matrix, build_matrix_with, verify_matrix};
 pub use schedule::{ProbeSchedule, ProbeSet};
 
 use crate::solve::layout::TextureLayout;

@@ -1,17 +1,34 @@
 //! Which texels are probed together. Two probed texels must never reach the
-//! same pixel: they are `spacing` apart in x and y (a bilinear footprint is
-//! 2 texels wide, trilinear magnification/minification stays within that),
-//! every third MIP level is probed at once (trilinear reads two adjacent
-//! levels), and cube faces go in pairs of opposite faces, which share no
-//! edge where seamless filtering could mix them. 6 × 6 × 3 = 108 sets for
-//! a 2D texture (8 apart on a wrapping dimension 6 does not divide, so the
-//! texels either side of the wrap stay apart), × 3 face pairs for a cube.
+//! same pixel. A trilinear lookup reads a 2 × 2 footprint on each of two
+//! adjacent MIP levels (lavapipe's footprint is 2 texels for every ratio,
+//! anisotropy being off), so the engine's schedule ([`ProbeSchedule::new`])
+//! probes texels 2 apart in x and y on every second level: 2 × 2 × 2 = 8
+//! sets for a 2D texture, × 3 pairs of opposite cube faces (which share no
+//! edge where seamless filtering could mix them) = 24 for a cube.
+//!
+//! The thesis spaced probed texels 6 apart on every third level (6 × 6 × 3
+//! = 108 sets, [`ProbeSchedule::thesis`]) because its 8-bit IDs had to be
+//! constant over each probed texel's filter neighbourhood; the float IDs of
+//! [`super::build_matrix`] only need probed texels never to share a
+//! footprint, and any pixel that two of them reach is reported as a
+//! collision, never silently merged. Both schedules give the same matrix
+//! (`engine/tests/probe.rs`), the compact one in 13× fewer renders.
+//!
+//! A 2D texture wraps (repeat sampler), so each dimension's texels either
+//! side of the wrap must stay apart too: 2 apart holds on every MIP level
+//! of a power-of-two size; any other size falls back to the thesis's rule
+//! (6 apart where 6 divides it, else 8).
 
 use crate::solve::layout::{TextureLayout, TextureShape};
 
-pub const SPACING: u32 = 6;
+/// The engine's spacing and level step (see the module comment).
+pub const SPACING: u32 = 2;
+pub const LEVEL_STEP: u32 = 2;
+/// The thesis's spacing, level step and spacing on a wrapping dimension 6
+/// does not divide.
+pub const THESIS_SPACING: u32 = 6;
+pub const THESIS_LEVEL_STEP: u32 = 3;
 pub const WRAP_SPACING: u32 = 8;
-pub const LEVEL_STEP: u32 = 3;
 const FACE_GROUPS: [[u32; 2]; 3] = [[0, 1], [2, 3], [4, 5]];
 
 /// The texels of one probe render, in the order their local IDs count.
@@ -26,27 +43,44 @@ pub struct ProbeSchedule {
 }
 
 impl ProbeSchedule {
+    /// The engine's schedule: texels 2 apart, every second level (a 2D
+    /// texture whose sizes are not powers of two: the thesis's).
     pub fn new(layout: &TextureLayout, shape: TextureShape) -> Self {
-        // 2D textures wrap (repeat sampler); cube faces clamp at their edge
-        // and meet other faces, handled by the face pairs.
+        let (w0, h0) = layout.level_size(0);
+        match shape {
+            TextureShape::Tex2D { .. } if !(w0.is_power_of_two() && h0.is_power_of_two()) => {
+                Self::thesis(layout, shape)
+            }
+            _ => Self::spaced(layout, (SPACING, SPACING), LEVEL_STEP),
+        }
+    }
+
+    /// The thesis's schedule: texels 6 apart (8 on a wrapping dimension 6
+    /// does not divide), every third level.
+    pub fn thesis(layout: &TextureLayout, shape: TextureShape) -> Self {
         let spacing = |size: u32| match shape {
-            TextureShape::Tex2D { .. } if size % SPACING != 0 => WRAP_SPACING,
-            _ => SPACING,
+            TextureShape::Tex2D { .. } if size % THESIS_SPACING != 0 => WRAP_SPACING,
+            _ => THESIS_SPACING,
         };
         let (w0, h0) = layout.level_size(0);
-        let (sx, sy) = (spacing(w0), spacing(h0));
+        Self::spaced(layout, (spacing(w0), spacing(h0)), THESIS_LEVEL_STEP)
+    }
+
+    /// Probed texels `sx` × `sy` apart on every `level_step`-th level, cube
+    /// faces in opposite pairs.
+    fn spaced(layout: &TextureLayout, (sx, sy): (u32, u32), level_step: u32) -> Self {
         let groups: Vec<Vec<u32>> = if layout.faces() == 6 {
             FACE_GROUPS.iter().map(|g| g.to_vec()).collect()
         } else {
             vec![vec![0]]
         };
         let mut sets = Vec::new();
-        for phase in 0..LEVEL_STEP.min(layout.levels()) {
+        for phase in 0..level_step.min(layout.levels()) {
             for faces in &groups {
                 for dy in 0..sy {
                     for dx in 0..sx {
                         let mut texels = Vec::new();
-                        for level in (phase..layout.levels()).step_by(LEVEL_STEP as usize) {
+                        for level in (phase..layout.levels()).step_by(level_step as usize) {
                             let (w, h) = layout.level_size(level);
                             for &face in faces {
                                 for y in (dy..h).step_by(sy as usize) {
@@ -71,59 +105,107 @@ impl ProbeSchedule {
 mod tests {
     use super::*;
 
+    const SHAPES: [TextureShape; 4] = [
+        TextureShape::Tex2D {
+            width: 20,
+            height: 12,
+        },
+        TextureShape::Tex2D {
+            width: 64,
+            height: 32,
+        },
+        TextureShape::Cube { size: 16 },
+        TextureShape::Cube { size: 24 },
+    ];
+
+    fn both(layout: &TextureLayout, shape: TextureShape) -> [ProbeSchedule; 2] {
+        [
+            ProbeSchedule::new(layout, shape),
+            ProbeSchedule::thesis(layout, shape),
+        ]
+    }
+
     #[test]
     fn every_texel_is_probed_exactly_once() {
-        for shape in [
-            TextureShape::Tex2D {
-                width: 20,
-                height: 12,
-            },
-            TextureShape::Cube { size: 16 },
-        ] {
+        for shape in SHAPES {
             let layout = TextureLayout::full_chain(shape);
-            let schedule = ProbeSchedule::new(&layout, shape);
-            let mut seen = vec![0u32; layout.len()];
-            for set in &schedule.sets {
-                for &t in &set.texels {
-                    seen[t] += 1;
+            for schedule in both(&layout, shape) {
+                let mut seen = vec![0u32; layout.len()];
+                for set in &schedule.sets {
+                    for &t in &set.texels {
+                        seen[t] += 1;
+                    }
                 }
+                assert!(seen.iter().all(|&n| n == 1), "{shape:?}");
             }
-            assert!(seen.iter().all(|&n| n == 1), "{shape:?}");
         }
     }
 
     #[test]
-    fn set_counts_match_the_thesis_schedule() {
-        let tex = TextureShape::Tex2D {
+    fn set_counts() {
+        let count = |shape: TextureShape, thesis: bool| {
+            let layout = TextureLayout::full_chain(shape);
+            let schedule = if thesis {
+                ProbeSchedule::thesis(&layout, shape)
+            } else {
+                ProbeSchedule::new(&layout, shape)
+            };
+            schedule.sets.len()
+        };
+        let pow2 = TextureShape::Tex2D {
+            width: 256,
+            height: 256,
+        };
+        let cube = TextureShape::Cube { size: 256 };
+        assert_eq!(
+            count(pow2, false),
+            8,
+            "2 x 2 x 2 for a power-of-two 2D texture"
+        );
+        assert_eq!(count(cube, false), 24, "x 3 opposite-face pairs for a cube");
+        let six = TextureShape::Tex2D {
             width: 96,
             height: 96,
         };
-        let sets = ProbeSchedule::new(&TextureLayout::full_chain(tex), tex)
-            .sets
-            .len();
-        assert_eq!(sets, 108, "6 x 6 x 3 for a 2D texture 6 divides");
-        let cube = TextureShape::Cube { size: 96 };
-        let sets = ProbeSchedule::new(&TextureLayout::full_chain(cube), cube)
-            .sets
-            .len();
-        assert_eq!(sets, 324, "x 3 opposite-face pairs for a cube");
+        assert_eq!(count(six, true), 108, "the thesis: 6 x 6 x 3");
+        assert_eq!(
+            count(six, false),
+            108,
+            "a size not a power of two wraps badly at 2"
+        );
+        assert_eq!(count(TextureShape::Cube { size: 96 }, true), 324);
+    }
+
+    /// Texels `a` and `b` of one set: on one face and level they are at
+    /// least `SPACING` apart in x or y (across the wrap for a 2D texture),
+    /// so no 2 × 2 footprint holds both; on one face, `LEVEL_STEP` levels
+    /// apart; otherwise on opposite faces.
+    fn assert_apart(layout: &TextureLayout, wraps: bool, a: usize, b: usize) {
+        let (fa, la, xa, ya) = layout.coords(a);
+        let (fb, lb, xb, yb) = layout.coords(b);
+        let (w, h) = layout.level_size(la);
+        let apart = |d: u32, n: u32| if wraps { d.min(n - d) } else { d };
+        if fa == fb && la == lb {
+            let (dx, dy) = (apart(xa.abs_diff(xb), w), apart(ya.abs_diff(yb), h));
+            assert!(dx >= SPACING || dy >= SPACING, "{a} and {b}");
+        } else if fa == fb {
+            assert!(la.abs_diff(lb) >= LEVEL_STEP);
+        } else {
+            assert_eq!(fa / 2, fb / 2, "only opposite faces share a set");
+        }
     }
 
     #[test]
-    fn probed_texels_of_a_set_are_far_apart() {
-        let shape = TextureShape::Cube { size: 32 };
-        let layout = TextureLayout::full_chain(shape);
-        for set in ProbeSchedule::new(&layout, shape).sets {
-            for (i, &a) in set.texels.iter().enumerate() {
-                for &b in &set.texels[i + 1..] {
-                    let (fa, la, xa, ya) = layout.coords(a);
-                    let (fb, lb, xb, yb) = layout.coords(b);
-                    if fa == fb && la == lb {
-                        assert!(xa.abs_diff(xb) >= SPACING || ya.abs_diff(yb) >= SPACING);
-                    } else if fa == fb {
-                        assert!(la.abs_diff(lb) >= LEVEL_STEP);
-                    } else {
-                        assert_eq!(fa / 2, fb / 2, "only opposite faces share a set");
+    fn probed_texels_of_a_set_never_share_a_footprint() {
+        for shape in SHAPES {
+            let layout = TextureLayout::full_chain(shape);
+            let wraps = matches!(shape, TextureShape::Tex2D { .. });
+            for schedule in both(&layout, shape) {
+                for set in schedule.sets {
+                    for (i, &a) in set.texels.iter().enumerate() {
+                        for &b in &set.texels[i + 1..] {
+                            assert_apart(&layout, wraps, a, b);
+                        }
                     }
                 }
             }
