@@ -95,14 +95,11 @@ impl Job<'_> {
         self.layer.shape(self.resolution)
     }
     /// The weight of the neighbouring samples' views in this job's solve:
-    /// the object's `neighbour_weight` for the layered PEM's distant and
-    /// local layers, 0 for the sphere PEM and the PTM (the baselines are
-    /// solved as their papers do).
+    /// the object's `neighbour_weight` for every layer, so the sphere PEM
+    /// and PTM baselines are solved from the same traced views as the
+    /// layered PEM they are ranked against.
     pub fn neighbour_weight(&self) -> f32 {
-        match self.layer {
-            MapLayer::Distant | MapLayer::Local => self.object.neighbour_weight(),
-            MapLayer::Sphere | MapLayer::Ptm => 0.0,
-        }
+        self.object.neighbour_weight()
     }
     /// Where this job's stacked views lie, when it stacks any: the
     /// object's `neighbour_deg` either side of the sample, or (None) the
@@ -285,7 +282,7 @@ mod tests {
     use inference::solve::SolveOptions;
 
     #[test]
-    fn the_neighbour_weight_keys_only_the_layered_pems_maps() {
+    fn the_neighbour_weight_keys_every_map() {
         let with = Scene::load("teapot").expect("the built-in teapot scene loads");
         assert!(
             with.object("teapot")
@@ -315,13 +312,10 @@ mod tests {
                 })
                 .collect()
         };
-        for ((name, a), (_, b)) in key(&with).into_iter().zip(key(&without)) {
-            let layered = name.ends_with("distant") || name.ends_with("local");
-            assert_eq!(
-                a != b,
-                layered,
-                "{name}: keyed by the weight only if layered"
-            );
+        let (with, without) = (key(&with), key(&without));
+        assert_eq!(with.len(), 4, "distant, local, sphere, PTM");
+        for ((name, a), (_, b)) in with.into_iter().zip(without) {
+            assert_ne!(a, b, "{name}: every map stacks, so the weight is keyed");
         }
     }
 
@@ -345,7 +339,7 @@ mod tests {
     }
 
     #[test]
-    fn views_above_take_their_own_weight_in_the_layered_pems_solves() {
+    fn views_above_take_their_own_weight_in_every_maps_solves() {
         let text = std::fs::read_to_string(concat!(
             env!("CARGO_MANIFEST_DIR"),
             "/../assets/scenes/teapot.toml"
@@ -364,11 +358,11 @@ mod tests {
                 .map(|j| (j.neighbour_weight(), j.neighbour_above_weight()))
                 .collect()
         };
-        // Distant, local, sphere, PTM: only the layered PEM's layers stack.
+        // Distant, local, sphere, PTM: every map stacks the same views.
         let set = weights("neighbour_above_deg = [12.0]\nneighbour_above_weight = 0.25");
-        assert_eq!(set, [(0.5, 0.25), (0.5, 0.25), (0.0, 0.0), (0.0, 0.0)]);
+        assert_eq!(set, [(0.5, 0.25); 4]);
         let unset = weights("neighbour_above_deg = [12.0]");
-        assert_eq!(unset, [(0.5, 0.5), (0.5, 0.5), (0.0, 0.0), (0.0, 0.0)]);
+        assert_eq!(unset, [(0.5, 0.5); 4]);
     }
 
     #[test]
