@@ -4,7 +4,10 @@
 //! anisotropy being off), so the engine's schedule ([`ProbeSchedule::new`])
 //! probes texels 2 apart in x and y on every second level: 2 × 2 × 2 = 8
 //! sets for a 2D texture, × 3 pairs of opposite cube faces (which share no
-//! edge where seamless filtering could mix them) = 24 for a cube.
+//! edge where seamless filtering could mix them) = 24 for a cube, each set
+//! split into parts of at most [`MAX_SET`] texels so that the float IDs
+//! stay exact enough (48 sets for a 256² cube with all its MIP levels, 12
+//! for a 256² 2D texture).
 //!
 //! The thesis spaced probed texels 6 apart on every third level (6 × 6 × 3
 //! = 108 sets, [`ProbeSchedule::thesis`]) because its 8-bit IDs had to be
@@ -12,7 +15,8 @@
 //! [`super::build_matrix`] only need probed texels never to share a
 //! footprint, and any pixel that two of them reach is reported as a
 //! collision, never silently merged. Both schedules give the same matrix
-//! (`engine/tests/probe.rs`), the compact one in 13× fewer renders.
+//! (`engine/tests/probe.rs`), the compact one in 6.6× fewer renders at
+//! 256²×6.
 //!
 //! A 2D texture wraps (repeat sampler), so each dimension's texels either
 //! side of the wrap must stay apart too: 2 apart holds on every MIP level
@@ -30,6 +34,11 @@ pub const THESIS_SPACING: u32 = 6;
 pub const THESIS_LEVEL_STEP: u32 = 3;
 pub const WRAP_SPACING: u32 = 8;
 const FACE_GROUPS: [[u32; 2]; 3] = [[0, 1], [2, 3], [4, 5]];
+/// Most texels in one set. A pixel reads its texel's ID k as the ratio of
+/// two filtered channels, exact to about 3e-7·k (2.5e-7 measured on
+/// lavapipe at 256²×6), and [`super::build_matrix`] accepts it within
+/// 0.01 of an integer; 16,384 keeps that error under 0.005.
+pub const MAX_SET: usize = 16_384;
 
 /// The texels of one probe render, in the order their local IDs count.
 #[derive(Clone, Debug)]
@@ -90,8 +99,11 @@ impl ProbeSchedule {
                                 }
                             }
                         }
-                        if !texels.is_empty() {
-                            sets.push(ProbeSet { texels });
+                        // Any part of a set is a set: split so IDs stay small.
+                        for part in texels.chunks(MAX_SET) {
+                            sets.push(ProbeSet {
+                                texels: part.to_vec(),
+                            });
                         }
                     }
                 }
@@ -142,6 +154,23 @@ mod tests {
     }
 
     #[test]
+    fn no_set_is_larger_than_the_ids_allow() {
+        for shape in [
+            TextureShape::Cube { size: 512 },
+            TextureShape::Tex2D {
+                width: 1024,
+                height: 1024,
+            },
+        ] {
+            let layout = TextureLayout::full_chain(shape);
+            let [compact, thesis] = both(&layout, shape);
+            let largest = |s: &ProbeSchedule| s.sets.iter().map(|s| s.texels.len()).max();
+            assert_eq!(largest(&compact), Some(MAX_SET), "{shape:?} splits");
+            assert!(largest(&thesis) <= Some(MAX_SET), "{shape:?}");
+        }
+    }
+
+    #[test]
     fn set_counts() {
         let count = |shape: TextureShape, thesis: bool| {
             let layout = TextureLayout::full_chain(shape);
@@ -157,12 +186,18 @@ mod tests {
             height: 256,
         };
         let cube = TextureShape::Cube { size: 256 };
-        assert_eq!(
-            count(pow2, false),
-            8,
-            "2 x 2 x 2 for a power-of-two 2D texture"
-        );
-        assert_eq!(count(cube, false), 24, "x 3 opposite-face pairs for a cube");
+        // Level 0's sets (128² texels + levels 2, 4, …) split in two.
+        assert_eq!(count(pow2, false), 4 * 2 + 4, "2 x 2 x 2 sets, 4 split");
+        let small = TextureShape::Tex2D {
+            width: 64,
+            height: 64,
+        };
+        assert_eq!(count(small, false), 8, "2 x 2 x 2 for a 64² texture");
+        // Level 0 of a face pair (2 x 128² texels + levels 2, 4, …) splits
+        // into 3 parts, level 1's (2 x 64² + …) stays whole.
+        assert_eq!(count(cube, false), 3 * 12 + 12, "x 3 opposite-face pairs");
+        let cube64 = TextureShape::Cube { size: 64 };
+        assert_eq!(count(cube64, false), 24, "no set of a 64² cube splits");
         let six = TextureShape::Tex2D {
             width: 96,
             height: 96,
