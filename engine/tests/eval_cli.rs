@@ -158,7 +158,18 @@ fn eval_ranks_the_methods_against_the_tracer() {
     let data = dir.path().join("data");
     let log = run_eval(&scene, &data);
     let eval = data.join("eval");
-    assert!(eval.join("tradeoff.png").is_file() && eval.join("modes_above.png").is_file());
+    assert!(eval.join("tradeoff.png").is_file());
+    // The four one-word rows beside the tracer at each elevation (10° keeps
+    // the old name).
+    for picture in [
+        "modes_above.png",
+        "modes_above_20.png",
+        "modes_above_30.png",
+    ] {
+        let labels = std::fs::read_to_string(eval.join(picture).with_extension("txt"));
+        let labels = labels.unwrap_or_else(|e| panic!("{picture}: {e}"));
+        assert_eq!(labels.split(" | ").count(), 5, "{picture}: {labels}");
+    }
     let table: serde_json::Value =
         serde_json::from_slice(&std::fs::read(eval.join("eval.json")).expect("eval.json"))
             .expect("JSON");

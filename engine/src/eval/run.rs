@@ -99,9 +99,9 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
             Mode::Rem | Mode::LayeredPem | Mode::SpherePem | Mode::Ptm => renderer.map_bytes,
             _ => None,
         };
-        let (results, picture) = run.measure_row(&mut source, &mut renderer, &scene, &progress)?;
+        let (results, frames) = run.measure_row(&mut source, &mut renderer, &scene, &progress)?;
         if !row.label.contains(' ') {
-            pictures.extend(picture.map(|p| (row.label.clone(), p)));
+            pictures.push((row.label.clone(), frames));
         }
         let samples = matches!(row.mode, Mode::LayeredPem | Mode::SpherePem | Mode::Ptm)
             .then(|| scene.orbit.sample_count());
@@ -203,7 +203,7 @@ fn write_outputs(
     table: &EvalTable,
     title: &str,
     run: &RowRun,
-    mut pictures: Vec<(String, Vec<[f32; 4]>)>,
+    pictures: Vec<(String, Vec<Pixels>)>,
     (width, height): (u32, u32),
 ) -> Result<String> {
     let json_path = out.join("eval.json");
@@ -215,10 +215,21 @@ fn write_outputs(
     if !table.rows.is_empty() {
         tradeoff_chart(&plot_path, table, title)?;
     }
-    if let Some(above) = run.above().filter(|&a| a < run.references.len()) {
-        pictures.push(("gold (traced)".into(), run.references[above].beauty.clone()));
-        let mask = &run.references[above].mask;
-        side_by_side(&out.join("modes_above.png"), &pictures, mask, width, height)?;
+    // One picture per elevation: the first's keeps its old name.
+    for (j, &above) in run.above().iter().enumerate() {
+        let Some(reference) = run.references.get(above) else {
+            continue;
+        };
+        let mut row: Vec<(String, Pixels)> = pictures
+            .iter()
+            .filter_map(|(label, frames)| Some((label.clone(), frames.get(j)?.clone())))
+            .collect();
+        row.push(("gold (traced)".into(), reference.beauty.clone()));
+        let name = match j {
+            0 => "modes_above.png".to_owned(),
+            _ => format!("modes_above_{:.0}.png", run.views[above].elevation_deg),
+        };
+        side_by_side(&out.join(name), &row, &reference.mask, width, height)?;
     }
     Ok(format!(
         "wrote {} and {}\n",
@@ -239,23 +250,32 @@ struct RowRun<'a> {
 }
 
 impl RowRun<'_> {
-    /// The first view above the plane (the side-by-side picture's).
-    fn above(&self) -> Option<usize> {
-        self.views
-            .iter()
-            .position(|v| v.category == Category::Above)
+    /// The first view above the plane at each elevation, in the order of
+    /// the views (the side-by-side pictures').
+    fn above(&self) -> Vec<usize> {
+        let mut firsts: Vec<usize> = Vec::new();
+        for (i, v) in self.views.iter().enumerate() {
+            let seen = firsts
+                .iter()
+                .any(|&f| self.views[f].elevation_deg == v.elevation_deg);
+            if v.category == Category::Above && !seen {
+                firsts.push(i);
+            }
+        }
+        firsts
     }
 
-    /// One row on every view; with its frame of the first view above.
+    /// One row on every view; with its frames of [`RowRun::above`]'s views.
     fn measure_row(
         &self,
         source: &mut FrameSource,
         renderer: &mut crate::renderer::Renderer,
         scene: &inference::scene::Scene,
         progress: &indicatif::ProgressBar,
-    ) -> Result<(Vec<ViewResult>, Option<Pixels>)> {
+    ) -> Result<(Vec<ViewResult>, Vec<Pixels>)> {
         let mut results = Vec::new();
-        let mut picture = None;
+        let above = self.above();
+        let mut frames = Vec::new();
         for (i, (view, reference)) in self.views.iter().zip(self.references).enumerate() {
             let (result, pixels) = measure(
                 source,
@@ -267,12 +287,12 @@ impl RowRun<'_> {
                 self.reflector,
             )?;
             results.push(result);
-            if Some(i) == self.above() {
-                picture = Some(pixels);
+            if above.contains(&i) {
+                frames.push(pixels);
             }
             progress.inc(1);
         }
-        Ok((results, picture))
+        Ok((results, frames))
     }
 }
 
