@@ -8,15 +8,19 @@
 //!
 //! ```sh
 //! cargo run --release -p engine --example room_compare -- \
-//!     SCENE DATA_DIR AZIMUTH ELEVATION REF.exr [OUT.png]
+//!     SCENE DATA_DIR AZIMUTH ELEVATION REF.exr [OUT.png] \
+//!     [--infer-dir DIR] [--distant-only] [--full]
 //! ```
 //! DATA_DIR holds the compiled maps (the main job's `--out`); REF.exr is a
 //! traced view at the same azimuth, elevation and size (e.g. one of
-//! `engine eval`'s `reference/` files).
+//! `engine eval`'s `reference/` files). `--infer-dir` plays the inferred
+//! EXR maps of DIR instead of the container (the codec's share of the
+//! error), `--distant-only` drops the local layer (its share), `--full`
+//! also writes OUT_engine.png and OUT_trace.png at full size.
 
 use anyhow::{Context, Result, bail};
 use engine::eval::metrics::{display_psnr_masked, frame_scores};
-use engine::options::{Mode, PemOptions, RoomShading, RunPlace};
+use engine::options::{Maps, Mode, PemOptions, RoomShading, RunPlace};
 use engine::play::{Session, compile_context, setup_mode};
 use inference::trace::output::read_exr;
 use std::path::{Path, PathBuf};
@@ -26,8 +30,12 @@ type Frame = Vec<[f32; 4]>;
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let [scene, data, az, el, reference, rest @ ..] = args.as_slice() else {
-        bail!("usage: room_compare SCENE DATA_DIR AZIMUTH ELEVATION REF.exr [OUT.png]");
+        bail!(
+            "usage: room_compare SCENE DATA_DIR AZIMUTH ELEVATION REF.exr [OUT.png] \
+             [--infer-dir DIR] [--distant-only] [--full]"
+        );
     };
+    let flags = Flags::parse(rest)?;
     let (az, el): (f32, f32) = (
         az.parse().context("AZIMUTH: expected degrees")?,
         el.parse().context("ELEVATION: expected degrees")?,
@@ -62,10 +70,7 @@ fn main() -> Result<()> {
     let eye = session.scene.orbit.eye(az, el);
     let mut frames = Vec::new();
     for room in [RoomShading::Inferred, RoomShading::Analytic] {
-        let pem = PemOptions {
-            room,
-            ..PemOptions::default()
-        };
+        let pem = flags.pem(room);
         let ctx = compile_context(&place, &session.scene, &session.out);
         let mut source = setup_mode(&ctx, &mut session.renderer, Mode::LayeredPem, &pem, 16)?;
         source.frame(&mut session.renderer, &session.scene, eye)?;
@@ -78,14 +83,16 @@ fn main() -> Result<()> {
         print_split(&layers, &traced, &pixels)?;
         frames.push(pixels);
     }
-    if let Some(out) = rest.first() {
-        let out = Path::new(out);
+    if let Some(out) = &flags.out {
+        let out = out.as_path();
+        if flags.full {
+            let named = |what: &str| out.with_file_name(format!("{}_{what}.png", stem(out)));
+            engine::capture::write_png(&named("engine"), width, height, &frames[0])?;
+            engine::capture::write_png(&named("trace"), width, height, &traced)?;
+        }
         let diff = |f: &Frame| display_diff(&traced, f, 4.0);
         side_by_side(out, [&frames[0], &traced], width, height)?;
-        let diffs = out.with_file_name(format!(
-            "{}_diff.png",
-            out.file_stem().and_then(|s| s.to_str()).unwrap_or("room")
-        ));
+        let diffs = out.with_file_name(format!("{}_diff.png", stem(out)));
         side_by_side(
             &diffs,
             [&diff(&frames[0]), &diff(&frames[1])],
@@ -94,6 +101,56 @@ fn main() -> Result<()> {
         )?;
     }
     Ok(())
+}
+
+/// The optional arguments after REF.exr.
+#[derive(Default)]
+struct Flags {
+    out: Option<PathBuf>,
+    infer_dir: Option<PathBuf>,
+    distant_only: bool,
+    full: bool,
+}
+
+impl Flags {
+    fn parse(rest: &[String]) -> Result<Self> {
+        let mut flags = Flags::default();
+        let mut args = rest.iter();
+        while let Some(a) = args.next() {
+            match a.as_str() {
+                "--infer-dir" => {
+                    let dir = args.next().context("--infer-dir: expected a folder")?;
+                    flags.infer_dir = Some(PathBuf::from(dir));
+                }
+                "--distant-only" => flags.distant_only = true,
+                "--full" => flags.full = true,
+                flag if flag.starts_with("--") => bail!("unknown option {flag}"),
+                out if flags.out.is_none() => flags.out = Some(PathBuf::from(out)),
+                extra => bail!("unexpected argument {extra}"),
+            }
+        }
+        Ok(flags)
+    }
+
+    /// Playback options for `room`: the container, or the EXR maps of
+    /// `--infer-dir`; both layers unless `--distant-only`.
+    fn pem(&self, room: RoomShading) -> PemOptions {
+        let maps = match self.infer_dir {
+            Some(_) => Maps::Exr,
+            None => Maps::Container,
+        };
+        PemOptions {
+            room,
+            maps,
+            infer_dir: self.infer_dir.clone(),
+            local_layer: !self.distant_only,
+            ..PemOptions::default()
+        }
+    }
+}
+
+fn stem(path: &Path) -> &str {
+    path.file_stem().and_then(|s| s.to_str()).unwrap_or("room")
 }
 
 /// `frame` at half size, 2×2 box filtered (linear).
