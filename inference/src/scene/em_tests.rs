@@ -76,6 +76,27 @@ fn the_neighbour_weight_is_zero_unless_asked_and_checked() {
 }
 
 #[test]
+fn the_local_bound_is_off_unless_asked_and_checked() {
+    let bound = |s: &Scene| s.object("teapot").expect("teapot").local_bound();
+    let s = Scene::load("teapot").expect("the built-in teapot scene loads");
+    assert_eq!(
+        bound(&s),
+        0.0,
+        "the shipped teapot solves its local layer free"
+    );
+    let line = setting_line("neighbour_weight =");
+    let with = |w: &str| load_edited(&line, &format!("{line}local_bound = {w}\n"));
+    assert_eq!(bound(&with("10.0").expect("loads")), 10.0);
+    for bad in ["-1.0", "nan", "1e9"] {
+        let e = with(bad).err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(
+            e.contains(".em.local_bound") && e.contains("expected"),
+            "{bad}: {e}"
+        );
+    }
+}
+
+#[test]
 fn the_neighbour_offset_is_off_unless_asked_and_checked() {
     let deg = |s: &Scene| s.object("teapot").expect("teapot").neighbour_deg();
     let s = Scene::load("teapot").expect("the built-in teapot scene loads");

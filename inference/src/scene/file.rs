@@ -196,6 +196,8 @@ pub struct EmFile {
     pub lod_bias: f32,
     #[serde(default)]
     pub neighbour_weight: f32,
+    #[serde(default)]
+    pub local_bound: f32,
     pub neighbour_deg: Option<f32>,
     #[serde(default)]
     pub neighbour_above_deg: Vec<f32>,

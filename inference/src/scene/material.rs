@@ -38,6 +38,12 @@ pub struct EmSettings {
     /// poorly to the views between samples; their neighbours constrain
     /// the texels only nearby views reach.
     pub neighbour_weight: f32,
+    /// Weight of a penalty on the local layer's texels outside the range
+    /// of a premultiplied layer (colour ≥ 0, 0 ≤ α ≤ 1), zero inside it;
+    /// 0 = off. The free fit lets texels no view pins down alternate far
+    /// outside it, which plays as speckle (README, "Where the whole
+    /// frame's remaining error is").
+    pub local_bound: f32,
     /// With stacking on, the stacked views lie this many degrees either
     /// side of each sample on its ring, traced for the purpose, instead of
     /// at the neighbouring samples. A placed orbit's neighbours lie 1–25°
@@ -61,6 +67,8 @@ pub struct EmSettings {
 
 /// The LOD biases a scene may ask for.
 pub const LOD_BIASES: std::ops::RangeInclusive<f32> = -4.0..=2.0;
+/// The local layer's bound weights a scene may ask for.
+pub const LOCAL_BOUNDS: std::ops::RangeInclusive<f32> = 0.0..=1.0e4;
 /// The neighbour weights a scene may ask for.
 pub const NEIGHBOUR_WEIGHTS: std::ops::RangeInclusive<f32> = 0.0..=1.0;
 /// The offsets of stacked views a scene may ask for, degrees.
@@ -92,6 +100,7 @@ impl Default for EmSettings {
             layers: vec![EmLayer::Distant, EmLayer::Local],
             lod_bias: 0.0,
             neighbour_weight: 0.0,
+            local_bound: 0.0,
             neighbour_deg: None,
             neighbour_above_deg: Vec::new(),
             neighbour_above_spacing_deg: None,

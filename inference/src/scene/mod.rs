@@ -83,6 +83,12 @@ impl Object {
         self.em.as_ref().map_or(0.0, |em| em.lod_bias)
     }
 
+    /// The weight of the bounds on the object's local layer
+    /// (`[objects.em] local_bound`; 0, off, without EMs).
+    pub fn local_bound(&self) -> f32 {
+        self.em.as_ref().map_or(0.0, |em| em.local_bound)
+    }
+
     /// The weight of neighbouring samples' views in the object's EM solves
     /// (`[objects.em] neighbour_weight`; 0 without EMs).
     pub fn neighbour_weight(&self) -> f32 {

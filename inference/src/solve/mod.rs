@@ -31,6 +31,7 @@
 //! - All products and reductions sum in a fixed order: results are
 //!   bit-identical for any rayon thread count.
 
+mod bounds;
 mod cg;
 pub mod csr;
 mod error;

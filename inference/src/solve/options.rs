@@ -18,6 +18,11 @@ pub struct SolveOptions {
     /// texels no view constrains stay see-through instead of taking what
     /// the pyramid term spreads into them. 0 (default) = off.
     pub eps_prior: f32,
+    /// Premultiplied RGBA layers: weight of a penalty on texels outside
+    /// their range (every channel ≥ 0, the fourth, α, ≤ 1), zero inside it
+    /// (absolute, like `eps_prior`), solved by active sets. Unlike the
+    /// barrier of `eps_b` it leaves transparent texels at 0. 0 (default) = off.
+    pub eps_bound: f32,
     /// Range regularization weight ε_b (0 = off; thesis figures used 1/32).
     pub eps_b: f32,
     /// Texel range for the range term: [0, range_max]; the barrier is
@@ -42,6 +47,7 @@ impl Default for SolveOptions {
             eps_f: 0.1,
             eps_seam: 0.0,
             eps_prior: 0.0,
+            eps_bound: 0.0,
             eps_b: 0.0,
             range_max: None,
             k_switch: 4.0,
@@ -81,6 +87,12 @@ impl SolveOptions {
             "eps_prior",
             self.eps_prior,
             self.eps_prior >= 0.0,
+            "must be finite and >= 0",
+        )?;
+        check(
+            "eps_bound",
+            self.eps_bound,
+            self.eps_bound >= 0.0,
             "must be finite and >= 0",
         )?;
         check(

@@ -7,12 +7,12 @@ use super::SolveError;
 use super::cg::{CgOutcome, pcg};
 use super::csr::CsrMatrix;
 use super::layout::TextureLayout;
-use super::newton;
 use super::operator::{Form, Operator, Pyramid, Seams};
 use super::options::{Solution, SolveOptions};
 use super::pyramid_op::PyramidOperator;
 use super::range::calibration;
 use super::seams::seam_matrix;
+use super::{bounds, newton};
 
 /// A prepared system for one A: reuse it for every channel (and for any
 /// number of right-hand sides) of that A.
@@ -110,6 +110,17 @@ impl<'a> Solver<'a> {
     /// Solves one channel. `x0` is the warm start (e.g. the neighbouring
     /// parameter sample's solution).
     pub fn solve(&self, b: &[f32], x0: Option<&[f32]>) -> Result<Solution, SolveError> {
+        self.solve_within(b, x0, f64::INFINITY)
+    }
+
+    /// [`Solver::solve`] with `upper` as the channel's upper bound when
+    /// `eps_bound` > 0 (its lower bound is 0).
+    pub fn solve_within(
+        &self,
+        b: &[f32],
+        x0: Option<&[f32]>,
+        upper: f64,
+    ) -> Result<Solution, SolveError> {
         self.check_inputs(b, x0)?;
         let n_t = self.a.cols;
         if self.a.rows == 0 || self.a.nnz() == 0 {
@@ -133,6 +144,16 @@ impl<'a> Solver<'a> {
         let tol = self.options.tolerance as f64;
         let max_it = self.options.max_iterations;
         let mut out = pcg(&self.op, None, &rhs, &mut x, tol, max_it);
+        let weight = f64::from(self.options.eps_bound);
+        if weight > 0.0 {
+            let b = bounds::Bounds {
+                weight,
+                hi: upper,
+                tolerance: tol,
+                max_iterations: max_it,
+            };
+            out = bounds::refine(&self.op, &rhs, &mut x, &b, out);
+        }
         if self.lambda_b > 0.0 {
             out = self.refine_range(b, &rhs, &mut x, out);
         }
@@ -229,8 +250,14 @@ pub fn solve(
     Solver::new(a, layout, options)?.solve(b, x0)
 }
 
+/// The upper bound of channel `i` of `n` under `eps_bound`: α (the fourth
+/// of four, premultiplied RGBA) ≤ 1, colours unbounded above.
+fn channel_upper(i: usize, n: usize) -> f64 {
+    if n == 4 && i == 3 { 1.0 } else { f64::INFINITY }
+}
+
 /// Several right-hand sides (e.g. R, G, B, A) with one A, prepared once and
-/// solved in parallel.
+/// solved in parallel; with `eps_bound` > 0 the fourth of four is α.
 pub fn solve_channels(
     a: &CsrMatrix,
     bs: &[&[f32]],
@@ -244,6 +271,6 @@ pub fn solve_channels(
     let solver = Solver::new(a, layout, options)?;
     bs.par_iter()
         .enumerate()
-        .map(|(i, b)| solver.solve(b, x0s.map(|v| v[i])))
+        .map(|(i, b)| solver.solve_within(b, x0s.map(|v| v[i]), channel_upper(i, bs.len())))
         .collect()
 }

@@ -206,6 +206,11 @@ pub fn map_key(trace: &Key, job: &Job, options: &SolveOptions, size: (u32, u32))
     if options.eps_prior > 0.0 {
         h.f32(options.eps_prior);
     }
+    // Added with the bounds: unbounded maps keep their keys.
+    if options.eps_bound > 0.0 {
+        h.str("bounds");
+        h.f32(options.eps_bound);
+    }
     // Added with the LOD bias: maps read without one keep their keys.
     if job.geometry.is_some() && job.object.lod_bias() != 0.0 {
         h.f32(job.object.lod_bias());

@@ -163,14 +163,13 @@ impl<'a> Plan<'a> {
     /// The solve options of `job`: local layers add a prior toward
     /// transparent, so texels only off-sample views reach stay see-through
     /// rather than smearing what the sample's view saw (measured in the
-    /// README, "Off the orbit").
+    /// README, "Off the orbit"), and only they (premultiplied RGBA) take
+    /// the object's bounds (`[objects.em] local_bound`).
     pub fn options_for(&self, job: &Job) -> SolveOptions {
+        let local = job.layer == MapLayer::Local;
         SolveOptions {
-            eps_prior: if job.layer == MapLayer::Local {
-                LOCAL_PRIOR
-            } else {
-                0.0
-            },
+            eps_prior: if local { LOCAL_PRIOR } else { 0.0 },
+            eps_bound: if local { job.object.local_bound() } else { 0.0 },
             ..self.options.clone()
         }
     }
@@ -379,6 +378,16 @@ mod tests {
             one,
             stacking_keys("samples = 100", 2, "neighbour_deg = 1.0")
         );
+    }
+
+    #[test]
+    fn the_local_bound_keys_the_local_layer_only() {
+        let free = stacking_keys("samples = 3", 1, "");
+        let bounded = stacking_keys("samples = 3", 1, "local_bound = 10.0");
+        let changed = free.iter().zip(&bounded).filter(|(f, b)| f != b).count();
+        assert_eq!(changed, 1, "{free:?} vs {bounded:?}");
+        let other = stacking_keys("samples = 3", 1, "local_bound = 1.0");
+        assert_ne!(bounded, other, "the weight is keyed");
     }
 
     #[test]

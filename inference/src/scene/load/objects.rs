@@ -15,7 +15,7 @@ use crate::scene::obj::load_obj;
 use crate::teapot::{self, DEFAULT_SEGMENTS, MAX_SEGMENTS, TeapotPart};
 
 use crate::scene::material::{
-    EM_RESOLUTIONS, LOD_BIASES, NEIGHBOUR_ABOVE_DEGS, NEIGHBOUR_ABOVE_MAX,
+    EM_RESOLUTIONS, LOCAL_BOUNDS, LOD_BIASES, NEIGHBOUR_ABOVE_DEGS, NEIGHBOUR_ABOVE_MAX,
     NEIGHBOUR_ABOVE_SPACINGS, NEIGHBOUR_ABOVE_WEIGHTS, NEIGHBOUR_DEGS, NEIGHBOUR_WEIGHTS,
 };
 
@@ -157,6 +157,8 @@ impl Loader<'_> {
             &NEIGHBOUR_WEIGHTS,
             "a weight",
         )?;
+        let bound = format!("{field}.local_bound");
+        self.in_range(bound, em.local_bound, &LOCAL_BOUNDS, "a weight")?;
         if let Some(deg) = em.neighbour_deg {
             self.in_range(
                 format!("{field}.neighbour_deg"),
@@ -171,6 +173,7 @@ impl Loader<'_> {
             layers: em.layers.clone(),
             lod_bias: em.lod_bias,
             neighbour_weight: em.neighbour_weight,
+            local_bound: em.local_bound,
             neighbour_deg: em.neighbour_deg,
             neighbour_above_deg: em.neighbour_above_deg.clone(),
             neighbour_above_spacing_deg: em.neighbour_above_spacing_deg,

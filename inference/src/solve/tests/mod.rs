@@ -2,6 +2,7 @@
 //! the shared problem builders are here.
 
 mod accuracy;
+mod bounds;
 mod degenerate_input;
 mod matrices;
 mod range_term;
