@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::tiny_scene;
+use common::{output_text as text, tiny_scene};
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -14,14 +14,6 @@ fn engine(args: &[&str]) -> Output {
         .args(args)
         .output()
         .expect("run engine")
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "stdout:\n{}\nstderr:\n{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
 }
 
 fn play(scene: &Path, out: &Path, extra: &[&str]) -> Output {

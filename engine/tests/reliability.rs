@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::tiny_scene;
+use common::{output_text as log, tiny_scene};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -15,14 +15,6 @@ fn engine(args: &[&str]) -> Output {
         .args(args)
         .output()
         .expect("run engine")
-}
-
-fn log(o: &Output) -> String {
-    format!(
-        "stdout:\n{}\nstderr:\n{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
 }
 
 fn s(p: &Path) -> &str {

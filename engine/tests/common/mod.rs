@@ -110,10 +110,12 @@ pub fn run_engine(args: &[&str]) -> std::process::Output {
         .expect("run engine")
 }
 
-/// A run's stdout and stderr, for assertion messages and log checks.
+/// A run's exit status, stdout and stderr, for assertion messages and log
+/// checks (the status names the signal when the engine died of one).
 pub fn output_text(o: &std::process::Output) -> String {
     format!(
-        "stdout:\n{}\nstderr:\n{}",
+        "{}\nstdout:\n{}\nstderr:\n{}",
+        o.status,
         String::from_utf8_lossy(&o.stdout),
         String::from_utf8_lossy(&o.stderr)
     )
