@@ -56,6 +56,8 @@ pub struct VulkanProbe {
     targets: Option<Targets>,
     uploaded: Option<Uploaded>,
     texture: Option<ProbeTexture>,
+    /// The mirror pipeline's set and the bare one's, once allocated.
+    sets: [Option<vk::DescriptorSet>; 2],
     /// Probe renders made so far.
     pub renders: u32,
 }
@@ -76,6 +78,7 @@ impl VulkanProbe {
             targets: None,
             uploaded: None,
             texture: None,
+            sets: [None; 2],
             renders: 0,
         })
     }
@@ -183,14 +186,26 @@ impl VulkanProbe {
             }
             .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST);
             let image = Image::new(&self.device, "probe texture", desc)?;
-            let set = if cube {
-                self.mirror.descriptor_set(&[
+            // One set per pipeline, rewritten for each new texture: a
+            // compile changes layouts hundreds of times, more than a pool
+            // holds.
+            let (pipeline, slot, bindings) = if cube {
+                let b = vec![
                     Binding::Image(image.view, self.clamp.raw),
                     Binding::Image(self.lut.view, self.clamp.raw),
-                ])?
+                ];
+                (&self.mirror, &mut self.sets[0], b)
             } else {
-                self.bare
-                    .descriptor_set(&[Binding::Image(image.view, self.repeat.raw)])?
+                let b = vec![Binding::Image(image.view, self.repeat.raw)];
+                (&self.bare, &mut self.sets[1], b)
+            };
+            let set = match *slot {
+                // SAFETY: every probe render was waited for; the set is idle.
+                Some(set) => unsafe {
+                    pipeline.rewrite_set(set, &bindings);
+                    set
+                },
+                None => *slot.insert(pipeline.descriptor_set(&bindings)?),
             };
             self.texture = Some(ProbeTexture {
                 layout: layout.clone(),

@@ -71,8 +71,12 @@ impl Commands {
             d.end_command_buffer(self.cmd).vk("vkEndCommandBuffer")?;
             d.queue_submit2(self.device.queue, &submit, self.fence)
                 .vk("vkQueueSubmit2")?;
-            d.wait_for_fences(&[self.fence], true, u64::MAX)
-                .vk("vkWaitForFences")?;
+            if let Err(e) = d.wait_for_fences(&[self.fence], true, u64::MAX) {
+                // The work may still run: let it finish before the caller
+                // frees what it uses. (Best effort; the first error counts.)
+                let _ = d.device_wait_idle();
+                return Err(e).vk("vkWaitForFences");
+            }
             d.reset_fences(&[self.fence]).vk("vkResetFences")?;
         }
         Ok(())

@@ -191,7 +191,9 @@ impl Pipeline {
         Ok(())
     }
 
-    /// A descriptor set binding `resources[i]` at binding i.
+    /// A descriptor set binding `resources[i]` at binding i. The pool
+    /// holds [`MAX_SETS`]: a caller that rebinds often rewrites its set
+    /// ([`Pipeline::rewrite_set`]) instead of allocating another.
     pub fn descriptor_set(&self, resources: &[Binding]) -> GpuResult<vk::DescriptorSet> {
         let layouts = [self.set_layout];
         let info = vk::DescriptorSetAllocateInfo::default()
@@ -201,6 +203,17 @@ impl Pipeline {
         // with the pool.
         let set = unsafe { self.device.device.allocate_descriptor_sets(&info) }
             .vk("vkAllocateDescriptorSets")?[0];
+        // SAFETY: the set was just allocated and is not in use.
+        unsafe { self.rewrite_set(set, resources) };
+        Ok(set)
+    }
+
+    /// Points `set` (allocated by this pipeline) at `resources`.
+    ///
+    /// # Safety
+    /// No pending command buffer may use `set` (the engine waits for every
+    /// submission, so between frames none does).
+    pub unsafe fn rewrite_set(&self, set: vk::DescriptorSet, resources: &[Binding]) {
         let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = resources
             .iter()
             .map(|r| match *r {
@@ -255,9 +268,8 @@ impl Pipeline {
                 }
             })
             .collect();
-        // SAFETY: the set was just allocated and is not in use.
+        // SAFETY: the caller guarantees the set is not in use.
         unsafe { self.device.device.update_descriptor_sets(&writes, &[]) };
-        Ok(set)
     }
 
     /// Binds the pipeline, the set, and the push constants (size-checked

@@ -19,6 +19,9 @@ pub struct Executor {
     device: Device,
     commands: Commands,
     queries: PassQueries,
+    /// This submission's label names: kept until the next recording, since
+    /// Mesa 22's command buffers keep the `pLabelName` pointer they get.
+    labels: Vec<CString>,
     pub states: ImageStates,
 }
 
@@ -28,6 +31,7 @@ impl Executor {
             device: device.clone(),
             commands: Commands::new(device)?,
             queries: PassQueries::new(device, 16)?,
+            labels: Vec::new(),
             states: ImageStates::default(),
         })
     }
@@ -40,9 +44,13 @@ impl Executor {
     /// Records, submits and waits for `passes`; returns each pass's timing.
     pub fn run(&mut self, passes: &[&dyn Pass]) -> GpuResult<Vec<PassTiming>> {
         if passes.len() as u32 > self.queries.capacity() {
-            self.queries = PassQueries::new(&self.device, passes.len() as u32)?;
+            let bigger = PassQueries::new(&self.device, passes.len() as u32)?;
+            self.wait_idle();
+            self.queries = bigger;
         }
         let cmd = self.commands.begin()?;
+        // The buffer was reset: nothing refers to the old names any more.
+        self.labels.clear();
         self.queries.reset(cmd);
         for (index, pass) in passes.iter().enumerate() {
             let index = index as u32;
@@ -102,13 +110,24 @@ impl Executor {
             .collect())
     }
 
-    fn begin_label(&self, cmd: vk::CommandBuffer, name: &str) {
+    fn begin_label(&mut self, cmd: vk::CommandBuffer, name: &str) {
         if let Some(debug) = &self.device.debug_utils {
-            let name = CString::new(name).unwrap_or_default();
-            let label = vk::DebugUtilsLabelEXT::default().label_name(&name);
-            // SAFETY: VK_EXT_debug_utils is enabled (debug_utils is Some).
+            self.labels.push(CString::new(name).unwrap_or_default());
+            let name = self.labels.last().map_or(c"", |n| n.as_c_str());
+            let label = vk::DebugUtilsLabelEXT::default().label_name(name);
+            // SAFETY: VK_EXT_debug_utils is enabled (debug_utils is Some);
+            // the name lives in `labels` until the buffer is reset.
             unsafe { debug.cmd_begin_debug_utils_label(cmd, &label) };
         }
+    }
+
+    /// Lets the device finish everything before objects it may have used
+    /// are destroyed. The fence wait already covers submitted work; this
+    /// also covers whatever the driver's own threads still hold after it.
+    fn wait_idle(&self) {
+        // SAFETY: the queue is only used from the thread that owns the
+        // executors (external synchronization of vkDeviceWaitIdle).
+        let _ = unsafe { self.device.device.device_wait_idle() };
     }
 
     fn end_label(&self, cmd: vk::CommandBuffer) {
@@ -116,5 +135,12 @@ impl Executor {
             // SAFETY: matches begin_label in the same command buffer.
             unsafe { debug.cmd_end_debug_utils_label(cmd) };
         }
+    }
+}
+
+impl Drop for Executor {
+    fn drop(&mut self) {
+        // Before the command pool and query pools go (fields drop after).
+        self.wait_idle();
     }
 }
