@@ -115,6 +115,9 @@ impl ImageDesc {
 pub struct Image {
     device: Device,
     pub raw: vk::Image,
+    /// Unique for the process's life, unlike `raw`: the driver reuses
+    /// handles of destroyed images, so state is tracked by this.
+    pub uid: u64,
     pub desc: ImageDesc,
     /// Samples every level and layer (cube view for cube maps).
     pub view: vk::ImageView,
@@ -152,9 +155,11 @@ impl Image {
             .initial_layout(vk::ImageLayout::UNDEFINED);
         // SAFETY: valid device and create info; destroyed in Drop.
         let raw = unsafe { device.device.create_image(&info, None) }.vk("vkCreateImage")?;
+        static NEXT_UID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
         let mut image = Self {
             device: device.clone(),
             raw,
+            uid: NEXT_UID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             desc,
             view: vk::ImageView::null(),
             target_views: Vec::new(),

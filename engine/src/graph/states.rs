@@ -54,9 +54,12 @@ fn target_state(usage: Usage) -> LevelState {
     }
 }
 
+/// Keyed by [`Image::uid`](crate::backend::Image::uid), not by handle: an
+/// image dropped without [`ImageStates::forget`] must not lend its layout
+/// to a new image that gets the same handle.
 #[derive(Default)]
 pub struct ImageStates {
-    levels: HashMap<vk::Image, Vec<LevelState>>,
+    levels: HashMap<u64, Vec<LevelState>>,
 }
 
 impl ImageStates {
@@ -66,13 +69,13 @@ impl ImageStates {
         let mut state = target_state(usage);
         state.wrote = true; // the upload's write is made visible by the next barrier
         self.levels
-            .insert(image.raw, vec![state; image.desc.mip_levels as usize]);
+            .insert(image.uid, vec![state; image.desc.mip_levels as usize]);
     }
 
-    /// Drops what is known of an image about to be destroyed, so a new
-    /// image that reuses its handle starts from UNDEFINED.
+    /// Drops what is known of an image about to be destroyed (keeps the
+    /// map small; a new image starts from UNDEFINED either way).
     pub fn forget(&mut self, image: &crate::backend::Image) {
-        self.levels.remove(&image.raw);
+        self.levels.remove(&image.uid);
     }
 
     /// The barriers that make `accesses` safe after everything recorded so
@@ -83,7 +86,7 @@ impl ImageStates {
             let desc = a.image.desc;
             let levels = self
                 .levels
-                .entry(a.image.raw)
+                .entry(a.image.uid)
                 .or_insert_with(|| vec![UNTOUCHED; desc.mip_levels as usize]);
             let wanted = target_state(a.usage);
             for level in a.levels.clone() {
