@@ -25,17 +25,9 @@ pub struct Lens {
     bvh: SceneBvh,
 }
 
-/// A point on the lens surface as a ray meets it, normals facing the ray.
-#[derive(Clone, Copy, Debug)]
-pub struct Surface {
-    pub p: Vec3,
-    /// Geometric normal on the side the ray came from.
-    pub ng: Vec3,
-    /// Interpolated normal on the same side (the geometric one where it fails).
-    pub ns: Vec3,
-    /// The ray arrived on the side the winding faces (from outside the glass).
-    pub front: bool,
-}
+/// A point on the lens surface as a ray meets it, normals facing the ray:
+/// the tracer's own type and rules.
+pub use crate::trace::surface::Surface;
 
 #[derive(Debug, thiserror::Error)]
 pub enum LensError {
@@ -91,32 +83,7 @@ impl Lens {
     /// The surface at `hit` (a hit on this lens: from [`Lens::closest`] or
     /// from the scene's BVH) for a ray along `dir` — the tracer's rules.
     pub fn surface(&self, hit: &Hit, dir: Vec3) -> Surface {
-        let m = &self.mesh;
-        let t = hit.prim.triangle as usize;
-        let idx = [
-            m.indices[3 * t] as usize,
-            m.indices[3 * t + 1] as usize,
-            m.indices[3 * t + 2] as usize,
-        ];
-        let [a, b, c] = m.triangle(t);
-        let w = [1.0 - hit.bary.x - hit.bary.y, hit.bary.x, hit.bary.y];
-        let p = a * w[0] + b * w[1] + c * w[2];
-        let ng_wound = (b - a).cross(c - a).normalize_or(-dir);
-        let front = ng_wound.dot(dir) < 0.0;
-        let side = if front { 1.0 } else { -1.0 };
-        let ng = ng_wound * side;
-        let ns = match idx.map(|i| m.normals.get(i)) {
-            [Some(&na), Some(&nb), Some(&nc)] => {
-                (na * w[0] + nb * w[1] + nc * w[2]).normalize_or(ng_wound) * side
-            }
-            _ => ng,
-        };
-        let ns = if ns.dot(-dir) > 0.0 && ns.dot(ng) > 0.0 {
-            ns
-        } else {
-            ng
-        };
-        Surface { p, ng, ns, front }
+        Surface::at(&self.mesh, hit.prim.triangle as usize, hit.bary, dir)
     }
 
     /// The surface at a mesh vertex seen along `dir`: its normal stands for
@@ -129,6 +96,7 @@ impl Lens {
             p,
             ng: n,
             ns: n,
+            uv: Vec2::ZERO,
             front,
         }
     }

@@ -47,6 +47,7 @@ pub mod output;
 pub mod photons;
 pub mod rng;
 pub mod shading;
+pub mod surface;
 pub mod transport;
 
 #[cfg(test)]

@@ -72,17 +72,7 @@ struct PathState {
     medium: Option<Vec3>,
 }
 
-/// A hit point, normals facing the incoming ray.
-pub(super) struct Surface {
-    pub(super) p: Vec3,
-    /// Geometric normal on the side the ray came from.
-    pub(super) ng: Vec3,
-    /// Interpolated normal on the same side (the geometric one where interpolation fails).
-    ns: Vec3,
-    uv: Vec2,
-    /// The ray hit the side the triangle winding faces.
-    front: bool,
-}
+pub(super) use super::surface::Surface;
 
 pub struct Integrator<'a> {
     pub(super) scene: &'a Scene,
@@ -119,42 +109,7 @@ impl<'a> Integrator<'a> {
 
     pub(super) fn surface(&self, hit: &Hit, dir: Vec3) -> Surface {
         let mesh = &self.scene.objects[hit.prim.object as usize].mesh;
-        let t = hit.prim.triangle as usize;
-        let idx = [
-            mesh.indices[3 * t] as usize,
-            mesh.indices[3 * t + 1] as usize,
-            mesh.indices[3 * t + 2] as usize,
-        ];
-        let [a, b, c] = mesh.triangle(t);
-        let w = [1.0 - hit.bary.x - hit.bary.y, hit.bary.x, hit.bary.y];
-        let p = a * w[0] + b * w[1] + c * w[2];
-        let ng_wound = (b - a).cross(c - a).normalize_or(-dir);
-        let front = ng_wound.dot(dir) < 0.0;
-        let side = if front { 1.0 } else { -1.0 };
-        let ng = ng_wound * side;
-        let ns = match idx.map(|i| mesh.normals.get(i)) {
-            [Some(&na), Some(&nb), Some(&nc)] => {
-                (na * w[0] + nb * w[1] + nc * w[2]).normalize_or(ng_wound) * side
-            }
-            _ => ng,
-        };
-        // An interpolated normal facing away from the viewer would reflect into the surface.
-        let ns = if ns.dot(-dir) > 0.0 && ns.dot(ng) > 0.0 {
-            ns
-        } else {
-            ng
-        };
-        let uv = match idx.map(|i| mesh.uvs.get(i)) {
-            [Some(&ua), Some(&ub), Some(&uc)] => ua * w[0] + ub * w[1] + uc * w[2],
-            _ => Vec2::ZERO,
-        };
-        Surface {
-            p,
-            ng,
-            ns,
-            uv,
-            front,
-        }
+        Surface::at(mesh, hit.prim.triangle as usize, hit.bary, dir)
     }
 
     fn albedo(&self, albedo: Vec3, texture: Option<usize>, uv: Vec2) -> Vec3 {
