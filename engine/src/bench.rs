@@ -246,7 +246,7 @@ impl Run<'_> {
     /// With elevation rings, views sit between rings too: four samples blend.
     fn between_rings(&self) -> f32 {
         if self.orbit.rings > 1 {
-            0.5 * self.orbit.ring_step_deg
+            0.5 * self.orbit.ring_elevation(1)
         } else {
             0.0
         }

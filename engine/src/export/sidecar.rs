@@ -55,6 +55,9 @@ pub struct OrbitJson {
     pub azimuths_deg: Option<Vec<f32>>,
     pub rings: u32,
     pub ring_step_deg: f32,
+    /// The rings' elevations when placed unevenly (`[orbit] ring_elevations_deg`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ring_elevations_deg: Option<Vec<f32>>,
 }
 
 #[derive(Serialize)]
@@ -140,6 +143,7 @@ impl Sidecar {
                 azimuths_deg: o.azimuths.clone(),
                 rings: o.rings.max(1),
                 ring_step_deg: o.ring_step_deg,
+                ring_elevations_deg: o.elevations.clone(),
             },
             maps: specs.iter().map(|s| map_json(s, jobs)).collect(),
             samples,

@@ -52,6 +52,7 @@ mod tests {
             rings: 1,
             ring_step_deg: 10.0,
             azimuths: None,
+            elevations: None,
         };
         let frames = default_frames(&o);
         assert_eq!(frames, 150);

@@ -150,6 +150,11 @@ impl PemPlayer {
         self.grid = std::mem::take(&mut self.grid).with_azimuths_used(lines);
     }
 
+    /// Blends between these elevation rings only (`None`: every ring).
+    pub fn use_rings(&mut self, rings: Option<&[u32]>) {
+        self.grid = std::mem::take(&mut self.grid).with_elevations_used(rings);
+    }
+
     /// The samples a frame from `eye` draws.
     pub fn blend(&self, eye: Vec3) -> SampleBlend {
         let s = &self.settings;

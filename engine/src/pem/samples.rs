@@ -39,6 +39,7 @@ mod tests {
             rings: 1,
             ring_step_deg: 10.0,
             azimuths: None,
+            elevations: None,
         };
         let grid = ViewGrid::from_orbit(&orbit);
         for k in [0, 37, 99] {
@@ -69,6 +70,7 @@ mod tests {
             rings: 3,
             ring_step_deg: 10.0,
             azimuths: None,
+            elevations: None,
         };
         let grid = ViewGrid::from_orbit(&orbit);
         assert_eq!(grid.len(), orbit.sample_count());

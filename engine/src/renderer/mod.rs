@@ -248,6 +248,13 @@ impl Renderer {
         }
     }
 
+    /// The same for elevation rings (`engine place --rings`).
+    pub fn use_rings(&mut self, rings: Option<&[u32]>) {
+        if let Some(p) = self.pem.as_mut() {
+            p.use_rings(rings);
+        }
+    }
+
     pub fn size(&self) -> (u32, u32) {
         (self.width, self.height)
     }

@@ -15,7 +15,7 @@ pub const MAX_ELEVATION_DEG: f32 = 30.0;
 /// The highest elevation the light maps of `orbit` serve: 30°, or its top
 /// ring's elevation when that is higher.
 pub fn max_elevation_deg(orbit: &Orbit) -> f32 {
-    let top = orbit.rings.saturating_sub(1) as f32 * orbit.ring_step_deg;
+    let top = orbit.ring_elevation(orbit.rings.saturating_sub(1));
     MAX_ELEVATION_DEG.max(top)
 }
 /// Surveyed grid: azimuths × elevations.

@@ -17,7 +17,9 @@ pub struct Camera {
 /// above the orbit plane (seen from `center`), sample `k` at azimuth line
 /// `k % samples` of ring `k / samples`. With `azimuths` the lines sit
 /// where those say (placed where the scene needs them); `start_deg` is
-/// then the first and `step_deg` their mean spacing.
+/// then the first and `step_deg` their mean spacing. Likewise with
+/// `elevations` the rings sit where those say, the first at 0°, and
+/// `ring_step_deg` is their mean spacing.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Orbit {
     pub center: Vec3,
@@ -32,6 +34,8 @@ pub struct Orbit {
     pub ring_step_deg: f32,
     /// Explicit azimuth lines, degrees, increasing (`samples` of them).
     pub azimuths: Option<Vec<f32>>,
+    /// Explicit ring elevations, degrees, increasing from 0 (`rings` of them).
+    pub elevations: Option<Vec<f32>>,
 }
 
 /// Keeps the eye off the poles, where a y-up look-at is undefined.
@@ -119,16 +123,25 @@ impl Orbit {
     /// (azimuth, elevation) of sample `sample`, degrees.
     pub fn sample_angles(&self, sample: u32) -> (f32, f32) {
         let n = self.samples.max(1);
-        (
-            self.angle_deg(sample % n),
-            (sample / n) as f32 * self.ring_step_deg,
-        )
+        (self.angle_deg(sample % n), self.ring_elevation(sample / n))
+    }
+
+    /// Elevation of ring `ring`, degrees (not range-checked: past the last
+    /// explicit ring it extrapolates by `ring_step_deg`).
+    pub fn ring_elevation(&self, ring: u32) -> f32 {
+        match self.elevations.as_deref() {
+            Some(list @ [.., last]) => list
+                .get(ring as usize)
+                .copied()
+                .unwrap_or(last + (ring as usize + 1 - list.len()) as f32 * self.ring_step_deg),
+            _ => ring as f32 * self.ring_step_deg,
+        }
     }
 
     /// The elevations of the rings, degrees (`[0]` for a 1D orbit).
     pub fn ring_elevations(&self) -> Vec<f32> {
         (0..self.rings.max(1))
-            .map(|j| j as f32 * self.ring_step_deg)
+            .map(|j| self.ring_elevation(j))
             .collect()
     }
 
@@ -161,6 +174,7 @@ mod tests {
             rings: 1,
             ring_step_deg: 10.0,
             azimuths: None,
+            elevations: None,
         }
     }
 
@@ -168,6 +182,7 @@ mod tests {
     fn explicit_lines_give_angles_between_views_and_extrapolate() {
         let o = Orbit {
             azimuths: Some(vec![0.0, 10.0, 14.0]),
+            elevations: None,
             start_deg: 0.0,
             step_deg: 7.0,
             samples: 3,

@@ -54,12 +54,13 @@ pub struct OrbitFile {
     /// Azimuth lines placed where the scene needs them (`engine place`),
     /// increasing; replaces start_deg, step_deg and samples.
     pub azimuths_deg: Option<Vec<f32>>,
-    /// Elevation rings of the 2D viewpoint space (1: the 1D orbit).
-    #[serde(default = "one_ring")]
-    pub rings: u32,
-    /// Degrees between rings, above the orbit plane.
-    #[serde(default = "ten")]
-    pub ring_step_deg: f32,
+    /// Elevation rings of the 2D viewpoint space [1: the 1D orbit],
+    /// `ring_step_deg` apart above the orbit plane [10°]; or
+    /// `ring_elevations_deg`, each given (the first 0, increasing).
+    pub rings: Option<u32>,
+    pub ring_step_deg: Option<f32>,
+    /// Rings placed where the scene needs them (`engine place --rings`).
+    pub ring_elevations_deg: Option<Vec<f32>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -216,12 +217,6 @@ pub struct GlassFile {
     pub view_spread_deg: Option<f32>,
 }
 
-fn one_ring() -> u32 {
-    1
-}
-fn ten() -> f32 {
-    10.0
-}
 fn default_line_width() -> f32 {
     0.04
 }

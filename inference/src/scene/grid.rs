@@ -22,6 +22,10 @@ pub struct ViewGrid {
     /// this way, sample indices unchanged. `None`: every line.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub azimuths_used: Option<Vec<u32>>,
+    /// Likewise the elevation rings views blend between (`engine place
+    /// --rings`). `None`: every ring.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub elevations_used: Option<Vec<u32>>,
 }
 
 /// The samples one view draws from, nearest first, weights summing to 1.
@@ -54,6 +58,7 @@ impl ViewGrid {
                 .collect(),
             elevations_deg: orbit.ring_elevations(),
             azimuths_used: None,
+            elevations_used: None,
         }
     }
 
@@ -61,25 +66,25 @@ impl ViewGrid {
     /// out-of-range ones dropped, sorted, deduplicated; empty or `None`
     /// means every line).
     pub fn with_azimuths_used(mut self, lines: Option<&[u32]>) -> Self {
-        let n = self.azimuths_deg.len() as u32;
-        self.azimuths_used = lines
-            .map(|l| {
-                let mut l: Vec<u32> = l.iter().copied().filter(|&i| i < n).collect();
-                l.sort_unstable();
-                l.dedup();
-                l
-            })
-            .filter(|l| !l.is_empty());
+        self.azimuths_used = subset(lines, self.azimuths_deg.len());
+        self
+    }
+
+    /// The same grid blending between `rings` only (elevation ring
+    /// indices, as [`ViewGrid::with_azimuths_used`] takes lines).
+    pub fn with_elevations_used(mut self, rings: Option<&[u32]>) -> Self {
+        self.elevations_used = subset(rings, self.elevations_deg.len());
         self
     }
 
     /// The azimuth lines in use, every `spacing`-th of them.
     fn azimuth_lines(&self, spacing: u32) -> Vec<usize> {
-        let s = spacing.max(1) as usize;
-        match &self.azimuths_used {
-            Some(l) => l.iter().map(|&i| i as usize).step_by(s).collect(),
-            None => (0..self.azimuths_deg.len()).step_by(s).collect(),
-        }
+        used(&self.azimuths_used, self.azimuths_deg.len(), spacing)
+    }
+
+    /// The elevation rings in use, every `spacing`-th of them.
+    fn elevation_lines(&self, spacing: u32) -> Vec<usize> {
+        used(&self.elevations_used, self.elevations_deg.len(), spacing)
     }
 
     pub fn len(&self) -> u32 {
@@ -122,7 +127,7 @@ impl ViewGrid {
     pub fn blend(&self, azimuth: f32, elevation: f32, spacing: u32, blend: bool) -> SampleBlend {
         let azimuth = unwrap_around(&self.azimuths_deg, azimuth);
         let (a0, a1, ta) = bracket(&self.azimuths_deg, &self.azimuth_lines(spacing), azimuth);
-        let elevation_lines = every(self.elevations_deg.len(), spacing);
+        let elevation_lines = self.elevation_lines(spacing);
         let (e0, e1, te) = bracket(&self.elevations_deg, &elevation_lines, elevation);
         let mut samples: Vec<(u32, f32)> = Vec::with_capacity(4);
         for (i_el, we) in [(e0, 1.0 - te), (e1, te)] {
@@ -159,16 +164,32 @@ impl ViewGrid {
             span(&self.azimuths_deg, &self.azimuth_lines(spacing), azimuth),
             span(
                 &self.elevations_deg,
-                &every(self.elevations_deg.len(), spacing),
+                &self.elevation_lines(spacing),
                 elevation,
             ),
         )
     }
 }
 
-/// Every `spacing`-th of `n` lines.
-fn every(n: usize, spacing: u32) -> Vec<usize> {
-    (0..n).step_by(spacing.max(1) as usize).collect()
+/// `lines` below `n`, sorted and deduplicated; None when that leaves none.
+fn subset(lines: Option<&[u32]>, n: usize) -> Option<Vec<u32>> {
+    lines
+        .map(|l| {
+            let mut l: Vec<u32> = l.iter().copied().filter(|&i| (i as usize) < n).collect();
+            l.sort_unstable();
+            l.dedup();
+            l
+        })
+        .filter(|l| !l.is_empty())
+}
+
+/// Every `spacing`-th of the lines in use (`used`, or all `n`).
+fn used(used: &Option<Vec<u32>>, n: usize, spacing: u32) -> Vec<usize> {
+    let s = spacing.max(1) as usize;
+    match used {
+        Some(l) => l.iter().map(|&i| i as usize).step_by(s).collect(),
+        None => (0..n).step_by(s).collect(),
+    }
 }
 
 /// The spacing of the `used` lines around `x`.
@@ -225,6 +246,7 @@ mod tests {
             azimuths_deg: (0..100).map(|k| k as f32).collect(),
             elevations_deg: vec![0.0],
             azimuths_used: None,
+            elevations_used: None,
         }
     }
 
@@ -250,6 +272,7 @@ mod tests {
             azimuths_deg: vec![0.0, 4.0, 10.0],
             elevations_deg: vec![0.0, 15.0, 30.0],
             azimuths_used: None,
+            elevations_used: None,
         };
         assert_eq!(g.len(), 9);
         assert_eq!(g.coords(5), (2, 1));
@@ -263,6 +286,31 @@ mod tests {
         }
         let sum: f32 = b.samples.iter().map(|s| s.1).sum();
         assert!((sum - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn a_subset_of_rings_blends_across_the_rings_left_out() {
+        let g = ViewGrid {
+            azimuths_deg: vec![0.0, 4.0],
+            elevations_deg: vec![0.0, 5.0, 10.0, 15.0, 20.0],
+            azimuths_used: None,
+            elevations_used: None,
+        }
+        .with_elevations_used(Some(&[4, 0, 9]));
+        assert_eq!(g.elevations_used, Some(vec![0, 4]));
+        // On azimuth line 1 at 5°: a quarter of the way from ring 0 to 4.
+        let b = g.blend(4.0, 5.0, 1, true);
+        let w = |k| b.samples.iter().find(|s| s.0 == k).map_or(0.0, |s| s.1);
+        assert!((w(g.index(1, 0)) - 0.75).abs() < 1e-5, "{b:?}");
+        assert!((w(g.index(1, 4)) - 0.25).abs() < 1e-5, "{b:?}");
+        assert_eq!(b.samples.len(), 2);
+        assert_eq!(g.cell_size(4.0, 5.0, 1).1, 20.0);
+        // Every ring again.
+        let all = g.with_elevations_used(None);
+        assert_eq!(
+            all.blend(4.0, 5.0, 1, true),
+            SampleBlend::one(all.index(1, 1))
+        );
     }
 
     #[test]
@@ -283,6 +331,7 @@ mod tests {
             azimuths_deg: vec![5.0],
             elevations_deg: vec![0.0],
             azimuths_used: None,
+            elevations_used: None,
         };
         assert_eq!(single.blend(50.0, 3.0, 1, true), SampleBlend::one(0));
     }

@@ -67,3 +67,57 @@ fn bad_lines_name_the_field() {
         );
     }
 }
+
+const EVEN_RINGS: &str = "rings = 4\nring_step_deg = 10.0\n";
+
+/// The shipped `teapot_rings` scene with its even rings replaced by `rings`.
+fn with_rings(rings: &str) -> Result<Scene, SceneError> {
+    let text = super::shipped::shipped("teapot_rings").expect("shipped rings scene");
+    assert!(text.contains(EVEN_RINGS), "test bug: the rings changed");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("placed.toml");
+    std::fs::write(&path, text.replacen(EVEN_RINGS, rings, 1)).expect("write scene");
+    Scene::load(&path.to_string_lossy())
+}
+
+#[test]
+fn explicit_rings_load_as_the_grid_and_key_the_orbit() {
+    let s = with_rings("ring_elevations_deg = [0.0, 10.0, 25.0, 30.0]\n").expect("loads");
+    let o = &s.orbit;
+    assert_eq!((o.rings, o.sample_count()), (4, 16));
+    assert_eq!(o.ring_elevations(), [0.0, 10.0, 25.0, 30.0]);
+    assert_eq!(o.sample_angles(4 * 2 + 1), (o.angle_deg(1), 25.0));
+    assert_eq!(
+        ViewGrid::from_orbit(o).elevations_deg,
+        [0.0, 10.0, 25.0, 30.0]
+    );
+    // Ring 1 is the even scene's ring 1; ring 2 is not.
+    let even = Scene::load("teapot_rings").expect("teapot_rings");
+    let eye = |s: &Scene, k| s.orbit.sample_eye(k).expect("in range");
+    assert!(eye(&s, 5).abs_diff_eq(eye(&even, 5), 1e-6));
+    assert!(!eye(&s, 9).abs_diff_eq(eye(&even, 9), 1e-3));
+    let key = |s: &Scene| crate::trace::cache::scene_key(s);
+    assert_eq!(key(&s).changes(&key(&even)), ["orbit"]);
+    let same = with_rings(EVEN_RINGS).expect("loads");
+    assert_eq!(key(&same), key(&even));
+}
+
+#[test]
+fn bad_rings_name_the_field() {
+    for bad in [
+        "ring_elevations_deg = []\n",
+        "ring_elevations_deg = [5.0, 10.0]\n",
+        "ring_elevations_deg = [0.0, 10.0, 10.0]\n",
+        "ring_elevations_deg = [0.0, 20.0, 10.0]\n",
+        "ring_elevations_deg = [0.0, nan]\n",
+        "ring_elevations_deg = [0.0, 85.0]\n",
+        "ring_elevations_deg = [0.0, 10.0]\nrings = 2\n",
+        "ring_elevations_deg = [0.0, 10.0]\nring_step_deg = 10.0\n",
+    ] {
+        let e = with_rings(bad).expect_err(bad).to_string();
+        assert!(
+            e.contains("orbit.ring_elevations_deg") && e.contains("placed.toml"),
+            "{bad}: {e}"
+        );
+    }
+}

@@ -55,6 +55,11 @@ pub fn scene_key(scene: &Scene) -> Key {
                     h.str("azimuths");
                     lines.iter().for_each(|&a| h.f32(a));
                 }
+                // Explicit rings likewise (even rings keep their keys).
+                if let Some(rings) = &o.elevations {
+                    h.str("elevations");
+                    rings.iter().for_each(|&e| h.f32(e));
+                }
             }),
         )
         .with(

@@ -73,6 +73,7 @@ pub(super) fn scene(objects: Vec<(&str, Mesh, Material)>) -> Scene {
             rings: 1,
             ring_step_deg: 10.0,
             azimuths: None,
+            elevations: None,
         },
         lights: vec![],
         directional_lights: vec![],

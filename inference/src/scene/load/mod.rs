@@ -173,22 +173,13 @@ impl Loader<'_> {
     fn orbit(&self, file: &SceneFile) -> Result<Orbit, SceneError> {
         let o = &file.orbit;
         let lines = self.azimuth_lines(o)?;
-        if !(1..=MAX_RINGS).contains(&o.rings) || lines.samples * o.rings > MAX_SAMPLES {
+        let rings = self.ring_layout(o)?;
+        if lines.samples * rings.rings > MAX_SAMPLES {
             return Err(self.err(
                 "orbit.rings",
                 format!(
-                    "{} (expected 1 to {MAX_RINGS}, and samples × rings at most {MAX_SAMPLES})",
-                    o.rings
-                ),
-            ));
-        }
-        let top = (o.rings - 1) as f32 * o.ring_step_deg;
-        if o.rings > 1 && !(o.ring_step_deg > 0.0 && top <= MAX_RING_DEG) {
-            return Err(self.err(
-                "orbit.ring_step_deg",
-                format!(
-                    "{} (expected above 0, the top ring at most {MAX_RING_DEG}° above the orbit)",
-                    o.ring_step_deg
+                    "{} (expected samples × rings at most {MAX_SAMPLES})",
+                    rings.rings
                 ),
             ));
         }
@@ -199,9 +190,73 @@ impl Loader<'_> {
             start_deg: lines.start_deg,
             step_deg: lines.step_deg,
             samples: lines.samples,
-            rings: o.rings,
-            ring_step_deg: o.ring_step_deg,
+            rings: rings.rings,
+            ring_step_deg: rings.step_deg,
             azimuths: lines.azimuths,
+            elevations: rings.elevations,
+        })
+    }
+
+    /// The orbit's rings: even (`rings`, `ring_step_deg`) or explicit
+    /// (`ring_elevations_deg`: finite, increasing from 0), never both.
+    fn ring_layout(&self, o: &OrbitFile) -> Result<RingLayout, SceneError> {
+        let Some(list) = &o.ring_elevations_deg else {
+            let rings = o.rings.unwrap_or(1);
+            if !(1..=MAX_RINGS).contains(&rings) {
+                return Err(self.err(
+                    "orbit.rings",
+                    format!("{rings} (expected 1 to {MAX_RINGS})"),
+                ));
+            }
+            let step = o.ring_step_deg.unwrap_or(10.0);
+            let top = (rings - 1) as f32 * step;
+            if rings > 1 && !(step > 0.0 && top <= MAX_RING_DEG) {
+                return Err(self.err(
+                    "orbit.ring_step_deg",
+                    format!(
+                        "{step} (expected above 0, the top ring at most {MAX_RING_DEG}° above the orbit)"
+                    ),
+                ));
+            }
+            return Ok(RingLayout {
+                rings,
+                step_deg: step,
+                elevations: None,
+            });
+        };
+        if o.rings.is_some() || o.ring_step_deg.is_some() {
+            return Err(self.err(
+                "orbit.ring_elevations_deg",
+                "given with rings or ring_step_deg (expected either the explicit rings or the \
+                 even ones)"
+                    .to_string(),
+            ));
+        }
+        let n = list.len() as u32;
+        let increasing = list.windows(2).all(|w| w[0] < w[1]);
+        let in_range = list.first() == Some(&0.0) && list.iter().all(|e| *e <= MAX_RING_DEG);
+        if !(1..=MAX_RINGS).contains(&n)
+            || !list.iter().all(|e| e.is_finite())
+            || !increasing
+            || !in_range
+        {
+            return Err(self.err(
+                "orbit.ring_elevations_deg",
+                format!(
+                    "{} rings (expected 1 to {MAX_RINGS} finite elevations in degrees, the first \
+                     0, each above the one before, the last at most {MAX_RING_DEG})",
+                    list.len()
+                ),
+            ));
+        }
+        Ok(RingLayout {
+            rings: n,
+            step_deg: if n > 1 {
+                list[list.len() - 1] / (n - 1) as f32
+            } else {
+                10.0
+            },
+            elevations: Some(list.clone()),
         })
     }
 
@@ -283,6 +338,13 @@ impl Loader<'_> {
         }
         Ok((min, max))
     }
+}
+
+/// An orbit's rings as the loader found them.
+struct RingLayout {
+    rings: u32,
+    step_deg: f32,
+    elevations: Option<Vec<f32>>,
 }
 
 /// An orbit's azimuth lines as the loader found them.
