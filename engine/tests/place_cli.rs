@@ -177,7 +177,7 @@ fn a_2d_viewpoint_space_is_refused_before_anything_compiles() {
     let log = output_text(&o);
     assert!(!o.status.success(), "{log}");
     assert!(
-        log.contains("rings = 4") && log.contains("1D orbit"),
+        log.contains("4 rings") && log.contains("1D orbit") && log.contains("--rings"),
         "{log}"
     );
     assert!(
@@ -211,4 +211,88 @@ fn a_budget_below_the_start_lines_is_refused_before_anything_compiles() {
         !data.join("trace").exists() && !data.join("infer").exists(),
         "{log}"
     );
+}
+
+/// `--rings` on a 2D grid of 2 azimuth lines × 5 rings 5° apart: it places
+/// rings, each with both lines, scoring the views half way between dense
+/// rings on every line, within a budget of samples (6 = 3 rings), and
+/// writes `ring_elevations_deg`.
+#[test]
+fn rings_are_placed_with_every_azimuth_line() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let tiny = tiny_scene(dir.path());
+    let text = std::fs::read_to_string(&tiny).expect("tiny scene");
+    let dense = dir.path().join("rings.toml");
+    let rings = "samples = 2\nrings = 5\nring_step_deg = 5.0";
+    std::fs::write(&dense, text.replacen("samples = 3", rings, 1)).expect("write");
+    let (data, out) = (dir.path().join("data"), dir.path().join("place"));
+    let args = [
+        "place",
+        "--rings",
+        "--scene",
+        s(&dense),
+        "--size",
+        "64x48",
+        "--data",
+        s(&data),
+        "--out",
+        s(&out),
+        "--start",
+        "2",
+        "--max-samples",
+        "7",
+        "--target-db",
+        "99",
+        "--spp",
+        "4",
+        "--validate",
+    ];
+    let o = run_engine(&args);
+    let log = output_text(&o);
+    assert!(
+        o.status.success() && log.contains("validation messages: 0"),
+        "{log}"
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("placement.json")).expect("json"))
+            .expect("JSON");
+    assert_eq!(
+        (&report["axis"], &report["stop"]),
+        (&serde_json::json!("rings"), &serde_json::json!("budget")),
+        "{report}"
+    );
+    let placed = &report["placed"];
+    assert_eq!(placed["lines"], serde_json::json!([0, 2, 4]), "{report}");
+    assert_eq!(placed["samples"], 6, "{report}");
+    assert_eq!(
+        placed["elevations_deg"],
+        serde_json::json!([0.0, 10.0, 20.0])
+    );
+    assert_eq!(
+        placed["probes_deg"],
+        serde_json::json!([7.5, 17.5]),
+        "{report}"
+    );
+    let probes: Vec<u64> = report["measured"]
+        .as_array()
+        .expect("measured")
+        .iter()
+        .filter_map(|m| m["probe"].as_u64())
+        .collect();
+    assert_eq!(probes, [2, 1, 3], "{report}");
+    let scene = out.join("teapot_placed.toml");
+    let text = std::fs::read_to_string(&scene).expect("placed scene written");
+    assert!(
+        text.contains("ring_elevations_deg = [0.0, 10.0, 20.0]")
+            && !text
+                .lines()
+                .any(|l| l.starts_with("ring_step_deg") || l.starts_with("rings")),
+        "{text}"
+    );
+    let placed = inference::scene::Scene::load(s(&scene)).expect("placed scene loads");
+    assert_eq!(placed.orbit.sample_count(), 6);
+    // A 1D orbit is refused with --rings, naming the file and the fix.
+    let o = run_engine(&["place", "--rings", "--scene", s(&tiny), "--data", s(&data)]);
+    let log = output_text(&o);
+    assert!(!o.status.success() && log.contains("one ring"), "{log}");
 }

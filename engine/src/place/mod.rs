@@ -1,4 +1,6 @@
-//! `engine place`: how many viewpoint samples a 1D orbit needs, and where.
+//! `engine place`: how many viewpoint samples a scene needs, and where:
+//! the azimuth lines of a 1D orbit, or (`--rings`) the elevation rings of
+//! a 2D one, each ring with every azimuth line.
 //! On a dense compile (every line inferred), each candidate interval is
 //! scored by playing a held-out view near its middle ([`probe_azimuth`])
 //! blended from its two ends only, against the traced view there;
@@ -7,9 +9,11 @@
 //! placement with as many samples, so the report compares the two on
 //! equal terms.
 
+mod axis;
 pub mod plan;
 mod report;
 
+pub use axis::Axis;
 pub use plan::{Interval, Plan, PlanOptions, Stop};
 pub use report::PlaceReport;
 
@@ -39,6 +43,8 @@ pub struct PlaceOptions {
     pub start: u32,
     /// Samples per pixel of the traced views.
     pub spp: u32,
+    /// Which lines to place.
+    pub axis: Axis,
 }
 
 /// Places the samples of `place`'s scene (compiled there densely first if
@@ -50,18 +56,12 @@ pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
         mut renderer,
         ..
     } = Session::open(place)?;
-    if scene.orbit.rings > 1 {
-        bail!(
-            "{}: [orbit] rings = {}: `engine place` places the azimuth lines of a 1D orbit \
-             (rings = 1)",
-            scene.source.display(),
-            scene.orbit.rings
-        );
-    }
+    opts.axis.check(&scene)?;
+    let per_line = opts.axis.samples_per_line(&scene.orbit);
     let mut plan_opts = PlanOptions {
-        lines: scene.orbit.samples,
+        lines: opts.axis.lines(&scene.orbit),
         start: opts.start,
-        max_samples: opts.max_samples,
+        max_samples: opts.max_samples / per_line,
         target_db: opts.target_db,
     };
     plan_opts
@@ -87,7 +87,7 @@ pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
     };
     let bytes = Bytes::of(&renderer, &scene, opts.max_bytes)?;
     if let Some(b) = &bytes {
-        b.limit(&mut plan_opts)?;
+        b.limit(&mut plan_opts, per_line)?;
     }
     let references = References::new(&scene, &out.join("reference"), settings)?;
     let progress = spinner();
@@ -100,9 +100,13 @@ pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
         reflector: &reflector,
     };
     let mut seen = BTreeMap::new();
+    let noun = opts.axis.noun();
     let mut measure = |from, to, at| {
-        progress.set_message(format!("lines {from}..{to}: view at line {at}"));
-        let db = probe.score(from, to, at);
+        progress.set_message(format!("{noun} {from}..{to}: views past {at}"));
+        let db = match opts.axis {
+            Axis::Azimuth => probe.score(from, to, at),
+            Axis::Rings => probe.score_rings(from, to, at),
+        };
         progress.inc(1);
         db
     };
@@ -138,7 +142,7 @@ impl Bytes {
                 scene.name
             );
         };
-        let lines = scene.orbit.samples;
+        let lines = scene.orbit.sample_count();
         Ok(Some(Bytes {
             max,
             per_sample: dense as f64 / f64::from(lines.max(1)),
@@ -146,10 +150,10 @@ impl Bytes {
         }))
     }
 
-    /// Caps `plan`'s budget at the samples that fit; an error naming what
-    /// fits when that is below the start lines.
-    fn limit(&self, plan: &mut PlanOptions) -> Result<()> {
-        plan.max_samples = plan.max_samples.min(self.samples);
+    /// Caps `plan`'s budget at the lines (of `per_line` samples each) that
+    /// fit; an error naming what fits when that is below the start lines.
+    fn limit(&self, plan: &mut PlanOptions, per_line: u32) -> Result<()> {
+        plan.max_samples = plan.max_samples.min(self.samples / per_line.max(1));
         plan.validate().with_context(|| {
             format!(
                 "--max-bytes {}: the dense container holds {:.0} B a sample, so {} fit",
@@ -178,18 +182,28 @@ fn placed_scene(
     report: &PlaceReport,
     out: &std::path::Path,
 ) -> String {
-    use inference::scene::placed::{with_azimuths, with_neighbour_deg};
-    let lines = &report.placed.azimuths_deg;
+    use inference::scene::placed::{with_azimuths, with_neighbour_deg, with_rings};
+    type Rewrite = fn(&str, &str, &[f32], &str) -> Option<String>;
+    let (key, lines, rewrite): (_, _, Rewrite) = match report.axis {
+        Axis::Azimuth => ("azimuths_deg", &report.placed.azimuths_deg, with_azimuths),
+        Axis::Rings => (
+            "ring_elevations_deg",
+            &report.placed.elevations_deg,
+            with_rings,
+        ),
+    };
     let name = format!("{}_placed", report.scene);
     let path = out.join(format!("{name}.toml"));
     let note = format!("placed by `engine place`: {}", report.reason);
-    let stacks_samples = dense
-        .objects
-        .iter()
-        .any(|o| o.neighbour_weight() > 0.0 && o.neighbour_deg().is_none());
+    // (Stacked neighbours are azimuth neighbours, which placing rings keeps.)
+    let stacks_samples = report.axis == Axis::Azimuth
+        && dense
+            .objects
+            .iter()
+            .any(|o| o.neighbour_weight() > 0.0 && o.neighbour_deg().is_none());
     let written = (|| -> Result<()> {
         let (text, _) = Scene::text(scene_arg)?;
-        let Some(mut text) = with_azimuths(&text, &name, lines, &note) else {
+        let Some(mut text) = rewrite(&text, &name, lines, &note) else {
             bail!("the scene file has no [orbit] table or no top-level name line to rewrite");
         };
         if stacks_samples {
@@ -206,8 +220,9 @@ fn placed_scene(
             path.display()
         ),
         Err(e) => format!(
-            "no placed scene file ({e:#}); put `azimuths_deg = {lines:?}` in [orbit] instead of \
-             start_deg, step_deg and samples\n"
+            "no placed scene file ({e:#}); put `{key} = {lines:?}` in [orbit] instead of its \
+             even {}\n",
+            report.axis.noun()
         ),
     }
 }
@@ -244,24 +259,43 @@ impl Probe<'_, '_> {
     /// Reflector PSNR (as `engine eval` scores it) of the frame at
     /// [`probe_azimuth`]`(at)` blended from lines `from` and `to` alone.
     fn score(&mut self, from: u32, to: u32, at: u32) -> Result<f64> {
-        let orbit = &self.scene.orbit;
-        let azimuth = probe_azimuth(orbit, at);
-        let reference = self
-            .references
-            .get(View::on_orbit(azimuth), self.reflector)?;
+        let view = View::on_orbit(probe_azimuth(&self.scene.orbit, at));
         self.renderer.use_azimuth_lines(Some(&[from, to]));
-        let eye = orbit.eye(azimuth, 0.0);
-        // The first frame brings the two samples' maps in; the second is scored.
+        let db = self.score_view(view);
+        self.renderer.use_azimuth_lines(None);
+        db
+    }
+
+    /// The mean reflector PSNR of the views half way between rings `at`
+    /// and `at + 1`, one on each azimuth line (so only the rings blend),
+    /// blended from rings `from` and `to` alone.
+    fn score_rings(&mut self, from: u32, to: u32, at: u32) -> Result<f64> {
+        let scene = self.scene;
+        let elevation = Axis::Rings.probe_deg(&scene.orbit, at);
+        self.renderer.use_rings(Some(&[from, to]));
+        let scores: Result<Vec<f64>> = (0..scene.orbit.samples)
+            .map(|line| self.score_view(View::new(scene.orbit.angle_deg(line), elevation)))
+            .collect();
+        self.renderer.use_rings(None);
+        let scores = scores?;
+        Ok(scores.iter().sum::<f64>() / scores.len().max(1) as f64)
+    }
+
+    /// Reflector PSNR of the frame at `view` with the blend as set.
+    fn score_view(&mut self, view: View) -> Result<f64> {
+        let reference = self.references.get(view, self.reflector)?;
+        let eye = view.eye(self.scene);
+        // The first frame brings the samples' maps in; the second is scored.
         self.source.frame(self.renderer, self.scene, eye)?;
         self.renderer.settle();
         let pixels = self.source.frame(self.renderer, self.scene, eye)?.1;
-        self.renderer.use_azimuth_lines(None);
         let (width, height) = self.renderer.size();
-        let mask = &reference.mask;
-        match metrics::masked_psnr(&reference.beauty, &pixels, mask)? {
+        match metrics::masked_psnr(&reference.beauty, &pixels, &reference.mask)? {
             Some(db) => Ok(db),
             None => bail!(
-                "view at azimuth {azimuth}° (line {at}): {} covers no pixel at {width}x{height}",
+                "view at azimuth {}°, elevation {}°: {} covers no pixel at {width}x{height}",
+                view.azimuth_deg,
+                view.elevation_deg,
                 self.reflector
             ),
         }

@@ -1,7 +1,7 @@
 //! What `engine place` found, as placement.json, placement.png and text.
 
 use super::plan::{Interval, Plan, Stop, worst};
-use super::{Bytes, PlaceOptions};
+use super::{Axis, Bytes, PlaceOptions};
 use crate::eval::plot::{ChartSpec, LegendPosition, Series, xy_chart};
 use crate::util::stats::median;
 use anyhow::Result;
@@ -12,24 +12,37 @@ use std::time::Duration;
 /// One placement's lines and the scores of its intervals' middles.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Placement {
+    /// Viewpoint samples (lines × the samples each line holds).
     pub samples: u32,
+    /// The placed lines (azimuth lines, or rings with `--rings`).
     pub lines: Vec<u32>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub azimuths_deg: Vec<f32>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub elevations_deg: Vec<f32>,
     /// Lowest and median interval score, dB (reflector PSNR at each
     /// interval's held-out view).
     pub worst_db: f64,
     pub median_db: f64,
     pub intervals: Vec<Interval>,
-    /// Azimuth of each interval's scored view, degrees.
+    /// Azimuth (elevation with `--rings`) of each interval's scored
+    /// view(s), degrees.
     pub probes_deg: Vec<f32>,
 }
 
 impl Placement {
-    fn new(scene: &Scene, lines: Vec<u32>, intervals: Vec<Interval>) -> Placement {
+    fn new(scene: &Scene, axis: Axis, lines: Vec<u32>, intervals: Vec<Interval>) -> Placement {
         let scores: Vec<f64> = intervals.iter().map(|i| i.psnr_db).collect();
+        let o = &scene.orbit;
+        let positions: Vec<f32> = lines.iter().map(|&l| axis.position_deg(o, l)).collect();
+        let (azimuths_deg, elevations_deg) = match axis {
+            Axis::Azimuth => (positions, Vec::new()),
+            Axis::Rings => (Vec::new(), positions),
+        };
         Placement {
-            samples: lines.len() as u32,
-            azimuths_deg: lines.iter().map(|&l| scene.orbit.angle_deg(l)).collect(),
+            samples: lines.len() as u32 * axis.samples_per_line(o),
+            azimuths_deg,
+            elevations_deg,
             lines,
             worst_db: worst(&intervals),
             median_db: if scores.is_empty() {
@@ -39,7 +52,7 @@ impl Placement {
             },
             probes_deg: intervals
                 .iter()
-                .map(|i| super::probe_azimuth(&scene.orbit, i.probe))
+                .map(|i| axis.probe_deg(o, i.probe))
                 .collect(),
             intervals,
         }
@@ -50,7 +63,9 @@ impl Placement {
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct PlaceReport {
     pub scene: String,
-    /// Lines of the dense compile the samples were chosen from.
+    /// What was placed: azimuth lines or rings.
+    pub axis: Axis,
+    /// Samples of the dense compile the placement was chosen from.
     pub dense_samples: u32,
     pub target_db: f64,
     pub max_samples: u32,
@@ -85,11 +100,14 @@ impl PlaceReport {
         even: Vec<Interval>,
         took: Duration,
     ) -> PlaceReport {
-        let placed = Placement::new(scene, plan.lines, plan.intervals);
+        let axis = opts.axis;
+        let placed = Placement::new(scene, axis, plan.lines, plan.intervals);
         let reason = match plan.stop {
             Stop::TargetMet => format!(
                 "every interval's middle reaches {} dB with {} of {} samples",
-                opts.target_db, placed.samples, scene.orbit.samples
+                opts.target_db,
+                placed.samples,
+                scene.orbit.sample_count()
             ),
             Stop::Budget => format!(
                 "the budget of {} samples{} is spent; the worst interval ({:.2} dB) is below {} dB",
@@ -109,7 +127,8 @@ impl PlaceReport {
             bytes.map(|b| (b.per_sample * f64::from(placed.samples)).round() as u64);
         PlaceReport {
             scene: scene.name.clone(),
-            dense_samples: scene.orbit.samples,
+            axis,
+            dense_samples: scene.orbit.sample_count(),
             target_db: opts.target_db,
             max_samples: opts.max_samples,
             max_bytes: bytes,
@@ -118,7 +137,7 @@ impl PlaceReport {
             spp: opts.spp,
             stop: plan.stop,
             reason,
-            even: Placement::new(scene, even_lines, even),
+            even: Placement::new(scene, axis, even_lines, even),
             placed,
             measured: plan.measured,
             minutes: took.as_secs_f64() / 60.0,
@@ -143,9 +162,13 @@ impl PlaceReport {
             labels: Vec::new(),
             connect: true,
         };
+        let x = match self.axis {
+            Axis::Azimuth => "azimuth of the held-out view between samples (degrees)",
+            Axis::Rings => "elevation of the held-out views between rings (degrees)",
+        };
         let mut spec = ChartSpec::new(
             &format!("Where {} needs its samples", self.scene),
-            "azimuth of the held-out view between samples (degrees)",
+            x,
             "reflector PSNR between samples (dB)",
         );
         spec.legend = LegendPosition::LowerLeft;
@@ -170,7 +193,7 @@ impl PlaceReport {
         format!(
             "{}: {} samples placed of {} ({}): worst {:.2} dB, median {:.2} dB between samples \
              (held-out views); an even placement of {} samples: worst {:.2} dB, median {:.2} dB\n\
-             lines {:?}{}\n{} intervals measured in {:.1} min; wrote {} and {}\n",
+             {} {:?}{}\n{} intervals measured in {:.1} min; wrote {} and {}\n",
             self.scene,
             p.samples,
             self.dense_samples,
@@ -180,6 +203,7 @@ impl PlaceReport {
             e.samples,
             e.worst_db,
             e.median_db,
+            self.axis.noun(),
             p.lines,
             match self.estimated_bytes {
                 Some(b) => format!(" (~{b} B of container)"),

@@ -7,11 +7,36 @@
 
 /// Keys of `[orbit]` that say where its azimuth lines are.
 const LINE_KEYS: [&str; 4] = ["start_deg", "step_deg", "samples", "azimuths_deg"];
+/// Keys of `[orbit]` that say where its rings are.
+const RING_KEYS: [&str; 3] = ["rings", "ring_step_deg", "ring_elevations_deg"];
 
 /// `text` with `[orbit]`'s lines at `azimuths_deg` and the scene named
 /// `name`; `None` when the text has no `[orbit]` table or no top-level
 /// `name` line to rewrite.
 pub fn with_azimuths(text: &str, name: &str, azimuths_deg: &[f32], note: &str) -> Option<String> {
+    with_orbit_list(text, name, (&LINE_KEYS, "azimuths_deg"), azimuths_deg, note)
+}
+
+/// The same for the rings: `[orbit]`'s rings at `elevations_deg`
+/// (`ring_elevations_deg`), its azimuth lines kept.
+pub fn with_rings(text: &str, name: &str, elevations_deg: &[f32], note: &str) -> Option<String> {
+    with_orbit_list(
+        text,
+        name,
+        (&RING_KEYS, "ring_elevations_deg"),
+        elevations_deg,
+        note,
+    )
+}
+
+/// `text` with the `[orbit]` keys `keys` replaced by one line `key = values`.
+fn with_orbit_list(
+    text: &str,
+    name: &str,
+    (keys, key_out): (&[&str], &str),
+    values: &[f32],
+    note: &str,
+) -> Option<String> {
     let mut out = Vec::new();
     let (mut table, mut found_orbit, mut found_name) = (String::new(), false, false);
     for line in text.lines() {
@@ -26,9 +51,9 @@ pub fn with_azimuths(text: &str, name: &str, azimuths_deg: &[f32], note: &str) -
             out.push(line.to_owned());
             if trimmed.starts_with("[orbit]") {
                 found_orbit = true;
-                let list: Vec<String> = azimuths_deg.iter().map(|a| format!("{a:?}")).collect();
+                let list: Vec<String> = values.iter().map(|a| format!("{a:?}")).collect();
                 out.push(format!("# {note}"));
-                out.push(format!("azimuths_deg = [{}]", list.join(", ")));
+                out.push(format!("{key_out} = [{}]", list.join(", ")));
             }
             continue;
         }
@@ -36,7 +61,7 @@ pub fn with_azimuths(text: &str, name: &str, azimuths_deg: &[f32], note: &str) -
         if table.is_empty() && key == "name" {
             found_name = true;
             out.push(format!("name = {name:?}"));
-        } else if !(table == "orbit" && LINE_KEYS.contains(&key)) {
+        } else if !(table == "orbit" && keys.contains(&key)) {
             out.push(line.to_owned());
         }
     }
@@ -94,6 +119,23 @@ mod tests {
         let again = with_azimuths(&placed, "teapot_placed", &[0.0, 99.0], "again").expect("again");
         let s = Scene::from_toml(&again, Path::new("t.toml")).expect("loads");
         assert_eq!(s.orbit.samples, 2);
+    }
+
+    #[test]
+    fn placed_rings_replace_the_even_ones_and_keep_the_lines() {
+        let text = crate::scene::shipped::shipped("teapot_rings").expect("teapot_rings");
+        let rings = [0.0, 15.0, 25.0, 30.0];
+        let placed =
+            with_rings(text, "rings_placed", &rings, "placed: 4 rings").expect("rewritten");
+        let s = Scene::from_toml(&placed, Path::new("rings_placed.toml")).expect("loads");
+        assert_eq!(s.orbit.ring_elevations(), rings);
+        let original = Scene::load("teapot_rings").expect("teapot_rings");
+        assert_eq!(s.orbit.samples, original.orbit.samples);
+        assert_eq!(s.orbit.angle_deg(3), original.orbit.angle_deg(3));
+        assert!(!placed.contains("ring_step_deg") && placed.contains("# placed: 4 rings"));
+        let again = with_rings(&placed, "rings_placed", &[0.0, 30.0], "again").expect("again");
+        let s = Scene::from_toml(&again, Path::new("t.toml")).expect("loads");
+        assert_eq!(s.orbit.rings, 2);
     }
 
     #[test]

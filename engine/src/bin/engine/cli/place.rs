@@ -6,8 +6,8 @@ use std::path::PathBuf;
 
 #[derive(Args, Debug, Clone)]
 pub struct PlaceArgs {
-    /// A built-in scene's name (teapot) or the path of a .toml scene file
-    /// with a 1D orbit; its samples are the dense lines placement chooses from.
+    /// A built-in scene's name (teapot) or the path of a .toml scene file;
+    /// its samples are the dense lines placement chooses from.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
     /// Where the scene's dense compile lives (compiled there if missing) [default: out/<scene>].
@@ -26,7 +26,11 @@ pub struct PlaceArgs {
     /// bytes per sample (the codec codes at a fixed ratio) [default: no limit].
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     pub max_bytes: Option<u64>,
-    /// Samples placed evenly before measuring, both ends included.
+    /// Place the elevation rings of a scene with rings (every ring keeps
+    /// all its azimuth lines) instead of the azimuth lines of a 1D orbit.
+    #[arg(long)]
+    pub rings: bool,
+    /// Lines (or rings) placed evenly before measuring, both ends included.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(2..))]
     pub start: u32,
     /// Samples per pixel of the traced views (as `engine eval --spp`).

@@ -1,9 +1,10 @@
-//! `engine place`: where a 1D orbit needs its viewpoint samples.
+//! `engine place`: where a scene needs its viewpoint samples (azimuth
+//! lines, or rings with `--rings`).
 
 use crate::cli::{PlaceArgs, device};
 use anyhow::Result;
 use engine::options::RunPlace;
-use engine::place::{PlaceOptions, place};
+use engine::place::{Axis, PlaceOptions, place};
 
 pub fn run(args: &PlaceArgs) -> Result<String> {
     let run = RunPlace {
@@ -20,6 +21,11 @@ pub fn run(args: &PlaceArgs) -> Result<String> {
         max_bytes: args.max_bytes,
         start: args.start,
         spp: args.spp,
+        axis: if args.rings {
+            Axis::Rings
+        } else {
+            Axis::Azimuth
+        },
     };
     place(&run, &opts)
 }
