@@ -295,4 +295,20 @@ fn rings_are_placed_with_every_azimuth_line() {
     let o = run_engine(&["place", "--rings", "--scene", s(&tiny), "--data", s(&data)]);
     let log = output_text(&o);
     assert!(!o.status.success() && log.contains("one ring"), "{log}");
+    // Starting from every dense ring leaves nothing to place.
+    let o = run_engine(&[
+        "place",
+        "--rings",
+        "--scene",
+        s(&dense),
+        "--data",
+        s(&data),
+        "--start",
+        "5",
+    ]);
+    let log = output_text(&o);
+    assert!(
+        !o.status.success() && log.contains("--start 5 places all 5 dense rings"),
+        "{log}"
+    );
 }

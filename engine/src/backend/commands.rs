@@ -65,7 +65,9 @@ impl Commands {
         let cmd_infos = [vk::CommandBufferSubmitInfo::default().command_buffer(self.cmd)];
         let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmd_infos)];
         // SAFETY: the buffer is in the recording state (from `begin`); the
-        // fence is unsignalled (reset after every wait).
+        // fence is unsignalled (reset after every wait); the queue is only
+        // used from this thread, as vkDeviceWaitIdle's external
+        // synchronization requires.
         unsafe {
             let d = &self.device.device;
             d.end_command_buffer(self.cmd).vk("vkEndCommandBuffer")?;

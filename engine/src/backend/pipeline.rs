@@ -211,8 +211,10 @@ impl Pipeline {
     /// Points `set` (allocated by this pipeline) at `resources`.
     ///
     /// # Safety
-    /// No pending command buffer may use `set` (the engine waits for every
-    /// submission, so between frames none does).
+    /// `set` was allocated by this pipeline (its layout), `resources` match
+    /// its bindings in number and kind, and no pending command buffer uses
+    /// `set` (the engine waits for every submission, so between frames
+    /// none does).
     pub unsafe fn rewrite_set(&self, set: vk::DescriptorSet, resources: &[Binding]) {
         let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = resources
             .iter()

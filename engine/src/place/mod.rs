@@ -64,9 +64,26 @@ pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
         max_samples: opts.max_samples / per_line,
         target_db: opts.target_db,
     };
-    plan_opts
-        .validate()
-        .with_context(|| format!("{}: [orbit]", scene.source.display()))?;
+    let noun = opts.axis.noun();
+    plan_opts.validate().with_context(|| match opts.axis {
+        Axis::Azimuth => format!("{}: [orbit]", scene.source.display()),
+        Axis::Rings => format!(
+            "{}: --rings: a ring is {per_line} samples, so --max-samples {} buys {} rings",
+            scene.source.display(),
+            opts.max_samples,
+            plan_opts.max_samples
+        ),
+    })?;
+    if plan_opts.start >= plan_opts.lines {
+        bail!(
+            "{}: --start {} places all {} dense {noun}: nothing is left to choose (expected \
+             --start below {}, e.g. 2)",
+            scene.source.display(),
+            plan_opts.start,
+            plan_opts.lines,
+            plan_opts.lines
+        );
+    }
     let out = opts.out.clone().unwrap_or_else(|| data.join("place"));
     crate::util::files::claim_dir(&out)?;
     let reflector = crate::eval::reflector_name(&scene)?;
@@ -100,7 +117,6 @@ pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
         reflector: &reflector,
     };
     let mut seen = BTreeMap::new();
-    let noun = opts.axis.noun();
     let mut measure = |from, to, at| {
         progress.set_message(format!("{noun} {from}..{to}: views past {at}"));
         let db = match opts.axis {
@@ -153,16 +169,20 @@ impl Bytes {
     /// Caps `plan`'s budget at the lines (of `per_line` samples each) that
     /// fit; an error naming what fits when that is below the start lines.
     fn limit(&self, plan: &mut PlanOptions, per_line: u32) -> Result<()> {
-        plan.max_samples = plan.max_samples.min(self.samples / per_line.max(1));
+        let per_line = per_line.max(1);
+        plan.max_samples = plan.max_samples.min(self.samples / per_line);
         plan.validate().with_context(|| {
+            let fit = match self.samples {
+                1 => "1 sample".to_string(),
+                n => format!("{n} samples"),
+            };
+            let rings = match per_line {
+                1 => String::new(),
+                n => format!(" ({} rings of {n})", self.samples / n),
+            };
             format!(
-                "--max-bytes {}: the dense container holds {:.0} B a sample, so {} fit",
-                self.max,
-                self.per_sample,
-                match self.samples {
-                    1 => "1 sample".to_string(),
-                    n => format!("{n} samples"),
-                }
+                "--max-bytes {}: the dense container holds {:.0} B a sample, so {fit}{rings} fit",
+                self.max, self.per_sample,
             )
         })
     }
@@ -266,9 +286,10 @@ impl Probe<'_, '_> {
         db
     }
 
-    /// The mean reflector PSNR of the views half way between rings `at`
+    /// The lowest reflector PSNR of the views half way between rings `at`
     /// and `at + 1`, one on each azimuth line (so only the rings blend),
-    /// blended from rings `from` and `to` alone.
+    /// blended from rings `from` and `to` alone: "every interval reaches
+    /// the target" then holds for every view scored.
     fn score_rings(&mut self, from: u32, to: u32, at: u32) -> Result<f64> {
         let scene = self.scene;
         let elevation = Axis::Rings.probe_deg(&scene.orbit, at);
@@ -277,8 +298,7 @@ impl Probe<'_, '_> {
             .map(|line| self.score_view(View::new(scene.orbit.angle_deg(line), elevation)))
             .collect();
         self.renderer.use_rings(None);
-        let scores = scores?;
-        Ok(scores.iter().sum::<f64>() / scores.len().max(1) as f64)
+        Ok(scores?.into_iter().fold(f64::INFINITY, f64::min))
     }
 
     /// Reflector PSNR of the frame at `view` with the blend as set.

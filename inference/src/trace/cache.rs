@@ -55,8 +55,9 @@ pub fn scene_key(scene: &Scene) -> Key {
                     h.str("azimuths");
                     lines.iter().for_each(|&a| h.f32(a));
                 }
-                // Explicit rings likewise (even rings keep their keys).
-                if let Some(rings) = &o.elevations {
+                // Explicit rings likewise (even rings keep their keys;
+                // one ring at 0° is the 1D orbit).
+                if let (Some(rings), true) = (&o.elevations, o.rings > 1) {
                     h.str("elevations");
                     rings.iter().for_each(|&e| h.f32(e));
                 }

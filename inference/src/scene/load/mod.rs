@@ -175,8 +175,12 @@ impl Loader<'_> {
         let lines = self.azimuth_lines(o)?;
         let rings = self.ring_layout(o)?;
         if lines.samples * rings.rings > MAX_SAMPLES {
+            let field = match rings.elevations {
+                Some(_) => "orbit.ring_elevations_deg",
+                None => "orbit.rings",
+            };
             return Err(self.err(
-                "orbit.rings",
+                field,
                 format!(
                     "{} (expected samples × rings at most {MAX_SAMPLES})",
                     rings.rings
@@ -243,9 +247,8 @@ impl Loader<'_> {
             return Err(self.err(
                 "orbit.ring_elevations_deg",
                 format!(
-                    "{} rings (expected 1 to {MAX_RINGS} finite elevations in degrees, the first \
-                     0, each above the one before, the last at most {MAX_RING_DEG})",
-                    list.len()
+                    "{list:?} (expected 1 to {MAX_RINGS} finite elevations in degrees, the first \
+                     0, each above the one before, the last at most {MAX_RING_DEG})"
                 ),
             ));
         }
