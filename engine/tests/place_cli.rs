@@ -40,6 +40,8 @@ fn placement_splits_the_worst_interval_and_its_scene_plays() {
         "3",
         "--max-bytes",
         "1000000000000",
+        "--max-minutes",
+        "100000",
         "--target-db",
         "99",
         "--spp",
@@ -86,6 +88,7 @@ fn placement_splits_the_worst_interval_and_its_scene_plays() {
     );
     assert!(out.join("placement.png").is_file());
     assert_byte_budget(&report, &dense, &data);
+    assert_minutes_budget(&report, &dense, &data);
     assert_placed_scene_plays(&out.join("teapot_placed.toml"), &dir.path().join("play"));
 }
 
@@ -104,7 +107,19 @@ fn assert_byte_budget(report: &serde_json::Value, dense: &Path, data: &Path) {
         "{report}"
     );
     let small = ((per_sample * 1.5) as u64).to_string();
-    let out = data.join("small_budget");
+    assert_refused(
+        dense,
+        data,
+        "--max-bytes",
+        &small,
+        "B a sample, so 1 sample fit",
+    );
+}
+
+/// `engine place` with `option value` is refused, the log naming both and
+/// `expected`, no placement written.
+fn assert_refused(dense: &Path, data: &Path, option: &str, value: &str, expected: &str) {
+    let out = data.join(format!("refused{option}"));
     let o = run_engine(&[
         "place",
         "--scene",
@@ -117,18 +132,36 @@ fn assert_byte_budget(report: &serde_json::Value, dense: &Path, data: &Path) {
         s(&out),
         "--start",
         "2",
-        "--max-bytes",
-        &small,
+        option,
+        value,
         "--spp",
         "4",
     ]);
     let log = output_text(&o);
     assert!(!o.status.success(), "{log}");
     assert!(
-        log.contains(&format!("--max-bytes {small}")) && log.contains("so 1 sample fit"),
+        log.contains(&format!("{option} {value}")) && log.contains(expected),
         "{log}"
     );
     assert!(!out.join("placement.json").exists(), "{log}");
+}
+
+/// The compile-minutes budget the same way, from the dense compile's
+/// records: the estimate is the minutes per sample times 3, and a budget
+/// of 1.5 samples' minutes is refused naming what fits.
+fn assert_minutes_budget(report: &serde_json::Value, dense: &Path, data: &Path) {
+    let per_sample = num(&report["max_minutes"]["per_sample"]);
+    assert!(per_sample > 0.0 && per_sample.is_finite(), "{report}");
+    let estimated = num(&report["estimated_minutes"]);
+    assert!((estimated - per_sample * 3.0).abs() < 1e-9, "{report}");
+    let small = format!("{}", per_sample * 1.5);
+    assert_refused(
+        dense,
+        data,
+        "--max-minutes",
+        &small,
+        "min a sample, so 1 sample fit",
+    );
 }
 
 /// The placed scene compiles its 3 samples only (eyes at dense lines 0, 2

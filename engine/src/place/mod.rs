@@ -10,10 +10,12 @@
 //! equal terms.
 
 mod axis;
+mod budget;
 pub mod plan;
 mod report;
 
 pub use axis::Axis;
+pub use budget::{Budget, Cost};
 pub use plan::{Interval, Plan, PlanOptions, Stop};
 pub use report::PlaceReport;
 
@@ -40,6 +42,9 @@ pub struct PlaceOptions {
     /// At most this many container bytes, estimated from the dense
     /// container's bytes per sample ([`plan::samples_within_bytes`]).
     pub max_bytes: Option<u64>,
+    /// At most this many minutes of compile, estimated from the dense
+    /// compile's recorded minutes per sample.
+    pub max_minutes: Option<f64>,
     pub start: u32,
     /// Samples per pixel of the traced views.
     pub spp: u32,
@@ -102,8 +107,14 @@ pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
         progress: false,
         ..TraceSettings::default()
     };
-    let bytes = Bytes::of(&renderer, &scene, opts.max_bytes)?;
-    if let Some(b) = &bytes {
+    let bytes = Budget::of(
+        Cost::Bytes,
+        opts.max_bytes.map(|b| b as f64),
+        &renderer,
+        &scene,
+    )?;
+    let minutes = Budget::of(Cost::Minutes, opts.max_minutes, &renderer, &scene)?;
+    for b in bytes.iter().chain(&minutes) {
         b.limit(&mut plan_opts, per_line)?;
     }
     let references = References::new(&scene, &out.join("reference"), settings)?;
@@ -130,62 +141,19 @@ pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
     let even_lines = plan::uniform(plan_opts.lines, plan.lines.len() as u32);
     let even = plan::measure_intervals(&even_lines, &mut seen, &mut measure)?;
     progress.finish_and_clear();
-    let report = PlaceReport::new(&scene, opts, bytes, plan, even_lines, even, start.elapsed());
+    let budgets = [bytes, minutes];
+    let report = PlaceReport::new(
+        &scene,
+        opts,
+        budgets,
+        plan,
+        even_lines,
+        even,
+        start.elapsed(),
+    );
     report.write(&out)?;
     let scene_file = placed_scene(&place.scene, &scene, &report, &out);
     Ok(report.summary(&out) + &scene_file)
-}
-
-/// A budget of container bytes and what it buys at the dense container's
-/// bytes per sample.
-#[derive(Clone, Copy, Debug, serde::Serialize)]
-pub struct Bytes {
-    pub max: u64,
-    pub per_sample: f64,
-    pub samples: u32,
-}
-
-impl Bytes {
-    /// None without `--max-bytes`; an error when the maps play from EXR
-    /// files (no container to take bytes per sample from).
-    fn of(renderer: &Renderer, scene: &Scene, max: Option<u64>) -> Result<Option<Bytes>> {
-        let Some(max) = max else { return Ok(None) };
-        let Some(dense) = renderer.map_bytes else {
-            bail!(
-                "--max-bytes {max}: {}'s dense maps play from EXR files, not a container, so there \
-                 are no bytes per sample to budget with; encode them first (`engine encode`) or \
-                 use --max-samples",
-                scene.name
-            );
-        };
-        let lines = scene.orbit.sample_count();
-        Ok(Some(Bytes {
-            max,
-            per_sample: dense as f64 / f64::from(lines.max(1)),
-            samples: plan::samples_within_bytes(max, dense, lines),
-        }))
-    }
-
-    /// Caps `plan`'s budget at the lines (of `per_line` samples each) that
-    /// fit; an error naming what fits when that is below the start lines.
-    fn limit(&self, plan: &mut PlanOptions, per_line: u32) -> Result<()> {
-        let per_line = per_line.max(1);
-        plan.max_samples = plan.max_samples.min(self.samples / per_line);
-        plan.validate().with_context(|| {
-            let fit = match self.samples {
-                1 => "1 sample".to_string(),
-                n => format!("{n} samples"),
-            };
-            let rings = match per_line {
-                1 => String::new(),
-                n => format!(" ({} rings of {n})", self.samples / n),
-            };
-            format!(
-                "--max-bytes {}: the dense container holds {:.0} B a sample, so {fit}{rings} fit",
-                self.max, self.per_sample,
-            )
-        })
-    }
 }
 
 /// Writes `<name>_placed.toml` under `out`: the scene with the placed

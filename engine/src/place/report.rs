@@ -1,7 +1,7 @@
 //! What `engine place` found, as placement.json, placement.png and text.
 
 use super::plan::{Interval, Plan, Stop, worst};
-use super::{Axis, Bytes, PlaceOptions};
+use super::{Axis, Budget, Cost, PlaceOptions};
 use crate::eval::plot::{ChartSpec, LegendPosition, Series, xy_chart};
 use crate::util::stats::median;
 use anyhow::Result;
@@ -72,11 +72,17 @@ pub struct PlaceReport {
     /// The byte budget (`--max-bytes`), what a sample costs in the dense
     /// container and how many samples that buys.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub max_bytes: Option<Bytes>,
+    pub max_bytes: Option<Budget>,
     /// The placed samples' container bytes at the dense bytes per sample
     /// (with `--max-bytes`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub estimated_bytes: Option<u64>,
+    /// The compile-minutes budget (`--max-minutes`), the same way.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_minutes: Option<Budget>,
+    /// The placed samples' compile minutes at the dense minutes per sample.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub estimated_minutes: Option<f64>,
     pub start: u32,
     pub spp: u32,
     pub stop: Stop,
@@ -94,7 +100,7 @@ impl PlaceReport {
     pub fn new(
         scene: &Scene,
         opts: &PlaceOptions,
-        bytes: Option<Bytes>,
+        [bytes, minutes]: [Option<Budget>; 2],
         plan: Plan,
         even_lines: Vec<u32>,
         even: Vec<Interval>,
@@ -112,19 +118,27 @@ impl PlaceReport {
             Stop::Budget => format!(
                 "the budget of {} samples{} is spent; the worst interval ({:.2} dB) is below {} dB",
                 placed.samples,
-                match bytes {
-                    Some(b) if b.samples <= opts.max_samples => format!(
-                        " ({} B at {:.0} B a sample in the dense container)",
-                        b.max, b.per_sample
-                    ),
-                    _ => String::new(),
-                },
+                bytes
+                    .iter()
+                    .chain(&minutes)
+                    .filter(|b| b.samples <= opts.max_samples)
+                    .min_by_key(|b| b.samples)
+                    .map_or(String::new(), |b| match b.cost {
+                        Cost::Bytes => format!(
+                            " ({} B at {:.0} B a sample in the dense container)",
+                            b.max, b.per_sample
+                        ),
+                        Cost::Minutes => format!(
+                            " ({} min at {:.2} min a sample in the dense compile)",
+                            b.max, b.per_sample
+                        ),
+                    }),
                 placed.worst_db,
                 opts.target_db
             ),
         };
-        let estimated_bytes =
-            bytes.map(|b| (b.per_sample * f64::from(placed.samples)).round() as u64);
+        let estimated_bytes = bytes.map(|b| b.estimate(placed.samples).round() as u64);
+        let estimated_minutes = minutes.map(|b| b.estimate(placed.samples));
         PlaceReport {
             scene: scene.name.clone(),
             axis,
@@ -133,6 +147,8 @@ impl PlaceReport {
             max_samples: opts.max_samples,
             max_bytes: bytes,
             estimated_bytes,
+            max_minutes: minutes,
+            estimated_minutes,
             start: opts.start,
             spp: opts.spp,
             stop: plan.stop,
@@ -205,9 +221,11 @@ impl PlaceReport {
             e.median_db,
             self.axis.noun(),
             p.lines,
-            match self.estimated_bytes {
-                Some(b) => format!(" (~{b} B of container)"),
-                None => String::new(),
+            match (self.estimated_bytes, self.estimated_minutes) {
+                (Some(b), Some(m)) => format!(" (~{b} B of container, ~{m:.1} min to compile)"),
+                (Some(b), None) => format!(" (~{b} B of container)"),
+                (None, Some(m)) => format!(" (~{m:.1} min to compile)"),
+                (None, None) => String::new(),
             },
             self.measured.len() + e.intervals.len(),
             self.minutes,

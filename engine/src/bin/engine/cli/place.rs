@@ -26,6 +26,10 @@ pub struct PlaceArgs {
     /// bytes per sample (the codec codes at a fixed ratio) [default: no limit].
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     pub max_bytes: Option<u64>,
+    /// At most this many minutes of compile (trace, maps, container), at the
+    /// dense compile's recorded minutes per sample [default: no limit].
+    #[arg(long, value_parser = positive_minutes)]
+    pub max_minutes: Option<f64>,
     /// Place the elevation rings of a scene with rings (every ring keeps
     /// all its azimuth lines) instead of the azimuth lines of a 1D orbit.
     #[arg(long)]
@@ -45,4 +49,11 @@ pub struct PlaceArgs {
     /// Vulkan device to use (substring of its name) [default: lavapipe].
     #[arg(long, env = "ENGINE_DEVICE")]
     pub device: Option<String>,
+}
+
+fn positive_minutes(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(m) if m.is_finite() && m > 0.0 => Ok(m),
+        _ => Err(format!("{s:?} (expected a positive number of minutes)")),
+    }
 }

@@ -19,6 +19,7 @@ pub fn run(args: &PlaceArgs) -> Result<String> {
         target_db: args.target_db,
         max_samples: args.max_samples.unwrap_or(u32::MAX),
         max_bytes: args.max_bytes,
+        max_minutes: args.max_minutes,
         start: args.start,
         spp: args.spp,
         axis: if args.rings {
