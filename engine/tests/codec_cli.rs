@@ -324,3 +324,27 @@ fn report_on_a_corrupt_container_fails_cleanly() {
         "{err}"
     );
 }
+
+/// The report's JSON goes in a folder that must exist: checked before the
+/// (minutes-long) measurement, not after it.
+#[test]
+fn report_into_a_missing_folder_fails_before_any_work() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let file = dir.path().join("bad.ptxc");
+    std::fs::write(&file, b"PTXC not really a container").expect("write");
+    let json = dir.path().join("missing").join("r.json");
+    let o = engine(&[
+        "codec-report",
+        file.to_str().expect("utf-8"),
+        "--json",
+        json.to_str().expect("utf-8"),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("does not exist") && err.contains("missing"),
+        "{err}"
+    );
+    // Refused before the container was even opened.
+    assert!(!err.contains("bad.ptxc:"), "{err}");
+    assert!(!dir.path().join("missing").exists());
+}

@@ -43,7 +43,7 @@ pub struct CodecReportRequest {
 }
 
 pub fn codec_report(scene: &Scene, req: &CodecReportRequest) -> Result<String> {
-    crate::util::files::check_overwrite(&req.json)?;
+    crate::util::files::check_output_file(&req.json)?;
     let container = codec::Container::open(&req.file)
         .with_context(|| format!("opening {}", req.file.display()))?;
     let input = load_input(scene, &req.infer_dir)?;

@@ -61,6 +61,24 @@ pub fn check_overwrite(path: &Path) -> Result<()> {
     )
 }
 
+/// [`check_overwrite`], and the folder `path` goes in exists: a command
+/// that writes one named file at the end of long work fails before it.
+pub fn check_output_file(path: &Path) -> Result<()> {
+    check_overwrite(path)?;
+    let folder = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if !folder.is_dir() {
+        bail!(
+            "{}: the folder {} does not exist (expected an existing folder: create it first)",
+            path.display(),
+            folder.display()
+        );
+    }
+    Ok(())
+}
+
 /// Whether a keyed output (a container, a map) and its key record may be
 /// written at `path`: absent, or carrying a key record this engine wrote
 /// (stale or damaged files of its own are rebuilt; anything else is
