@@ -12,6 +12,16 @@ fn s(p: &Path) -> &str {
     p.to_str().expect("utf-8")
 }
 
+/// The tiny scene in `dir`, and a copy named `name` whose 3 orbit samples
+/// are replaced by `orbit` (the dense grid placement chooses from).
+fn dense_tiny(dir: &Path, name: &str, orbit: &str) -> (std::path::PathBuf, std::path::PathBuf) {
+    let tiny = tiny_scene(dir);
+    let text = std::fs::read_to_string(&tiny).expect("tiny scene");
+    let dense = dir.join(name);
+    std::fs::write(&dense, text.replacen("samples = 3", orbit, 1)).expect("write");
+    (tiny, dense)
+}
+
 fn num(v: &serde_json::Value) -> f64 {
     v.as_f64().unwrap_or_else(|| panic!("not a number: {v}"))
 }
@@ -19,10 +29,7 @@ fn num(v: &serde_json::Value) -> f64 {
 #[test]
 fn placement_splits_the_worst_interval_and_its_scene_plays() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let tiny = tiny_scene(dir.path());
-    let text = std::fs::read_to_string(&tiny).expect("tiny scene");
-    let dense = dir.path().join("dense.toml");
-    std::fs::write(&dense, text.replacen("samples = 3", "samples = 5", 1)).expect("write");
+    let (_, dense) = dense_tiny(dir.path(), "dense.toml", "samples = 5");
     let (data, out) = (dir.path().join("data"), dir.path().join("place"));
     let o = run_engine(&[
         "place",
@@ -253,11 +260,8 @@ fn a_budget_below_the_start_lines_is_refused_before_anything_compiles() {
 #[test]
 fn rings_are_placed_with_every_azimuth_line() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let tiny = tiny_scene(dir.path());
-    let text = std::fs::read_to_string(&tiny).expect("tiny scene");
-    let dense = dir.path().join("rings.toml");
     let rings = "samples = 2\nrings = 5\nring_step_deg = 5.0";
-    std::fs::write(&dense, text.replacen("samples = 3", rings, 1)).expect("write");
+    let (tiny, dense) = dense_tiny(dir.path(), "rings.toml", rings);
     let (data, out) = (dir.path().join("data"), dir.path().join("place"));
     let args = [
         "place",

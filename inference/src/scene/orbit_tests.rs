@@ -7,14 +7,17 @@ const EVEN: &str = "start_deg = 0.0\nstep_deg = 1.0\nsamples = 100\n";
 
 /// The shipped teapot scene with its even lines replaced by `lines`.
 fn with_lines(lines: &str) -> Result<Scene, SceneError> {
-    let text = super::shipped::shipped("teapot").expect("shipped teapot scene");
-    assert!(
-        text.contains(EVEN),
-        "test bug: the teapot's even lines changed"
-    );
+    edited("teapot", EVEN, lines)
+}
+
+/// Shipped scene `name` loaded as `placed.toml` with `even` (which it must
+/// contain) replaced by `explicit`.
+fn edited(name: &str, even: &str, explicit: &str) -> Result<Scene, SceneError> {
+    let text = super::shipped::shipped(name).expect("shipped scene");
+    assert!(text.contains(even), "test bug: {name}'s {even:?} changed");
     let dir = tempfile::tempdir().expect("temp dir");
     let path = dir.path().join("placed.toml");
-    std::fs::write(&path, text.replacen(EVEN, lines, 1)).expect("write scene");
+    std::fs::write(&path, text.replacen(even, explicit, 1)).expect("write scene");
     Scene::load(&path.to_string_lossy())
 }
 
@@ -72,12 +75,7 @@ const EVEN_RINGS: &str = "rings = 4\nring_step_deg = 10.0\n";
 
 /// The shipped `teapot_rings` scene with its even rings replaced by `rings`.
 fn with_rings(rings: &str) -> Result<Scene, SceneError> {
-    let text = super::shipped::shipped("teapot_rings").expect("shipped rings scene");
-    assert!(text.contains(EVEN_RINGS), "test bug: the rings changed");
-    let dir = tempfile::tempdir().expect("temp dir");
-    let path = dir.path().join("placed.toml");
-    std::fs::write(&path, text.replacen(EVEN_RINGS, rings, 1)).expect("write scene");
-    Scene::load(&path.to_string_lossy())
+    edited("teapot_rings", EVEN_RINGS, rings)
 }
 
 #[test]
