@@ -6,6 +6,7 @@
 mod common;
 
 use common::{output_text, run_engine, tiny_scene, traced_views};
+use serde_json::json;
 use std::path::Path;
 
 fn s(p: &Path) -> &str {
@@ -22,6 +23,18 @@ fn dense_tiny(dir: &Path, name: &str, orbit: &str) -> (std::path::PathBuf, std::
     (tiny, dense)
 }
 
+/// Runs `engine args` (with `--validate`), expects success without
+/// validation messages, and returns `out`'s placement.json.
+fn placement(args: &[&str], out: &Path) -> serde_json::Value {
+    let o = run_engine(args);
+    let log = output_text(&o);
+    assert!(
+        o.status.success() && log.contains("validation messages: 0"),
+        "{log}"
+    );
+    serde_json::from_slice(&std::fs::read(out.join("placement.json")).expect("json")).expect("JSON")
+}
+
 fn num(v: &serde_json::Value) -> f64 {
     v.as_f64().unwrap_or_else(|| panic!("not a number: {v}"))
 }
@@ -31,38 +44,33 @@ fn placement_splits_the_worst_interval_and_its_scene_plays() {
     let dir = tempfile::tempdir().expect("temp dir");
     let (_, dense) = dense_tiny(dir.path(), "dense.toml", "samples = 5");
     let (data, out) = (dir.path().join("data"), dir.path().join("place"));
-    let o = run_engine(&[
-        "place",
-        "--scene",
-        s(&dense),
-        "--size",
-        "64x48",
-        "--data",
-        s(&data),
-        "--out",
-        s(&out),
-        "--start",
-        "2",
-        "--max-samples",
-        "3",
-        "--max-bytes",
-        "1000000000000",
-        "--max-minutes",
-        "100000",
-        "--target-db",
-        "99",
-        "--spp",
-        "4",
-        "--validate",
-    ]);
-    let log = output_text(&o);
-    assert!(
-        o.status.success() && log.contains("validation messages: 0"),
-        "{log}"
+    let report = placement(
+        &[
+            "place",
+            "--scene",
+            s(&dense),
+            "--size",
+            "64x48",
+            "--data",
+            s(&data),
+            "--out",
+            s(&out),
+            "--start",
+            "2",
+            "--max-samples",
+            "3",
+            "--max-bytes",
+            "1000000000000",
+            "--max-minutes",
+            "100000",
+            "--target-db",
+            "99",
+            "--spp",
+            "4",
+            "--validate",
+        ],
+        &out,
     );
-    let report: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("placement.json")).expect("json"))
-            .expect("JSON");
     assert_eq!(report["stop"], "budget", "{report}");
     let lines: Vec<u64> = report["placed"]["lines"]
         .as_array()
@@ -253,14 +261,14 @@ fn a_budget_below_the_start_lines_is_refused_before_anything_compiles() {
     );
 }
 
-/// `--rings` on a 2D grid of 2 azimuth lines × 5 rings 5° apart: it places
-/// rings, each with both lines, scoring the views half way between dense
-/// rings on every line, within a budget of samples (6 = 3 rings), and
-/// writes `ring_elevations_deg`.
+/// `--rings` on a 2D grid of 3 azimuth lines × 5 rings 5° apart: it places
+/// rings, each with every line, scoring the views half way between dense
+/// rings on every line, within a budget of samples (9 = 3 rings), and
+/// writes `ring_elevations_deg`. Then `--grid` on the same compile.
 #[test]
 fn rings_are_placed_with_every_azimuth_line() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let rings = "samples = 2\nrings = 5\nring_step_deg = 5.0";
+    let rings = "samples = 3\nrings = 5\nring_step_deg = 5.0";
     let (tiny, dense) = dense_tiny(dir.path(), "rings.toml", rings);
     let (data, out) = (dir.path().join("data"), dir.path().join("place"));
     let args = [
@@ -277,22 +285,14 @@ fn rings_are_placed_with_every_azimuth_line() {
         "--start",
         "2",
         "--max-samples",
-        "7",
+        "10",
         "--target-db",
         "99",
         "--spp",
         "4",
         "--validate",
     ];
-    let o = run_engine(&args);
-    let log = output_text(&o);
-    assert!(
-        o.status.success() && log.contains("validation messages: 0"),
-        "{log}"
-    );
-    let report: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("placement.json")).expect("json"))
-            .expect("JSON");
+    let report = placement(&args, &out);
     assert_eq!(
         (&report["axis"], &report["stop"]),
         (&serde_json::json!("rings"), &serde_json::json!("budget")),
@@ -300,7 +300,7 @@ fn rings_are_placed_with_every_azimuth_line() {
     );
     let placed = &report["placed"];
     assert_eq!(placed["lines"], serde_json::json!([0, 2, 4]), "{report}");
-    assert_eq!(placed["samples"], 6, "{report}");
+    assert_eq!(placed["samples"], 9, "{report}");
     assert_eq!(
         placed["elevations_deg"],
         serde_json::json!([0.0, 10.0, 20.0])
@@ -327,7 +327,8 @@ fn rings_are_placed_with_every_azimuth_line() {
         "{text}"
     );
     let placed = inference::scene::Scene::load(s(&scene)).expect("placed scene loads");
-    assert_eq!(placed.orbit.sample_count(), 6);
+    assert_eq!(placed.orbit.sample_count(), 9);
+    assert_grid_placement(&dense, &data, &dir.path().join("grid"));
     // A 1D orbit is refused with --rings, naming the file and the fix.
     let o = run_engine(&["place", "--rings", "--scene", s(&tiny), "--data", s(&data)]);
     let log = output_text(&o);
@@ -348,4 +349,71 @@ fn rings_are_placed_with_every_azimuth_line() {
         !o.status.success() && log.contains("--start 5 places all 5 dense rings"),
         "{log}"
     );
+}
+
+/// `--grid` on the 3 lines × 5 rings compile: from the 2 × 2 corners
+/// (lines 0 and 2, rings 0 and 4) one split fits a budget of 6 samples —
+/// a line (3 × 2) or a ring (2 × 3), whichever interval scored worse —
+/// and the placed scene names both lists.
+fn assert_grid_placement(dense: &Path, data: &Path, out: &Path) {
+    let report = placement(
+        &[
+            "place",
+            "--grid",
+            "--scene",
+            s(dense),
+            "--size",
+            "64x48",
+            "--data",
+            s(data),
+            "--out",
+            s(out),
+            "--start",
+            "2",
+            "--max-samples",
+            "6",
+            "--target-db",
+            "99",
+            "--spp",
+            "4",
+            "--validate",
+        ],
+        out,
+    );
+    assert_eq!(
+        (&report["axis"], &report["stop"]),
+        (&serde_json::json!("grid"), &serde_json::json!("budget")),
+        "{report}"
+    );
+    let splits = report["splits"].as_array().expect("splits");
+    assert_eq!(splits.len(), 1, "{report}");
+    let placed = &report["placed"];
+    assert_eq!(placed["samples"], 6, "{report}");
+    // Each start interval was scored on both lines of the other axis (4
+    // views); a ring split adds its two halves on both lines and the
+    // line interval on the new ring (5 more), a line split the rings'
+    // interval on the new line (1 more). The even grid of the same
+    // shape is the placed one here: no view scored twice.
+    let (lines, rings, views) = match splits[0]["axis"].as_str() {
+        Some("rings") => (json!([0, 2]), json!([0, 2, 4]), 9),
+        Some("azimuth") => (json!([0, 1, 2]), json!([0, 4]), 5),
+        other => panic!("split axis {other:?}: {report}"),
+    };
+    assert_eq!((&placed["lines"], &placed["rings"]), (&lines, &rings));
+    assert_eq!(report["views_scored"], views, "{report}");
+    assert_eq!(report["even"]["rings"], placed["rings"]);
+    assert_eq!(report["even"]["worst_db"], placed["worst_db"]);
+    let scene = out.join("teapot_placed.toml");
+    let text = std::fs::read_to_string(&scene).expect("placed scene written");
+    assert!(
+        text.contains("azimuths_deg = [") && text.contains("ring_elevations_deg = ["),
+        "{text}"
+    );
+    let scene = inference::scene::Scene::load(s(&scene)).expect("placed scene loads");
+    assert_eq!(scene.orbit.sample_count(), 6);
+    // A 1D orbit has no grid to place.
+    let none = out.join("teapot-data");
+    let o = run_engine(&["place", "--grid", "--scene", "teapot", "--data", s(&none)]);
+    let log = output_text(&o);
+    assert!(!o.status.success() && log.contains("--grid"), "{log}");
 }

@@ -19,7 +19,7 @@ impl Axis {
         match self {
             Axis::Azimuth if rings > 1 => bail!(
                 "{}: [orbit] has {rings} rings: `engine place` places the azimuth lines of a 1D \
-                 orbit, or with --rings the rings of a 2D one",
+                 orbit, with --rings the rings of a 2D one, or with --grid both",
                 scene.source.display()
             ),
             Axis::Rings if rings < 2 => bail!(
@@ -69,6 +69,55 @@ impl Axis {
         match self {
             Axis::Azimuth => "lines",
             Axis::Rings => "rings",
+        }
+    }
+}
+
+/// What `engine place` places: one axis's lines, or both axes of a 2D
+/// grid together (`--grid`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Placing {
+    Azimuth,
+    Rings,
+    Grid,
+}
+
+impl Placing {
+    /// The one axis placed; None for the grid.
+    pub fn axis(self) -> Option<Axis> {
+        match self {
+            Placing::Azimuth => Some(Axis::Azimuth),
+            Placing::Rings => Some(Axis::Rings),
+            Placing::Grid => None,
+        }
+    }
+
+    /// An error when the scene has nothing of this kind to choose from.
+    pub fn check(self, scene: &Scene) -> Result<()> {
+        match self.axis() {
+            Some(axis) => axis.check(scene),
+            None => {
+                let o = &scene.orbit;
+                if o.rings < 2 || o.samples < 2 {
+                    bail!(
+                        "{}: --grid: [orbit] has {} azimuth lines × {} rings (expected at least \
+                         2 of each to choose from)",
+                        scene.source.display(),
+                        o.samples,
+                        o.rings.max(1)
+                    );
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// The words for what is placed, in reports.
+    pub fn noun(self) -> &'static str {
+        match self.axis() {
+            Some(axis) => axis.noun(),
+            None => "lines × rings",
         }
     }
 }

@@ -3,6 +3,7 @@
 //! per sample (the codec codes at a fixed ratio and a sample's trace and
 //! maps take about the same time, so both grow with the samples).
 
+use super::grid::GridOptions;
 use super::plan::{self, PlanOptions};
 use crate::renderer::Renderer;
 use anyhow::{Context, Result, bail};
@@ -88,29 +89,38 @@ impl Budget {
     pub fn limit(&self, plan: &mut PlanOptions, per_line: u32) -> Result<()> {
         let per_line = per_line.max(1);
         plan.max_samples = plan.max_samples.min(self.samples / per_line);
-        plan.validate().with_context(|| {
-            let fit = match self.samples {
-                1 => "1 sample".to_string(),
-                n => format!("{n} samples"),
-            };
-            let rings = match per_line {
-                1 => String::new(),
-                n => format!(" ({} rings of {n})", self.samples / n),
-            };
-            let cost = match self.cost {
-                Cost::Bytes => format!(
-                    "the dense container holds {:.0} B a sample",
-                    self.per_sample
-                ),
-                Cost::Minutes => {
-                    format!("the dense compile took {:.2} min a sample", self.per_sample)
-                }
-            };
-            format!(
-                "{} {}: {cost}, so {fit}{rings} fit",
-                self.cost.option(),
-                self.max
-            )
-        })
+        plan.validate().with_context(|| self.explain(per_line))
+    }
+
+    /// The same for a grid placement, whose budget counts samples.
+    pub fn limit_grid(&self, grid: &mut GridOptions) -> Result<()> {
+        grid.max_samples = grid.max_samples.min(self.samples);
+        grid.validate().with_context(|| self.explain(1))
+    }
+
+    /// What the budget buys, in words.
+    fn explain(&self, per_line: u32) -> String {
+        let fit = match self.samples {
+            1 => "1 sample".to_string(),
+            n => format!("{n} samples"),
+        };
+        let rings = match per_line {
+            1 => String::new(),
+            n => format!(" ({} rings of {n})", self.samples / n),
+        };
+        let cost = match self.cost {
+            Cost::Bytes => format!(
+                "the dense container holds {:.0} B a sample",
+                self.per_sample
+            ),
+            Cost::Minutes => {
+                format!("the dense compile took {:.2} min a sample", self.per_sample)
+            }
+        };
+        format!(
+            "{} {}: {cost}, so {fit}{rings} fit",
+            self.cost.option(),
+            self.max
+        )
     }
 }

@@ -11,13 +11,17 @@
 
 mod axis;
 mod budget;
+pub mod grid;
 pub mod plan;
 mod report;
 
-pub use axis::Axis;
+pub use axis::{Axis, Placing};
 pub use budget::{Budget, Cost};
 pub use plan::{Interval, Plan, PlanOptions, Stop};
 pub use report::PlaceReport;
+
+use grid::GridOptions;
+use report::Outcome;
 
 use crate::eval::metrics;
 use crate::eval::reference::{References, View};
@@ -45,11 +49,83 @@ pub struct PlaceOptions {
     /// At most this many minutes of compile, estimated from the dense
     /// compile's recorded minutes per sample.
     pub max_minutes: Option<f64>,
+    /// Lines placed evenly before measuring (per axis with the grid).
     pub start: u32,
     /// Samples per pixel of the traced views.
     pub spp: u32,
     /// Which lines to place.
-    pub axis: Axis,
+    pub placing: Placing,
+}
+
+/// The refinement to run, its options checked against the scene.
+enum Planned {
+    Lines(Axis, PlanOptions),
+    Grid(GridOptions),
+}
+
+impl Planned {
+    /// Checks `opts` against `scene` before anything compiles.
+    fn new(scene: &Scene, opts: &PlaceOptions) -> Result<Planned> {
+        opts.placing.check(scene)?;
+        let o = &scene.orbit;
+        let Some(axis) = opts.placing.axis() else {
+            let grid = GridOptions {
+                lines: [o.samples, o.rings],
+                start: [opts.start; 2],
+                max_samples: opts.max_samples,
+                target_db: opts.target_db,
+            };
+            grid.validate()
+                .with_context(|| format!("{}: --grid", scene.source.display()))?;
+            if grid.start_samples() >= o.sample_count() {
+                bail!(
+                    "{}: --start {} places all {} × {} dense lines × rings: nothing is left to \
+                     choose (expected --start below one of them, e.g. 2)",
+                    scene.source.display(),
+                    opts.start,
+                    o.samples,
+                    o.rings
+                );
+            }
+            return Ok(Planned::Grid(grid));
+        };
+        let per_line = axis.samples_per_line(o);
+        let plan = PlanOptions {
+            lines: axis.lines(o),
+            start: opts.start,
+            max_samples: opts.max_samples / per_line,
+            target_db: opts.target_db,
+        };
+        plan.validate().with_context(|| match axis {
+            Axis::Azimuth => format!("{}: [orbit]", scene.source.display()),
+            Axis::Rings => format!(
+                "{}: --rings: a ring is {per_line} samples, so --max-samples {} buys {} rings",
+                scene.source.display(),
+                opts.max_samples,
+                plan.max_samples
+            ),
+        })?;
+        if plan.start >= plan.lines {
+            bail!(
+                "{}: --start {} places all {} dense {}: nothing is left to choose (expected \
+                 --start below {}, e.g. 2)",
+                scene.source.display(),
+                plan.start,
+                plan.lines,
+                axis.noun(),
+                plan.lines
+            );
+        }
+        Ok(Planned::Lines(axis, plan))
+    }
+
+    /// Caps the budget at what `budget` buys.
+    fn limit(&mut self, budget: &Budget, orbit: &inference::scene::Orbit) -> Result<()> {
+        match self {
+            Planned::Lines(axis, plan) => budget.limit(plan, axis.samples_per_line(orbit)),
+            Planned::Grid(grid) => budget.limit_grid(grid),
+        }
+    }
 }
 
 /// Places the samples of `place`'s scene (compiled there densely first if
@@ -61,34 +137,7 @@ pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
         mut renderer,
         ..
     } = Session::open(place)?;
-    opts.axis.check(&scene)?;
-    let per_line = opts.axis.samples_per_line(&scene.orbit);
-    let mut plan_opts = PlanOptions {
-        lines: opts.axis.lines(&scene.orbit),
-        start: opts.start,
-        max_samples: opts.max_samples / per_line,
-        target_db: opts.target_db,
-    };
-    let noun = opts.axis.noun();
-    plan_opts.validate().with_context(|| match opts.axis {
-        Axis::Azimuth => format!("{}: [orbit]", scene.source.display()),
-        Axis::Rings => format!(
-            "{}: --rings: a ring is {per_line} samples, so --max-samples {} buys {} rings",
-            scene.source.display(),
-            opts.max_samples,
-            plan_opts.max_samples
-        ),
-    })?;
-    if plan_opts.start >= plan_opts.lines {
-        bail!(
-            "{}: --start {} places all {} dense {noun}: nothing is left to choose (expected \
-             --start below {}, e.g. 2)",
-            scene.source.display(),
-            plan_opts.start,
-            plan_opts.lines,
-            plan_opts.lines
-        );
-    }
+    let mut planned = Planned::new(&scene, opts)?;
     let out = opts.out.clone().unwrap_or_else(|| data.join("place"));
     crate::util::files::claim_dir(&out)?;
     let reflector = crate::eval::reflector_name(&scene)?;
@@ -107,18 +156,13 @@ pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
         progress: false,
         ..TraceSettings::default()
     };
-    let bytes = Budget::of(
-        Cost::Bytes,
-        opts.max_bytes.map(|b| b as f64),
-        &renderer,
-        &scene,
-    )?;
-    let minutes = Budget::of(Cost::Minutes, opts.max_minutes, &renderer, &scene)?;
+    let budget = |cost, max| Budget::of(cost, max, &renderer, &scene);
+    let bytes = budget(Cost::Bytes, opts.max_bytes.map(|b| b as f64))?;
+    let minutes = budget(Cost::Minutes, opts.max_minutes)?;
     for b in bytes.iter().chain(&minutes) {
-        b.limit(&mut plan_opts, per_line)?;
+        planned.limit(b, &scene.orbit)?;
     }
     let references = References::new(&scene, &out.join("reference"), settings)?;
-    let progress = spinner();
     let start = Instant::now();
     let mut probe = Probe {
         scene: &scene,
@@ -126,34 +170,60 @@ pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
         source: &mut source,
         references: &references,
         reflector: &reflector,
+        views: 0,
+        progress: spinner(),
     };
-    let mut seen = BTreeMap::new();
-    let mut measure = |from, to, at| {
-        progress.set_message(format!("{noun} {from}..{to}: views past {at}"));
-        let db = match opts.axis {
-            Axis::Azimuth => probe.score(from, to, at),
-            Axis::Rings => probe.score_rings(from, to, at),
-        };
-        progress.inc(1);
-        db
+    let outcome = match planned {
+        Planned::Lines(axis, plan) => place_lines(&mut probe, axis, &plan)?,
+        Planned::Grid(grid) => place_both(&mut probe, &grid)?,
     };
-    let plan = plan::place(&plan_opts, &mut seen, &mut measure)?;
-    let even_lines = plan::uniform(plan_opts.lines, plan.lines.len() as u32);
-    let even = plan::measure_intervals(&even_lines, &mut seen, &mut measure)?;
-    progress.finish_and_clear();
-    let budgets = [bytes, minutes];
-    let report = PlaceReport::new(
-        &scene,
-        opts,
-        budgets,
-        plan,
-        even_lines,
-        even,
-        start.elapsed(),
-    );
+    probe.progress.finish_and_clear();
+    let report = PlaceReport::new(&scene, opts, [bytes, minutes], outcome, start.elapsed());
     report.write(&out)?;
     let scene_file = placed_scene(&place.scene, &scene, &report, &out);
     Ok(report.summary(&out) + &scene_file)
+}
+
+/// One axis's lines, refined, and an even placement of as many.
+fn place_lines(probe: &mut Probe, axis: Axis, plan_opts: &PlanOptions) -> Result<Outcome> {
+    let mut seen = BTreeMap::new();
+    let lines_on = probe.scene.orbit.samples;
+    let mut measure = |from, to, at| match axis {
+        Axis::Azimuth => probe.score(axis, from, to, at, 0),
+        // Every azimuth line's view between the rings: the worst counts.
+        Axis::Rings => (0..lines_on).try_fold(f64::INFINITY, |worst, line| {
+            Ok::<_, anyhow::Error>(worst.min(probe.score(axis, from, to, at, line)?))
+        }),
+    };
+    let plan = plan::place(plan_opts, &mut seen, &mut measure)?;
+    let even_lines = plan::uniform(plan_opts.lines, plan.lines.len() as u32);
+    let even = plan::measure_intervals(&even_lines, &mut seen, &mut measure)?;
+    Ok(Outcome::lines(
+        probe.scene,
+        axis,
+        plan,
+        (even_lines, even),
+        probe.views,
+    ))
+}
+
+/// Azimuth lines and rings refined together, and an even grid with as
+/// many lines along each axis.
+fn place_both(probe: &mut Probe, grid: &GridOptions) -> Result<Outcome> {
+    let mut views = grid::Views::new();
+    let mut measure = |axis, from, to, at, other| probe.score(axis, from, to, at, other);
+    let plan = grid::place_grid(grid, &mut views, &mut measure)?;
+    let even_lines = [0, 1].map(|k| plan::uniform(grid.lines[k], plan.lines[k].len() as u32));
+    let even = [
+        grid::grid_intervals(&even_lines, 0, &mut views, &mut measure)?,
+        grid::grid_intervals(&even_lines, 1, &mut views, &mut measure)?,
+    ];
+    Ok(Outcome::grid(
+        probe.scene,
+        plan,
+        (even_lines, even),
+        probe.views,
+    ))
 }
 
 /// Writes `<name>_placed.toml` under `out`: the scene with the placed
@@ -171,27 +241,31 @@ fn placed_scene(
     out: &std::path::Path,
 ) -> String {
     use inference::scene::placed::{with_azimuths, with_neighbour_deg, with_rings};
-    type Rewrite = fn(&str, &str, &[f32], &str) -> Option<String>;
-    let (key, lines, rewrite): (_, _, Rewrite) = match report.axis {
-        Axis::Azimuth => ("azimuths_deg", &report.placed.azimuths_deg, with_azimuths),
-        Axis::Rings => (
-            "ring_elevations_deg",
-            &report.placed.elevations_deg,
-            with_rings,
-        ),
-    };
+    let p = &report.placed;
+    let (az, el) = (&p.azimuths_deg, &p.elevations_deg);
     let name = format!("{}_placed", report.scene);
     let path = out.join(format!("{name}.toml"));
     let note = format!("placed by `engine place`: {}", report.reason);
     // (Stacked neighbours are azimuth neighbours, which placing rings keeps.)
-    let stacks_samples = report.axis == Axis::Azimuth
+    let stacks_samples = report.axis != Placing::Rings
         && dense
             .objects
             .iter()
             .any(|o| o.neighbour_weight() > 0.0 && o.neighbour_deg().is_none());
+    let what = match report.axis {
+        Placing::Azimuth => format!("azimuths_deg = {az:?}"),
+        Placing::Rings => format!("ring_elevations_deg = {el:?}"),
+        Placing::Grid => format!("azimuths_deg = {az:?} and ring_elevations_deg = {el:?}"),
+    };
     let written = (|| -> Result<()> {
         let (text, _) = Scene::text(scene_arg)?;
-        let Some(mut text) = rewrite(&text, &name, lines, &note) else {
+        let rewritten = match report.axis {
+            Placing::Azimuth => with_azimuths(&text, &name, az, &note),
+            Placing::Rings => with_rings(&text, &name, el, &note),
+            Placing::Grid => with_azimuths(&text, &name, az, &note)
+                .and_then(|t| with_rings(&t, &name, el, "and its rings, placed with them")),
+        };
+        let Some(mut text) = rewritten else {
             bail!("the scene file has no [orbit] table or no top-level name line to rewrite");
         };
         if stacks_samples {
@@ -208,8 +282,7 @@ fn placed_scene(
             path.display()
         ),
         Err(e) => format!(
-            "no placed scene file ({e:#}); put `{key} = {lines:?}` in [orbit] instead of its \
-             even {}\n",
+            "no placed scene file ({e:#}); put `{what}` in [orbit] instead of its even {}\n",
             report.axis.noun()
         ),
     }
@@ -241,32 +314,38 @@ struct Probe<'a, 's> {
     source: &'a mut FrameSource<'s>,
     references: &'a References<'a>,
     reflector: &'a str,
+    /// Views scored so far.
+    views: usize,
+    progress: indicatif::ProgressBar,
 }
 
 impl Probe<'_, '_> {
-    /// Reflector PSNR (as `engine eval` scores it) of the frame at
-    /// [`probe_azimuth`]`(at)` blended from lines `from` and `to` alone.
-    fn score(&mut self, from: u32, to: u32, at: u32) -> Result<f64> {
-        let view = View::on_orbit(probe_azimuth(&self.scene.orbit, at));
-        self.renderer.use_azimuth_lines(Some(&[from, to]));
+    /// Reflector PSNR (as `engine eval` scores it) of the view between
+    /// lines `at` and `at + 1` of `axis` ([`Axis::probe_deg`]: half a line
+    /// past `at`), on line `other` of the other axis (its ring, or its
+    /// azimuth line), blended from lines `from` and `to` of `axis` alone.
+    fn score(&mut self, axis: Axis, from: u32, to: u32, at: u32, other: u32) -> Result<f64> {
+        let o = &self.scene.orbit;
+        let between = axis.probe_deg(o, at);
+        self.progress
+            .set_message(format!("{} {from}..{to}: views past {at}", axis.noun()));
+        let pair = [from, to];
+        let view = match axis {
+            Axis::Azimuth => {
+                self.renderer.use_azimuth_lines(Some(&pair));
+                View::new(between, o.ring_elevation(other))
+            }
+            Axis::Rings => {
+                self.renderer.use_rings(Some(&pair));
+                View::new(o.angle_deg(other), between)
+            }
+        };
         let db = self.score_view(view);
         self.renderer.use_azimuth_lines(None);
-        db
-    }
-
-    /// The lowest reflector PSNR of the views half way between rings `at`
-    /// and `at + 1`, one on each azimuth line (so only the rings blend),
-    /// blended from rings `from` and `to` alone: "every interval reaches
-    /// the target" then holds for every view scored.
-    fn score_rings(&mut self, from: u32, to: u32, at: u32) -> Result<f64> {
-        let scene = self.scene;
-        let elevation = Axis::Rings.probe_deg(&scene.orbit, at);
-        self.renderer.use_rings(Some(&[from, to]));
-        let scores: Result<Vec<f64>> = (0..scene.orbit.samples)
-            .map(|line| self.score_view(View::new(scene.orbit.angle_deg(line), elevation)))
-            .collect();
         self.renderer.use_rings(None);
-        Ok(scores?.into_iter().fold(f64::INFINITY, f64::min))
+        self.views += 1;
+        self.progress.inc(1);
+        db
     }
 
     /// Reflector PSNR of the frame at `view` with the blend as set.

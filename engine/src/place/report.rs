@@ -1,7 +1,8 @@
 //! What `engine place` found, as placement.json, placement.png and text.
 
+use super::grid::{GridPlan, Split, grid_worst};
 use super::plan::{Interval, Plan, Stop, worst};
-use super::{Axis, Budget, Cost, PlaceOptions};
+use super::{Axis, Budget, Cost, PlaceOptions, Placing};
 use crate::eval::plot::{ChartSpec, LegendPosition, Series, xy_chart};
 use crate::util::stats::median;
 use anyhow::Result;
@@ -14,8 +15,11 @@ use std::time::Duration;
 pub struct Placement {
     /// Viewpoint samples (lines × the samples each line holds).
     pub samples: u32,
-    /// The placed lines (azimuth lines, or rings with `--rings`).
+    /// The placed lines (azimuth lines, or rings with `--rings`; with
+    /// `--grid` the azimuth lines, and the rings in `rings`).
     pub lines: Vec<u32>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub rings: Vec<u32>,
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub azimuths_deg: Vec<f32>,
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -28,6 +32,14 @@ pub struct Placement {
     /// Azimuth (elevation with `--rings`) of each interval's scored
     /// view(s), degrees.
     pub probes_deg: Vec<f32>,
+    /// With `--grid`: the intervals between rings (each scored by its
+    /// worst view over the placed azimuth lines; `intervals` holds those
+    /// between azimuth lines, scored over the placed rings) and the
+    /// elevations of their views.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub ring_intervals: Vec<Interval>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub ring_probes_deg: Vec<f32>,
 }
 
 impl Placement {
@@ -44,17 +56,96 @@ impl Placement {
             azimuths_deg,
             elevations_deg,
             lines,
+            rings: Vec::new(),
             worst_db: worst(&intervals),
-            median_db: if scores.is_empty() {
-                f64::INFINITY
-            } else {
-                median(&scores)
-            },
-            probes_deg: intervals
-                .iter()
-                .map(|i| axis.probe_deg(o, i.probe))
-                .collect(),
+            median_db: median_or_inf(&scores),
+            probes_deg: probes(o, axis, &intervals),
             intervals,
+            ring_intervals: Vec::new(),
+            ring_probes_deg: Vec::new(),
+        }
+    }
+
+    /// A grid placement: azimuth lines × rings and both axes' intervals.
+    fn grid(scene: &Scene, [lines, rings]: [Vec<u32>; 2], [az, el]: [Vec<Interval>; 2]) -> Self {
+        let o = &scene.orbit;
+        let at = |axis: Axis, l: &[u32]| l.iter().map(|&l| axis.position_deg(o, l)).collect();
+        let scores: Vec<f64> = az.iter().chain(&el).map(|i| i.psnr_db).collect();
+        Placement {
+            samples: (lines.len() * rings.len()) as u32,
+            azimuths_deg: at(Axis::Azimuth, &lines),
+            elevations_deg: at(Axis::Rings, &rings),
+            worst_db: grid_worst(&[az.clone(), el.clone()]),
+            median_db: median_or_inf(&scores),
+            probes_deg: probes(o, Axis::Azimuth, &az),
+            ring_probes_deg: probes(o, Axis::Rings, &el),
+            lines,
+            rings,
+            intervals: az,
+            ring_intervals: el,
+        }
+    }
+}
+
+fn median_or_inf(scores: &[f64]) -> f64 {
+    if scores.is_empty() {
+        f64::INFINITY
+    } else {
+        median(scores)
+    }
+}
+
+fn probes(o: &inference::scene::Orbit, axis: Axis, intervals: &[Interval]) -> Vec<f32> {
+    intervals
+        .iter()
+        .map(|i| axis.probe_deg(o, i.probe))
+        .collect()
+}
+
+/// What a placement run found, placed and even, before the report adds
+/// the options and budgets.
+pub struct Outcome {
+    pub placed: Placement,
+    pub even: Placement,
+    pub stop: Stop,
+    pub measured: Vec<Interval>,
+    pub splits: Vec<Split>,
+    pub views_scored: usize,
+}
+
+impl Outcome {
+    /// One axis's lines.
+    pub fn lines(
+        scene: &Scene,
+        axis: Axis,
+        plan: Plan,
+        (even_lines, even): (Vec<u32>, Vec<Interval>),
+        views_scored: usize,
+    ) -> Self {
+        Outcome {
+            placed: Placement::new(scene, axis, plan.lines, plan.intervals),
+            even: Placement::new(scene, axis, even_lines, even),
+            stop: plan.stop,
+            measured: plan.measured,
+            splits: Vec::new(),
+            views_scored,
+        }
+    }
+
+    /// Both axes of a grid.
+    pub fn grid(
+        scene: &Scene,
+        plan: GridPlan,
+        (even_lines, even): ([Vec<u32>; 2], [Vec<Interval>; 2]),
+        views_scored: usize,
+    ) -> Self {
+        Outcome {
+            placed: Placement::grid(scene, plan.lines, plan.intervals),
+            even: Placement::grid(scene, even_lines, even),
+            stop: plan.stop,
+            measured: plan.splits.iter().map(|s| s.interval).collect(),
+            splits: plan.splits,
+            views_scored,
         }
     }
 }
@@ -63,8 +154,8 @@ impl Placement {
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct PlaceReport {
     pub scene: String,
-    /// What was placed: azimuth lines or rings.
-    pub axis: Axis,
+    /// What was placed: azimuth lines, rings or both (`grid`).
+    pub axis: Placing,
     /// Samples of the dense compile the placement was chosen from.
     pub dense_samples: u32,
     pub target_db: f64,
@@ -91,8 +182,14 @@ pub struct PlaceReport {
     pub placed: Placement,
     /// An even placement with as many samples, scored the same way.
     pub even: Placement,
-    /// Every interval measured while refining, in order.
+    /// Every interval measured while refining, in order (with `--grid`,
+    /// every interval split, its axis in `splits`).
     pub measured: Vec<Interval>,
+    /// With `--grid`: each split's axis, interval and the samples after it.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub splits: Vec<Split>,
+    /// Held-out views rendered and scored.
+    pub views_scored: usize,
     pub minutes: f64,
 }
 
@@ -101,14 +198,18 @@ impl PlaceReport {
         scene: &Scene,
         opts: &PlaceOptions,
         [bytes, minutes]: [Option<Budget>; 2],
-        plan: Plan,
-        even_lines: Vec<u32>,
-        even: Vec<Interval>,
+        outcome: Outcome,
         took: Duration,
     ) -> PlaceReport {
-        let axis = opts.axis;
-        let placed = Placement::new(scene, axis, plan.lines, plan.intervals);
-        let reason = match plan.stop {
+        let Outcome {
+            placed,
+            even,
+            stop,
+            measured,
+            splits,
+            views_scored,
+        } = outcome;
+        let reason = match stop {
             Stop::TargetMet => format!(
                 "every interval's middle reaches {} dB with {} of {} samples",
                 opts.target_db,
@@ -141,7 +242,7 @@ impl PlaceReport {
         let estimated_minutes = minutes.map(|b| b.estimate(placed.samples));
         PlaceReport {
             scene: scene.name.clone(),
-            axis,
+            axis: opts.placing,
             dense_samples: scene.orbit.sample_count(),
             target_db: opts.target_db,
             max_samples: opts.max_samples,
@@ -151,11 +252,13 @@ impl PlaceReport {
             estimated_minutes,
             start: opts.start,
             spp: opts.spp,
-            stop: plan.stop,
+            stop,
             reason,
-            even: Placement::new(scene, axis, even_lines, even),
+            even,
             placed,
-            measured: plan.measured,
+            measured,
+            splits,
+            views_scored,
             minutes: took.as_secs_f64() / 60.0,
         }
     }
@@ -167,20 +270,22 @@ impl PlaceReport {
     }
 
     fn chart(&self, path: &Path) -> Result<()> {
-        let series = |name: String, p: &Placement| Series {
+        let series = |name: String, probes: &[f32], intervals: &[Interval]| Series {
             name,
-            points: p
-                .probes_deg
+            points: probes
                 .iter()
-                .zip(&p.intervals)
+                .zip(intervals)
                 .map(|(&x, i)| (f64::from(x), i.psnr_db))
                 .collect(),
             labels: Vec::new(),
             connect: true,
         };
         let x = match self.axis {
-            Axis::Azimuth => "azimuth of the held-out view between samples (degrees)",
-            Axis::Rings => "elevation of the held-out views between rings (degrees)",
+            Placing::Azimuth => "azimuth of the held-out view between samples (degrees)",
+            Placing::Rings => "elevation of the held-out views between rings (degrees)",
+            Placing::Grid => {
+                "azimuth (between lines) or elevation (between rings) of the held-out views (degrees)"
+            }
         };
         let mut spec = ChartSpec::new(
             &format!("Where {} needs its samples", self.scene),
@@ -188,13 +293,23 @@ impl PlaceReport {
             "reflector PSNR between samples (dB)",
         );
         spec.legend = LegendPosition::LowerLeft;
-        spec.series = vec![
-            series(
-                format!("placed, {} samples", self.placed.samples),
-                &self.placed,
-            ),
-            series(format!("even, {} samples", self.even.samples), &self.even),
-        ];
+        for (kind, p) in [("placed", &self.placed), ("even", &self.even)] {
+            let name = format!("{kind}, {} samples", p.samples);
+            if self.axis == Placing::Grid {
+                spec.series.push(series(
+                    format!("{name}: between lines"),
+                    &p.probes_deg,
+                    &p.intervals,
+                ));
+                spec.series.push(series(
+                    format!("{name}: between rings"),
+                    &p.ring_probes_deg,
+                    &p.ring_intervals,
+                ));
+            } else {
+                spec.series.push(series(name, &p.probes_deg, &p.intervals));
+            }
+        }
         spec.series.retain(|s| !s.points.is_empty());
         if spec.series.is_empty() {
             return Ok(());
@@ -209,7 +324,7 @@ impl PlaceReport {
         format!(
             "{}: {} samples placed of {} ({}): worst {:.2} dB, median {:.2} dB between samples \
              (held-out views); an even placement of {} samples: worst {:.2} dB, median {:.2} dB\n\
-             {} {:?}{}\n{} intervals measured in {:.1} min; wrote {} and {}\n",
+             {} {}{}\n{} views scored in {:.1} min; wrote {} and {}\n",
             self.scene,
             p.samples,
             self.dense_samples,
@@ -220,14 +335,17 @@ impl PlaceReport {
             e.worst_db,
             e.median_db,
             self.axis.noun(),
-            p.lines,
+            match self.axis {
+                Placing::Grid => format!("{:?} × {:?}", p.lines, p.rings),
+                _ => format!("{:?}", p.lines),
+            },
             match (self.estimated_bytes, self.estimated_minutes) {
                 (Some(b), Some(m)) => format!(" (~{b} B of container, ~{m:.1} min to compile)"),
                 (Some(b), None) => format!(" (~{b} B of container)"),
                 (None, Some(m)) => format!(" (~{m:.1} min to compile)"),
                 (None, None) => String::new(),
             },
-            self.measured.len() + e.intervals.len(),
+            self.views_scored,
             self.minutes,
             out.join("placement.json").display(),
             out.join("placement.png").display(),

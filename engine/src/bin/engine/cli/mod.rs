@@ -57,8 +57,9 @@ pub enum Command {
     /// views on the orbit, between samples and above the orbit plane;
     /// writes eval.json and tradeoff.png.
     Eval(EvalArgs),
-    /// Choose where a 1D orbit needs its samples: refine from a few even
-    /// samples, splitting the interval whose middle view (blended from its
+    /// Choose where a scene needs its viewpoint samples (a 1D orbit's
+    /// azimuth lines; a 2D grid's rings with --rings, or its lines and
+    /// rings together with --grid): refine from a few even lines, splitting the interval whose middle view (blended from its
     /// ends, on the dense compile) scores worst against the tracer, until
     /// every middle reaches --target-db or --max-samples are placed; scores
     /// an even placement of as many samples the same way; writes

@@ -32,9 +32,15 @@ pub struct PlaceArgs {
     pub max_minutes: Option<f64>,
     /// Place the elevation rings of a scene with rings (every ring keeps
     /// all its azimuth lines) instead of the azimuth lines of a 1D orbit.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "grid")]
     pub rings: bool,
-    /// Lines (or rings) placed evenly before measuring, both ends included.
+    /// Place the azimuth lines and the rings of a scene with rings
+    /// together: each step splits the worst interval of either axis whose
+    /// samples still fit the budget (--max-samples counts samples).
+    #[arg(long)]
+    pub grid: bool,
+    /// Lines (or rings) placed evenly before measuring, both ends included
+    /// (with --grid, this many of each).
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(2..))]
     pub start: u32,
     /// Samples per pixel of the traced views (as `engine eval --spp`).

@@ -1,10 +1,10 @@
 //! `engine place`: where a scene needs its viewpoint samples (azimuth
-//! lines, or rings with `--rings`).
+//! lines, rings with `--rings`, or both with `--grid`).
 
 use crate::cli::{PlaceArgs, device};
 use anyhow::Result;
 use engine::options::RunPlace;
-use engine::place::{Axis, PlaceOptions, place};
+use engine::place::{PlaceOptions, Placing, place};
 
 pub fn run(args: &PlaceArgs) -> Result<String> {
     let run = RunPlace {
@@ -22,10 +22,12 @@ pub fn run(args: &PlaceArgs) -> Result<String> {
         max_minutes: args.max_minutes,
         start: args.start,
         spp: args.spp,
-        axis: if args.rings {
-            Axis::Rings
+        placing: if args.grid {
+            Placing::Grid
+        } else if args.rings {
+            Placing::Rings
         } else {
-            Axis::Azimuth
+            Placing::Azimuth
         },
     };
     place(&run, &opts)
