@@ -71,6 +71,9 @@ pub struct ChartSpec {
     /// Logarithmic x axis (every x must then be > 0).
     pub log_x: bool,
     pub legend: LegendPosition,
+    /// Room right of the rightmost point, as a fraction of the x span
+    /// (point labels; a legend beside the points). Linear x axes only.
+    pub x_margin_right: f64,
     pub series: Vec<Series>,
 }
 
@@ -84,6 +87,7 @@ impl ChartSpec {
             size: (1024, 640),
             log_x: false,
             legend: LegendPosition::default(),
+            x_margin_right: 0.18,
             series: Vec::new(),
         }
     }
@@ -144,7 +148,12 @@ pub fn xy_chart(path: &Path, spec: &ChartSpec) -> Result<()> {
     let drawn = if spec.log_x {
         draw(&mut rgb, spec, padded_log(xs()).log_scale(), y)
     } else {
-        draw(&mut rgb, spec, padded_linear_sides(xs(), 0.05, 0.18), y)
+        draw(
+            &mut rgb,
+            spec,
+            padded_linear_sides(xs(), 0.05, spec.x_margin_right),
+            y,
+        )
     };
     drawn.with_context(|| format!("drawing {}", path.display()))?;
     let mut png = Vec::new();

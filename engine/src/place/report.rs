@@ -105,6 +105,8 @@ fn probes(o: &inference::scene::Orbit, axis: Axis, intervals: &[Interval]) -> Ve
 /// What a placement run found, placed and even, before the report adds
 /// the options and budgets.
 pub struct Outcome {
+    /// With the grid: the dense grid's azimuths and elevations, degrees.
+    pub dense_deg: [Vec<f32>; 2],
     pub placed: Placement,
     pub even: Placement,
     pub stop: Stop,
@@ -123,6 +125,7 @@ impl Outcome {
         views_scored: usize,
     ) -> Self {
         Outcome {
+            dense_deg: [Vec::new(), Vec::new()],
             placed: Placement::new(scene, axis, plan.lines, plan.intervals),
             even: Placement::new(scene, axis, even_lines, even),
             stop: plan.stop,
@@ -139,7 +142,12 @@ impl Outcome {
         (even_lines, even): ([Vec<u32>; 2], [Vec<Interval>; 2]),
         views_scored: usize,
     ) -> Self {
+        let o = &scene.orbit;
         Outcome {
+            dense_deg: [
+                (0..o.samples).map(|l| o.angle_deg(l)).collect(),
+                o.ring_elevations(),
+            ],
             placed: Placement::grid(scene, plan.lines, plan.intervals),
             even: Placement::grid(scene, even_lines, even),
             stop: plan.stop,
@@ -185,6 +193,11 @@ pub struct PlaceReport {
     /// Every interval measured while refining, in order (with `--grid`,
     /// every interval split, its axis in `splits`).
     pub measured: Vec<Interval>,
+    /// With `--grid`: the dense grid's azimuth lines and rings, degrees.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub dense_azimuths_deg: Vec<f32>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub dense_elevations_deg: Vec<f32>,
     /// With `--grid`: each split's axis, interval and the samples after it.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub splits: Vec<Split>,
@@ -202,6 +215,7 @@ impl PlaceReport {
         took: Duration,
     ) -> PlaceReport {
         let Outcome {
+            dense_deg: [dense_azimuths_deg, dense_elevations_deg],
             placed,
             even,
             stop,
@@ -216,27 +230,37 @@ impl PlaceReport {
                 placed.samples,
                 scene.orbit.sample_count()
             ),
-            Stop::Budget => format!(
-                "the budget of {} samples{} is spent; the worst interval ({:.2} dB) is below {} dB",
-                placed.samples,
-                bytes
+            Stop::Budget => {
+                let binding = bytes
                     .iter()
                     .chain(&minutes)
                     .filter(|b| b.samples <= opts.max_samples)
-                    .min_by_key(|b| b.samples)
-                    .map_or(String::new(), |b| match b.cost {
-                        Cost::Bytes => format!(
-                            " ({} B at {:.0} B a sample in the dense container)",
-                            b.max, b.per_sample
-                        ),
-                        Cost::Minutes => format!(
-                            " ({} min at {:.2} min a sample in the dense compile)",
-                            b.max, b.per_sample
-                        ),
-                    }),
-                placed.worst_db,
-                opts.target_db
-            ),
+                    .min_by_key(|b| b.samples);
+                let cost = binding.map_or(String::new(), |b| match b.cost {
+                    Cost::Bytes => format!(
+                        " ({} B at {:.0} B a sample in the dense container)",
+                        b.max, b.per_sample
+                    ),
+                    Cost::Minutes => format!(
+                        " ({} min at {:.2} min a sample in the dense compile)",
+                        b.max, b.per_sample
+                    ),
+                });
+                // A grid's next line may cost more samples than are left.
+                let budget = binding.map_or(opts.max_samples, |b| b.samples);
+                let spent = if opts.placing == Placing::Grid && placed.samples < budget {
+                    format!(
+                        "no further split fits the budget of {budget} samples{cost} ({} placed)",
+                        placed.samples
+                    )
+                } else {
+                    format!("the budget of {} samples{cost} is spent", placed.samples)
+                };
+                format!(
+                    "{spent}; the worst interval ({:.2} dB) is below {} dB",
+                    placed.worst_db, opts.target_db
+                )
+            }
         };
         let estimated_bytes = bytes.map(|b| b.estimate(placed.samples).round() as u64);
         let estimated_minutes = minutes.map(|b| b.estimate(placed.samples));
@@ -257,6 +281,8 @@ impl PlaceReport {
             even,
             placed,
             measured,
+            dense_azimuths_deg,
+            dense_elevations_deg,
             splits,
             views_scored,
             minutes: took.as_secs_f64() / 60.0,
@@ -270,6 +296,9 @@ impl PlaceReport {
     }
 
     fn chart(&self, path: &Path) -> Result<()> {
+        if self.axis == Placing::Grid {
+            return xy_chart(path, &self.grid_chart());
+        }
         let series = |name: String, probes: &[f32], intervals: &[Interval]| Series {
             name,
             points: probes
@@ -281,11 +310,8 @@ impl PlaceReport {
             connect: true,
         };
         let x = match self.axis {
-            Placing::Azimuth => "azimuth of the held-out view between samples (degrees)",
             Placing::Rings => "elevation of the held-out views between rings (degrees)",
-            Placing::Grid => {
-                "azimuth (between lines) or elevation (between rings) of the held-out views (degrees)"
-            }
+            _ => "azimuth of the held-out view between samples (degrees)",
         };
         let mut spec = ChartSpec::new(
             &format!("Where {} needs its samples", self.scene),
@@ -315,6 +341,73 @@ impl PlaceReport {
             return Ok(());
         }
         xy_chart(path, &spec)
+    }
+
+    /// The grid placement as a map of the viewpoint space: the dense
+    /// samples, the even and the placed ones, and each split numbered at
+    /// the line it added with the score that asked for it.
+    fn grid_chart(&self) -> ChartSpec {
+        let [az, el] = [&self.dense_azimuths_deg, &self.dense_elevations_deg];
+        let at = |l: &[u32], d: &[f32]| -> Vec<f64> {
+            l.iter()
+                .map(|&i| f64::from(d.get(i as usize).copied().unwrap_or(0.0)))
+                .collect()
+        };
+        let grid = |name: String, lines: &[f64], rings: &[f64]| Series {
+            name,
+            points: rings
+                .iter()
+                .flat_map(|&e| lines.iter().map(move |&a| (a, e)))
+                .collect(),
+            labels: Vec::new(),
+            connect: false,
+        };
+        let all = |d: &[f32]| d.iter().map(|&v| f64::from(v)).collect::<Vec<_>>();
+        let mut spec = ChartSpec::new(
+            &format!(
+                "Where {} needs its samples: {} of {}",
+                self.scene, self.placed.samples, self.dense_samples
+            ),
+            "azimuth (degrees)",
+            "elevation above the orbit plane (degrees)",
+        );
+        spec.legend = LegendPosition::UpperRight;
+        // The legend stands right of the grid, not over its corner.
+        spec.x_margin_right = 0.6;
+        spec.series.push(grid(
+            format!("dense, {} samples", self.dense_samples),
+            &all(az),
+            &all(el),
+        ));
+        for (kind, p) in [("even", &self.even), ("placed", &self.placed)] {
+            spec.series.push(grid(
+                format!("{kind}, {} samples (worst {:.2} dB)", p.samples, p.worst_db),
+                &at(&p.lines, az),
+                &at(&p.rings, el),
+            ));
+        }
+        let first = |d: &[f32]| f64::from(d.first().copied().unwrap_or(0.0));
+        let (lo_az, lo_el) = (first(az), first(el));
+        let (points, labels) = self
+            .splits
+            .iter()
+            .enumerate()
+            .map(|(k, s)| {
+                let i = s.interval.probe;
+                let point = match s.axis {
+                    Axis::Azimuth => (at(&[i], az)[0], lo_el),
+                    Axis::Rings => (lo_az, at(&[i], el)[0]),
+                };
+                (point, format!("{}: {:.2} dB", k + 1, s.interval.psnr_db))
+            })
+            .unzip();
+        spec.series.push(Series {
+            name: "split k: the worst interval's score".into(),
+            points,
+            labels,
+            connect: false,
+        });
+        spec
     }
 
     /// What `engine place` prints.
