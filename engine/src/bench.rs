@@ -92,6 +92,8 @@ pub struct BenchReport {
     pub frames_per_view: u32,
     /// Reflector pixels covered at the views (median over the views).
     pub covered_pixels: u64,
+    /// The same at the last row's views (it moves along the samples).
+    pub moving_covered_pixels: u64,
     pub rows: Vec<BenchRow>,
 }
 
@@ -165,7 +167,7 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
         progress: &progress,
     };
     let covered = run.resident(&mut renderers, &mut logs)?;
-    run.moving(&mut renderers, &mut logs)?;
+    let moving_covered = run.moving(&mut renderers, &mut logs)?;
     progress.finish_and_clear();
     let reports: Vec<PerfReport> = logs
         .into_iter()
@@ -176,7 +178,8 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
         views,
         frames_per_view: per_view,
         covered_pixels: covered as u64,
-        rows: rows(reports, covered),
+        moving_covered_pixels: moving_covered as u64,
+        rows: rows(reports, covered, moving_covered),
     };
     crate::util::files::write_json(&out.join("bench.json"), &report)?;
     Ok(report)
@@ -287,11 +290,13 @@ impl Run<'_> {
     }
 
     /// The last variant alone: one sample further every frame, its maps
-    /// decoded ahead while the previous frame draws.
-    fn moving(&self, renderers: &mut [Renderer], logs: &mut [PerfLog]) -> Result<()> {
+    /// decoded ahead while the previous frame draws; returns the median
+    /// covered reflector pixels at its timed frames' views.
+    fn moving(&self, renderers: &mut [Renderer], logs: &mut [PerfLog]) -> Result<f64> {
         let o = &self.orbit;
         let moving = self.variants.len() - 1;
         let last = o.samples.saturating_sub(1).max(1);
+        let mut eyes = Vec::new();
         for i in 0..self.warmup + self.views * self.per_view {
             let eye = o.eye(o.between_deg(i % last, 0.5), self.between_rings());
             let start = Instant::now();
@@ -299,10 +304,19 @@ impl Run<'_> {
             if i >= self.warmup {
                 let ms = start.elapsed().as_secs_f64() * 1e3;
                 logs[moving].record(ms, &stats.passes, stats.cpu);
+                eyes.push(eye);
                 self.progress.inc(1);
             }
         }
-        Ok(())
+        // Counted after the timed frames, so the read-backs do not give
+        // the decoding worker time the timed frames would not have had.
+        let r = &mut renderers[self.which[moving]];
+        let mut covered = Vec::with_capacity(eyes.len());
+        for eye in eyes {
+            r.frame(FrameMode::Pem, eye, o.view(eye))?;
+            covered.push(r.covered_pixels()? as f64);
+        }
+        Ok(median(&covered))
     }
 }
 
@@ -317,13 +331,17 @@ fn mode(d: &Draws) -> FrameMode {
 }
 
 /// The table's rows: ratios to the bare and static-EM frames (rows 0, 1),
-/// compositing invocations per covered pixel.
-fn rows(reports: Vec<PerfReport>, covered: f64) -> Vec<BenchRow> {
+/// compositing invocations per covered pixel (the last row's at its own
+/// views).
+fn rows(reports: Vec<PerfReport>, covered: f64, moving_covered: f64) -> Vec<BenchRow> {
     let bare_ms = reports[0].frame_ms_median;
     let static_ms = reports[1].frame_ms_median;
+    let last = reports.len().saturating_sub(1);
     reports
         .into_iter()
-        .map(|r| {
+        .enumerate()
+        .map(|(i, r)| {
+            let covered = if i == last { moving_covered } else { covered };
             let invocations: u64 = r
                 .passes
                 .iter()

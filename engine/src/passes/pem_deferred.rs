@@ -203,10 +203,12 @@ impl Pass for GBufferPass<'_> {
     }
 }
 
-/// One reflector's shading: the pixels marked `stencil`, inside `area`.
+/// One reflector's shading: the pixels marked `stencil`, inside `area`,
+/// drawn band by band where `bands` are given (scissors inside `area`).
 pub struct CompositeDraw {
     pub stencil: u32,
     pub area: vk::Rect2D,
+    pub bands: Vec<vk::Rect2D>,
     pub push: CompositePush,
 }
 
@@ -257,16 +259,23 @@ impl Pass for CompositePass<'_> {
             let d = &self.device.device;
             for draw in &self.draws {
                 self.pipeline.bind(cmd, Some(self.set), &draw.push)?;
+                let scissors = match draw.bands.as_slice() {
+                    [] => std::slice::from_ref(&draw.area),
+                    bands => bands,
+                };
                 // SAFETY: the composite pipeline (no vertex input) is bound
-                // inside dynamic rendering; the scissor lies in the render area.
+                // inside dynamic rendering; every scissor lies in `area`,
+                // hence in the render area (their union).
                 unsafe {
-                    d.cmd_set_scissor(cmd, 0, &[draw.area]);
                     d.cmd_set_stencil_reference(
                         cmd,
                         vk::StencilFaceFlags::FRONT_AND_BACK,
                         draw.stencil,
                     );
-                    d.cmd_draw(cmd, 3, 1, 0, 0);
+                    for scissor in scissors {
+                        d.cmd_set_scissor(cmd, 0, std::slice::from_ref(scissor));
+                        d.cmd_draw(cmd, 3, 1, 0, 0);
+                    }
                 }
             }
             Ok(())

@@ -223,6 +223,26 @@ pub fn area_of(
         })
 }
 
+/// The overlap of `a` and `b`; None when empty.
+pub fn intersect(a: vk::Rect2D, b: vk::Rect2D) -> Option<vk::Rect2D> {
+    let end = |r: vk::Rect2D| {
+        (
+            r.offset.x + r.extent.width as i32,
+            r.offset.y + r.extent.height as i32,
+        )
+    };
+    let (x0, y0) = (a.offset.x.max(b.offset.x), a.offset.y.max(b.offset.y));
+    let ((ax, ay), (bx, by)) = (end(a), end(b));
+    let (x1, y1) = (ax.min(bx), ay.min(by));
+    (x1 > x0 && y1 > y0).then(|| vk::Rect2D {
+        offset: vk::Offset2D { x: x0, y: y0 },
+        extent: vk::Extent2D {
+            width: (x1 - x0) as u32,
+            height: (y1 - y0) as u32,
+        },
+    })
+}
+
 /// The smallest rectangle holding both (None = the whole target wins).
 pub fn union(a: Option<vk::Rect2D>, b: Option<vk::Rect2D>) -> Option<vk::Rect2D> {
     let (a, b) = (a?, b?);

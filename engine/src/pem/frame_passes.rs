@@ -48,6 +48,7 @@ impl PemPlayer {
             cdraws.push(CompositeDraw {
                 stencil,
                 area,
+                bands: r.bands(area),
                 push: CompositePush {
                     f0: r.f0.extend(1.0),
                     weight: vec4_of(&weights),

@@ -165,7 +165,12 @@ impl PemPlayer {
     /// `blend`'s samples that are not resident into staging. The previous
     /// frame's uploads have run (its fence was waited on), so their
     /// staging buffers go back to the pool first.
-    pub fn prepare(&mut self, eye: Vec3, blend: &SampleBlend) -> Result<PemCpu> {
+    pub fn prepare(
+        &mut self,
+        eye: Vec3,
+        view: (glam::Mat4, (u32, u32)),
+        blend: &SampleBlend,
+    ) -> Result<PemCpu> {
         self.frame += 1;
         for p in self.pending.drain(..) {
             self.pool.give(p.buffer);
@@ -180,7 +185,7 @@ impl PemPlayer {
         let needed: Vec<u32> = blend.indices().collect();
         for ri in 0..self.reflectors.len() {
             let start = Instant::now();
-            self.reflectors[ri].texgen(eye, &self.settings, &mut self.scratch)?;
+            self.reflectors[ri].texgen(eye, view, &self.settings, &mut self.scratch)?;
             cpu.texgen_ms += start.elapsed().as_secs_f64() * 1e3;
             let Some(fills) = self.reflectors[ri].table.assign(&needed, self.frame) else {
                 bail!(

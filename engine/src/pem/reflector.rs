@@ -25,6 +25,12 @@ pub struct PemReflector {
     pub lod_bias: f32,
     positions: Vec<Vec3>,
     normals: Vec<Vec3>,
+    /// The mesh's triangles (the compositing bands' screen bounds).
+    triangles: Vec<u32>,
+    /// The compositing pass's scissor bands for the frame texgen last ran
+    /// for (empty: draw the bounding rectangle), and their scratch.
+    bands: Vec<vk::Rect2D>,
+    pixels: Vec<glam::Vec2>,
     origin: Vec3,
     /// World-space bounds: what the draw passes' render area must cover.
     pub bounds: (Vec3, Vec3),
@@ -80,6 +86,9 @@ impl PemReflector {
             lod_bias: o.lod_bias(),
             positions: o.mesh.positions.clone(),
             normals: o.mesh.normals.clone(),
+            triangles: o.mesh.indices.clone(),
+            bands: Vec::new(),
+            pixels: Vec::new(),
             origin,
             bounds: o.mesh.bounds(),
             distant: EmGeometry::Box {
@@ -105,44 +114,69 @@ impl PemReflector {
         })
     }
 
+    /// The rows this reflector covers in the frame texgen last ran for,
+    /// as scissor bands inside `within` ([`super::bands`]); empty where no
+    /// bound holds (a vertex behind the eye: draw `within`).
+    pub fn bands(&self, within: vk::Rect2D) -> Vec<vk::Rect2D> {
+        super::bands::clipped(&self.bands, within)
+    }
+
     /// The array element holding `sample`, if it is resident.
     pub fn element(&self, sample: u32) -> Option<u32> {
         self.table.find(sample).map(|slot| self.base + slot as u32)
     }
 
     /// CPU texgen for `eye` into the streams `settings` draw with (`scratch`
-    /// is reused between calls).
+    /// is reused between calls), and beside it, on the other core, the
+    /// compositing bands of the frame `view` (view-projection, size).
     pub fn texgen(
         &mut self,
         eye: Vec3,
+        (view_proj, size): (glam::Mat4, (u32, u32)),
         settings: &PemSettings,
         scratch: &mut Vec<TexgenVertex>,
     ) -> Result<()> {
         if settings.kind == PemKind::Ptm {
+            self.bands.clear();
             return Ok(());
         }
-        scratch.resize(self.positions.len(), [0.0; 4]);
+        let PemReflector {
+            positions,
+            normals,
+            triangles,
+            bands,
+            pixels,
+            texgen_distant,
+            texgen_local,
+            distant,
+            local,
+            origin,
+            ..
+        } = self;
         let first = match settings.kind {
             PemKind::Sphere => EmGeometry::SphereAtInfinity,
-            _ => self.distant,
+            _ => *distant,
         };
-        let mut streams = vec![(first, &mut self.texgen_distant)];
+        let mut streams = vec![(first, texgen_distant)];
         if settings.kind == PemKind::Layered && settings.local_layer {
-            streams.push((self.local, &mut self.texgen_local));
+            streams.push((*local, texgen_local));
         }
-        for (geometry, buffer) in streams {
-            texgen(
-                &geometry,
-                self.origin,
-                eye,
-                &self.positions,
-                &self.normals,
-                scratch,
-            );
-            let bytes: &[u8] = bytemuck::cast_slice(scratch);
-            buffer.mapped_mut()?[..bytes.len()].copy_from_slice(bytes);
-        }
-        Ok(())
+        let (written, ()) = rayon::join(
+            || -> Result<()> {
+                scratch.resize(positions.len(), [0.0; 4]);
+                for (geometry, buffer) in streams {
+                    texgen(&geometry, *origin, eye, positions, normals, scratch);
+                    let bytes: &[u8] = bytemuck::cast_slice(scratch);
+                    buffer.mapped_mut()?[..bytes.len()].copy_from_slice(bytes);
+                }
+                Ok(())
+            },
+            || {
+                *bands = super::bands::screen_bands(view_proj, positions, triangles, size, pixels)
+                    .unwrap_or_default();
+            },
+        );
+        written
     }
 }
 

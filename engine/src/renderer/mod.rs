@@ -312,7 +312,7 @@ impl Renderer {
         let glass = self.glass.as_mut();
         crate::glass::prepare_frame(glass, mode, (eye, view_proj), next, size, &mut cpu)?;
         let blend = match mode {
-            FrameMode::Pem => Some(self.prepare_pem(eye, &mut cpu)?),
+            FrameMode::Pem => Some(self.prepare_pem(eye, view_proj, &mut cpu)?),
             _ => None,
         };
         let parts = FrameParts {
@@ -350,12 +350,17 @@ impl Renderer {
 
     /// The samples a PEM frame from `eye` blends, their maps read into
     /// staging; what that cost on the CPU is added to `cpu`.
-    fn prepare_pem(&mut self, eye: Vec3, cpu: &mut CpuTimes) -> Result<SampleBlend, RenderError> {
+    fn prepare_pem(
+        &mut self,
+        eye: Vec3,
+        view_proj: Mat4,
+        cpu: &mut CpuTimes,
+    ) -> Result<SampleBlend, RenderError> {
         let Some(pem) = self.pem.as_mut() else {
             return Err(GpuError::Invalid("PEM frame without set_pem()".into()).into());
         };
         let blend = pem.blend(eye);
-        let prepared = pem.prepare(eye, &blend)?;
+        let prepared = pem.prepare(eye, (view_proj, (self.width, self.height)), &blend)?;
         cpu.texgen_ms += prepared.texgen_ms;
         cpu.decode_ms += prepared.decode_ms;
         cpu.decoded_maps += prepared.decoded_maps;
