@@ -329,8 +329,14 @@ fn rings_are_placed_with_every_azimuth_line() {
     let placed = inference::scene::Scene::load(s(&scene)).expect("placed scene loads");
     assert_eq!(placed.orbit.sample_count(), 9);
     assert_grid_placement(&dense, &data, &dir.path().join("grid"));
+    assert_rings_refused(&tiny, &dense, &data);
+}
+
+/// `--rings` on a 1D orbit is refused, naming the file and the fix, and so
+/// is starting from every dense ring (nothing left to place).
+fn assert_rings_refused(tiny: &Path, dense: &Path, data: &Path) {
     // A 1D orbit is refused with --rings, naming the file and the fix.
-    let o = run_engine(&["place", "--rings", "--scene", s(&tiny), "--data", s(&data)]);
+    let o = run_engine(&["place", "--rings", "--scene", s(tiny), "--data", s(data)]);
     let log = output_text(&o);
     assert!(!o.status.success() && log.contains("one ring"), "{log}");
     // Starting from every dense ring leaves nothing to place.
@@ -338,9 +344,9 @@ fn rings_are_placed_with_every_azimuth_line() {
         "place",
         "--rings",
         "--scene",
-        s(&dense),
+        s(dense),
         "--data",
-        s(&data),
+        s(data),
         "--start",
         "5",
     ]);
