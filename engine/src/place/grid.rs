@@ -194,6 +194,30 @@ pub fn place_grid(
     }
 }
 
+/// The even grid a placement of `samples` samples is compared with: the
+/// shape whose lines and rings take the most nearly equal fractions of the
+/// dense grid's (`dense` lines per axis), the fewest samples among those,
+/// and at least `samples` (so the even grid never has fewer samples than
+/// the placement it is compared with); the dense grid when none is that big.
+pub fn even_shape(dense: [u32; 2], samples: u32) -> [u32; 2] {
+    let fraction = |n: u32, of: u32| f64::from(n - 1) / f64::from(of.max(2) - 1);
+    let mut best: Option<(f64, u32, [u32; 2])> = None;
+    for a in 2..=dense[0].max(2) {
+        for r in 2..=dense[1].max(2) {
+            if a * r < samples {
+                continue;
+            }
+            let skew = (fraction(a, dense[0]) - fraction(r, dense[1])).abs();
+            let better = best
+                .is_none_or(|(s, n, _)| skew < s - 1e-9 || ((skew - s).abs() <= 1e-9 && a * r < n));
+            if better {
+                best = Some((skew, a * r, [a, r]));
+            }
+        }
+    }
+    best.map_or(dense, |(_, _, shape)| shape)
+}
+
 /// The lowest score of both axes' intervals (+∞ when none).
 pub fn grid_worst(intervals: &[Vec<Interval>; 2]) -> f64 {
     worst(&intervals[0]).min(worst(&intervals[1]))
@@ -278,6 +302,18 @@ mod tests {
         assert_eq!(plan.splits.len(), 1);
         // The rings fail first in this scene.
         assert_eq!(plan.splits[0].axis, Axis::Rings);
+    }
+
+    #[test]
+    fn the_even_grid_compared_is_balanced_and_never_smaller() {
+        // 7 × 7 dense: 14 placed samples meet a 4 × 4 even grid, 21 a 5 × 5.
+        assert_eq!(even_shape([7, 7], 14), [4, 4]);
+        assert_eq!(even_shape([7, 7], 21), [5, 5]);
+        assert_eq!(even_shape([7, 7], 4), [2, 2]);
+        // 3 lines × 5 rings: half of each, 2 × 3.
+        assert_eq!(even_shape([3, 5], 6), [2, 3]);
+        // Beyond the dense grid: the dense grid.
+        assert_eq!(even_shape([3, 5], 99), [3, 5]);
     }
 
     #[test]

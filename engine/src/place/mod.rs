@@ -207,13 +207,14 @@ fn place_lines(probe: &mut Probe, axis: Axis, plan_opts: &PlanOptions) -> Result
     ))
 }
 
-/// Azimuth lines and rings refined together, and an even grid with as
-/// many lines along each axis.
+/// Azimuth lines and rings refined together, and the balanced even grid
+/// with at least as many samples ([`grid::even_shape`]).
 fn place_both(probe: &mut Probe, grid: &GridOptions) -> Result<Outcome> {
     let mut views = grid::Views::new();
     let mut measure = |axis, from, to, at, other| probe.score(axis, from, to, at, other);
     let plan = grid::place_grid(grid, &mut views, &mut measure)?;
-    let even_lines = [0, 1].map(|k| plan::uniform(grid.lines[k], plan.lines[k].len() as u32));
+    let shape = grid::even_shape(grid.lines, plan.samples());
+    let even_lines = [0, 1].map(|k| plan::uniform(grid.lines[k], shape[k]));
     let even = [
         grid::grid_intervals(&even_lines, 0, &mut views, &mut measure)?,
         grid::grid_intervals(&even_lines, 1, &mut views, &mut measure)?,
