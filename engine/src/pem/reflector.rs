@@ -128,7 +128,8 @@ impl PemReflector {
 
     /// CPU texgen for `eye` into the streams `settings` draw with (`scratch`
     /// is reused between calls), and beside it, on the other core, the
-    /// compositing bands of the frame `view` (view-projection, size).
+    /// compositing bands of the frame `view` (view-projection, size) when
+    /// the frame composites deferred.
     pub fn texgen(
         &mut self,
         eye: Vec3,
@@ -172,7 +173,13 @@ impl PemReflector {
                 Ok(())
             },
             || {
-                *bands = super::bands::screen_bands(view_proj, positions, triangles, size, pixels)
+                // Only the deferred composite draws by bands.
+                *bands = settings
+                    .deferred()
+                    .then(|| {
+                        super::bands::screen_bands(view_proj, positions, triangles, size, pixels)
+                    })
+                    .flatten()
                     .unwrap_or_default();
             },
         );

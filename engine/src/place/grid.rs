@@ -9,7 +9,7 @@
 //! closure, so the rule is tested alone.
 
 use super::Axis;
-use super::plan::{Interval, Stop, uniform, worst};
+use super::plan::{Interval, Stop, gaps, uniform, worst};
 use anyhow::{Result, bail};
 use std::collections::BTreeMap;
 
@@ -94,6 +94,11 @@ impl GridPlan {
     pub fn samples(&self) -> u32 {
         (self.lines[0].len() * self.lines[1].len()) as u32
     }
+
+    /// The lowest score of both axes' intervals (+∞ when none).
+    pub fn worst_db(&self) -> f64 {
+        worst(&self.intervals[0]).min(worst(&self.intervals[1]))
+    }
 }
 
 /// Scored views, memoised: (axis index, from, to, the other axis's line)
@@ -112,12 +117,7 @@ pub fn grid_intervals(
     measure: &mut impl FnMut(Axis, u32, u32, u32, u32) -> Result<f64>,
 ) -> Result<Vec<Interval>> {
     let mut out = Vec::new();
-    for w in lines[k].windows(2) {
-        let (from, to) = (w[0], w[1]);
-        if to - from < 2 {
-            continue;
-        }
-        let probe = from + (to - from) / 2;
+    for (from, to, probe) in gaps(&lines[k]) {
         let mut psnr_db = f64::INFINITY;
         for &other in &lines[1 - k] {
             let db = match views.get(&(k, from, to, other)) {
@@ -218,11 +218,6 @@ pub fn even_shape(dense: [u32; 2], samples: u32) -> [u32; 2] {
     best.map_or(dense, |(_, _, shape)| shape)
 }
 
-/// The lowest score of both axes' intervals (+∞ when none).
-pub fn grid_worst(intervals: &[Vec<Interval>; 2]) -> f64 {
-    worst(&intervals[0]).min(worst(&intervals[1]))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -254,7 +249,7 @@ mod tests {
         let mut views = Views::new();
         let plan = place_grid(&opts(40.0, 1000), &mut views, scene).expect("plan");
         assert_eq!(plan.stop, Stop::TargetMet, "{plan:?}");
-        assert!(grid_worst(&plan.intervals) >= 40.0, "{plan:?}");
+        assert!(plan.worst_db() >= 40.0, "{plan:?}");
         // 40 dB needs width × busy ≤ 10: azimuth lines 8 apart (busy 1.2
         // on the top ring), rings 2 apart (busy 3 on the last line).
         assert_eq!(plan.lines, [vec![0, 8, 16], vec![0, 2, 4, 6, 8]]);

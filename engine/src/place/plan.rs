@@ -114,6 +114,16 @@ pub fn uniform(lines: u32, count: u32) -> Vec<u32> {
     out
 }
 
+/// The intervals between neighbouring `lines` with a dense line inside
+/// (neighbouring lines need no blend), each with the middle line it
+/// would split at: `(from, to, probe)`.
+pub fn gaps(lines: &[u32]) -> impl Iterator<Item = (u32, u32, u32)> + '_ {
+    lines
+        .windows(2)
+        .filter(|w| w[1] - w[0] >= 2)
+        .map(|w| (w[0], w[1], w[0] + (w[1] - w[0]) / 2))
+}
+
 /// Measures each interval of `lines` with a line inside (memoised in
 /// `seen`, so an interval is measured once whatever asks).
 pub fn measure_intervals(
@@ -122,15 +132,10 @@ pub fn measure_intervals(
     measure: &mut impl FnMut(u32, u32, u32) -> Result<f64>,
 ) -> Result<Vec<Interval>> {
     let mut out = Vec::new();
-    for w in lines.windows(2) {
-        let (from, to) = (w[0], w[1]);
-        if to - from < 2 {
-            continue;
-        }
+    for (from, to, probe) in gaps(lines) {
         let interval = match seen.get(&(from, to)) {
             Some(i) => *i,
             None => {
-                let probe = from + (to - from) / 2;
                 let psnr_db = measure(from, to, probe)?;
                 let i = Interval {
                     from,

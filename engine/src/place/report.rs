@@ -1,6 +1,6 @@
 //! What `engine place` found, as placement.json, placement.png and text.
 
-use super::grid::{GridPlan, Split, grid_worst};
+use super::grid::{GridPlan, Split};
 use super::plan::{Interval, Plan, Stop, worst};
 use super::{Axis, Budget, Cost, PlaceOptions, Placing};
 use crate::eval::plot::{ChartSpec, LegendPosition, Series, xy_chart};
@@ -75,7 +75,7 @@ impl Placement {
             samples: (lines.len() * rings.len()) as u32,
             azimuths_deg: at(Axis::Azimuth, &lines),
             elevations_deg: at(Axis::Rings, &rings),
-            worst_db: grid_worst(&[az.clone(), el.clone()]),
+            worst_db: worst(&az).min(worst(&el)),
             median_db: median_or_inf(&scores),
             probes_deg: probes(o, Axis::Azimuth, &az),
             ring_probes_deg: probes(o, Axis::Rings, &el),
@@ -321,20 +321,7 @@ impl PlaceReport {
         spec.legend = LegendPosition::LowerLeft;
         for (kind, p) in [("placed", &self.placed), ("even", &self.even)] {
             let name = format!("{kind}, {} samples", p.samples);
-            if self.axis == Placing::Grid {
-                spec.series.push(series(
-                    format!("{name}: between lines"),
-                    &p.probes_deg,
-                    &p.intervals,
-                ));
-                spec.series.push(series(
-                    format!("{name}: between rings"),
-                    &p.ring_probes_deg,
-                    &p.ring_intervals,
-                ));
-            } else {
-                spec.series.push(series(name, &p.probes_deg, &p.intervals));
-            }
+            spec.series.push(series(name, &p.probes_deg, &p.intervals));
         }
         spec.series.retain(|s| !s.points.is_empty());
         if spec.series.is_empty() {
@@ -348,11 +335,8 @@ impl PlaceReport {
     /// the line it added with the score that asked for it.
     fn grid_chart(&self) -> ChartSpec {
         let [az, el] = [&self.dense_azimuths_deg, &self.dense_elevations_deg];
-        let at = |l: &[u32], d: &[f32]| -> Vec<f64> {
-            l.iter()
-                .map(|&i| f64::from(d.get(i as usize).copied().unwrap_or(0.0)))
-                .collect()
-        };
+        let deg = |i: u32, d: &[f32]| f64::from(d.get(i as usize).copied().unwrap_or(0.0));
+        let at = |l: &[u32], d: &[f32]| -> Vec<f64> { l.iter().map(|&i| deg(i, d)).collect() };
         let grid = |name: String, lines: &[f64], rings: &[f64]| Series {
             name,
             points: rings
@@ -386,8 +370,7 @@ impl PlaceReport {
                 &at(&p.rings, el),
             ));
         }
-        let first = |d: &[f32]| f64::from(d.first().copied().unwrap_or(0.0));
-        let (lo_az, lo_el) = (first(az), first(el));
+        let (lo_az, lo_el) = (deg(0, az), deg(0, el));
         let (points, labels) = self
             .splits
             .iter()
@@ -395,8 +378,8 @@ impl PlaceReport {
             .map(|(k, s)| {
                 let i = s.interval.probe;
                 let point = match s.axis {
-                    Axis::Azimuth => (at(&[i], az)[0], lo_el),
-                    Axis::Rings => (lo_az, at(&[i], el)[0]),
+                    Axis::Azimuth => (deg(i, az), lo_el),
+                    Axis::Rings => (lo_az, deg(i, el)),
                 };
                 (point, format!("{}: {:.2} dB", k + 1, s.interval.psnr_db))
             })
