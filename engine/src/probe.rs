@@ -12,7 +12,7 @@ use crate::passes::mirror::{fresnel_lut_image, mirror_pipeline};
 use crate::passes::probe::ProbePass;
 use crate::passes::readback::ReadbackPass;
 use crate::passes::room::{RoomStyle, room_pipeline};
-use crate::passes::target::Target;
+use crate::passes::target::{Load, Target};
 use crate::shader_interface::{MirrorPush, RoomPush};
 use ash::vk;
 use glam::{Mat4, Vec4};
@@ -273,7 +273,7 @@ impl VulkanProbe {
             depth: &targets.depth,
             level: 0,
             layer: 0,
-            clear: true,
+            load: Load::Clear,
             front_face: vk::FrontFace::COUNTER_CLOCKWISE,
             area: None,
         };

@@ -2,7 +2,9 @@
 //! sample (one map, no blending) and between samples (two maps blended),
 //! the two frames agree — the G-buffer's explicit level of detail is the
 //! one a forward `texture()` picks (LOD bias included), so maps inferred
-//! through either path play in both.
+//! through either path play in both. A diffuse card stands between the
+//! eye and part of the teapot: the deferred frame draws the reflector
+//! before the room, and the card must still hide it.
 
 mod common;
 
@@ -69,10 +71,23 @@ fn deferred_and_multipass_frames_agree() {
     assert_no_validation_messages();
 }
 
-/// The tiny scene with `lod_bias`, compiled into `dir/<name>` at 96×72.
+/// A diffuse card (both windings) in front of the teapot's right half as
+/// the orbit's first samples see it: an occluder the room pass draws.
+const CARD_OBJ: &str = "v 0.05 0.15 0.8\nv 0.45 0.15 0.8\nv 0.45 0.45 0.8\nv 0.05 0.45 0.8\n\
+                        f 1 2 3\nf 1 3 4\nf 3 2 1\nf 4 3 1\n";
+const CARD: &str = "
+[[objects]]
+name = \"card\"
+mesh = { obj = \"card.obj\" }
+material = \"floor\"
+";
+
+/// The tiny scene with `lod_bias` and the card, compiled into
+/// `dir/<name>` at 96×72.
 fn compile(dir: &std::path::Path, name: &str, lod_bias: f32) -> (Scene, std::path::PathBuf) {
     let scene_path = tiny_scene(dir);
-    let text = std::fs::read_to_string(&scene_path).expect("scene");
+    std::fs::write(dir.join("card.obj"), CARD_OBJ).expect("write card");
+    let text = std::fs::read_to_string(&scene_path).expect("scene") + CARD;
     // The tiny scene inherits the shipped teapot's bias: replace its line.
     let text: String = text
         .lines()

@@ -55,6 +55,9 @@ pub enum StencilTest {
     /// Write the reference (set per draw) wherever a fragment passes the
     /// depth test.
     Mark,
+    /// Write 0 wherever a fragment passes the depth test: what is drawn
+    /// over a marked pixel unmarks it.
+    Unmark,
     /// Shade only where the stencil equals the reference (set per draw;
     /// tested before the fragment shader runs, so other pixels cost no
     /// invocation).
@@ -434,7 +437,7 @@ fn dynamic_states(desc: &PipelineDesc) -> Vec<vk::DynamicState> {
         vk::DynamicState::SCISSOR,
         vk::DynamicState::FRONT_FACE,
     ];
-    if desc.stencil != StencilTest::Off {
+    if matches!(desc.stencil, StencilTest::Mark | StencilTest::Equal) {
         dynamic_states.push(vk::DynamicState::STENCIL_REFERENCE);
     }
     dynamic_states
@@ -468,6 +471,7 @@ fn depth_stencil_state(desc: &PipelineDesc) -> vk::PipelineDepthStencilStateCrea
     let (stencil, face) = match desc.stencil {
         StencilTest::Off => (false, op(vk::CompareOp::ALWAYS, vk::StencilOp::KEEP, 0)),
         StencilTest::Mark => (true, op(vk::CompareOp::ALWAYS, vk::StencilOp::REPLACE, 0)),
+        StencilTest::Unmark => (true, op(vk::CompareOp::ALWAYS, vk::StencilOp::ZERO, 0)),
         StencilTest::Equal => (true, op(vk::CompareOp::EQUAL, vk::StencilOp::KEEP, 0)),
     };
     vk::PipelineDepthStencilStateCreateInfo::default()

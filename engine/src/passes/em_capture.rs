@@ -2,7 +2,7 @@
 //! cube at the reflector's EM origin, then every MIP level down-sampled.
 
 use super::room::RoomRenderer;
-use super::target::Target;
+use super::target::{Load, Target};
 use crate::backend::{Device, GpuResult, Image, ImageDesc};
 use crate::cube::{FACE_COUNT, face_view_proj};
 use crate::gpu_scene::GpuScene;
@@ -75,7 +75,7 @@ impl Pass for EmCapturePass<'_> {
                 depth: &self.cube.depth,
                 level: 0,
                 layer: face,
-                clear: true,
+                load: Load::Clear,
                 front_face: vk::FrontFace::CLOCKWISE,
                 area: None,
             };

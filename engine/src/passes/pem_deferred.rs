@@ -19,8 +19,10 @@ use ash::vk;
 use glam::{Mat4, Vec4};
 
 /// What the G-buffer holds where no reflector was drawn: the cosine's
-/// sentinel (below any cosine) lets a read-back count covered pixels.
-pub const GBUFFER_CLEAR: [[f32; 4]; 3] = [[0.0; 4], [0.0; 4], [-2.0, 0.0, 0.0, 0.0]];
+/// sentinel (below any cosine) lets a read-back count covered pixels; the
+/// lookups are left undefined (the composite reads only marked pixels, and
+/// clearing two RGBA32F frames would cost every frame).
+pub const GBUFFER_CLEAR: [Option<[f32; 4]>; 3] = [None, None, Some([-2.0, 0.0, 0.0, 0.0])];
 
 /// G-buffer formats: distant lookup + LOD, local lookup + LOD, cos θ.
 pub const GBUFFER_FORMATS: [vk::Format; 3] = [
@@ -123,19 +125,18 @@ pub struct GBufferDraw<'a> {
     pub lod_bias: f32,
 }
 
-/// Pass 1: the reflectors into the G-buffer, depth-tested against the
-/// room, their parts marked in the stencil.
+/// Pass 1, the frame's first: the reflectors into the G-buffer, their
+/// parts marked in the stencil, their depth laid down for the room.
 pub struct GBufferPass<'a> {
     pub device: &'a Device,
     pub pipeline: &'a Pipeline,
     /// Binds the distant and local map arrays (for the LOD queries).
     pub set: vk::DescriptorSet,
     pub gbuffer: &'a GBuffer,
-    /// The frame's depth/stencil (the room's depth already in it).
+    /// The frame's depth/stencil (cleared by this pass).
     pub depth: &'a Image,
     pub draws: Vec<GBufferDraw<'a>>,
     pub sampled: Vec<&'a Image>,
-    pub area: Option<vk::Rect2D>,
     pub view_proj: Mat4,
 }
 
@@ -162,10 +163,14 @@ impl Pass for GBufferPass<'_> {
         let colors: Vec<&Image> = self.gbuffer.images.iter().collect();
         let attachments = Attachments {
             colors: &colors,
+            // The frame's first pass: it clears depth and stencil over the
+            // whole frame, so the room drawn next skips the reflectors'
+            // pixels.
             load: ColorLoad::Clear(&GBUFFER_CLEAR),
             depth: self.depth,
             depth_usage: Usage::DepthTarget,
-            area: self.area,
+            clear_depth: true,
+            area: None,
         };
         attachments.render(self.device, cmd, || {
             let d = &self.device.device;
@@ -253,6 +258,7 @@ impl Pass for CompositePass<'_> {
             load: ColorLoad::Keep,
             depth: self.target.depth,
             depth_usage: Usage::DepthRead,
+            clear_depth: false,
             area: union,
         };
         attachments.render(self.device, cmd, || {
@@ -288,8 +294,9 @@ impl Pass for CompositePass<'_> {
 pub enum ColorLoad<'a> {
     /// What earlier passes left.
     Keep,
-    /// These values, one per attachment.
-    Clear(&'a [[f32; 4]]),
+    /// Per attachment, cleared to a value, or undefined (None: every
+    /// texel a later pass reads is written first).
+    Clear(&'a [Option<[f32; 4]>]),
 }
 
 /// Colour attachments (level 0, layer 0) and a depth/stencil image, for
@@ -300,38 +307,42 @@ pub struct Attachments<'a> {
     pub depth: &'a Image,
     /// `DepthTarget` (read and write) or `DepthRead` (tested only).
     pub depth_usage: Usage,
+    /// Clear depth (to 1) and stencil (to 0) over the render area first,
+    /// instead of loading what earlier passes left.
+    pub clear_depth: bool,
     pub area: Option<vk::Rect2D>,
 }
 
 impl Attachments<'_> {
-    /// Begins rendering (depth and stencil loaded), runs `draw`, ends.
+    /// Begins rendering, runs `draw`, ends.
     pub fn render(
         &self,
         device: &Device,
         cmd: vk::CommandBuffer,
         draw: impl FnOnce() -> GpuResult<()>,
     ) -> GpuResult<()> {
-        let colors = self
-            .colors
-            .iter()
-            .enumerate()
-            .map(|(i, c)| {
-                let info = vk::RenderingAttachmentInfo::default()
-                    .image_view(c.target_view(0, 0)?)
-                    .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                    .store_op(vk::AttachmentStoreOp::STORE);
-                Ok(match self.load {
-                    ColorLoad::Keep => info.load_op(vk::AttachmentLoadOp::LOAD),
-                    ColorLoad::Clear(values) => info
-                        .load_op(vk::AttachmentLoadOp::CLEAR)
-                        .clear_value(vk::ClearValue {
-                            color: vk::ClearColorValue {
-                                float32: values.get(i).copied().unwrap_or([0.0; 4]),
-                            },
-                        }),
+        let colors =
+            self.colors
+                .iter()
+                .enumerate()
+                .map(|(i, c)| {
+                    let info = vk::RenderingAttachmentInfo::default()
+                        .image_view(c.target_view(0, 0)?)
+                        .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                        .store_op(vk::AttachmentStoreOp::STORE);
+                    Ok(match self.load {
+                        ColorLoad::Keep => info.load_op(vk::AttachmentLoadOp::LOAD),
+                        ColorLoad::Clear(values) => match values.get(i).copied().flatten() {
+                            Some(value) => info.load_op(vk::AttachmentLoadOp::CLEAR).clear_value(
+                                vk::ClearValue {
+                                    color: vk::ClearColorValue { float32: value },
+                                },
+                            ),
+                            None => info.load_op(vk::AttachmentLoadOp::DONT_CARE),
+                        },
+                    })
                 })
-            })
-            .collect::<GpuResult<Vec<_>>>()?;
+                .collect::<GpuResult<Vec<_>>>()?;
         let (layout, store) = match self.depth_usage {
             Usage::DepthRead => (
                 vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL,
@@ -342,11 +353,22 @@ impl Attachments<'_> {
                 vk::AttachmentStoreOp::STORE,
             ),
         };
+        let depth_load = if self.clear_depth {
+            vk::AttachmentLoadOp::CLEAR
+        } else {
+            vk::AttachmentLoadOp::LOAD
+        };
         let depth = vk::RenderingAttachmentInfo::default()
             .image_view(self.depth.target_view(0, 0)?)
             .image_layout(layout)
-            .load_op(vk::AttachmentLoadOp::LOAD)
-            .store_op(store);
+            .load_op(depth_load)
+            .store_op(store)
+            .clear_value(vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue {
+                    depth: 1.0,
+                    stencil: 0,
+                },
+            });
         let (width, height) = self.depth.desc.mip_extent(0);
         render_into(
             device,

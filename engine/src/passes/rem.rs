@@ -6,7 +6,7 @@
 //! singularity (alpha carries the weight total) — and the `rem` pass that
 //! shades the reflector from it per pixel.
 
-use super::target::{Target, draw_mesh};
+use super::target::{Load, Target, draw_mesh};
 use crate::backend::upload::upload_image;
 use crate::backend::{
     Binding, Blend, DepthTest, Device, Filtering, GpuResult, Image, ImageDesc, Pipeline,
@@ -292,7 +292,7 @@ impl<'a> RemWarpPass<'a> {
             depth: &self.r.blended_depth,
             level: 0,
             layer: 0,
-            clear: true,
+            load: Load::Clear,
             front_face: vk::FrontFace::COUNTER_CLOCKWISE,
             area: None,
         }

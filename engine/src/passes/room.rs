@@ -106,6 +106,20 @@ impl RoomRenderer {
                 light_uvs: None,
             });
         }
+        if style == RoomStyle::Bare {
+            // Reflectors and glass first, as the lit frames draw them: the
+            // depth they lay down spares the room's shading behind them.
+            let drawn_late = |d: &Draw| {
+                matches!(
+                    scene
+                        .objects
+                        .get(d.object)
+                        .and_then(|o| scene.materials.get(o.material)),
+                    Some(Material::Diffuse { .. } | Material::Emissive { .. })
+                )
+            };
+            draws.sort_by_key(drawn_late);
+        }
         Ok(Self {
             device: device.clone(),
             pipeline,
@@ -285,7 +299,13 @@ pub fn room_pipeline(
             bindings: &[vk::DescriptorType::COMBINED_IMAGE_SAMPLER, second],
             blend: crate::backend::Blend::Replace,
             depth: crate::backend::DepthTest::TestWrite,
-            stencil: crate::backend::StencilTest::Off,
+            // The deferred PEM frame marks its reflectors before the room:
+            // a diffuse object drawn in front of one unmarks those pixels.
+            stencil: if style == RoomStyle::Bare {
+                crate::backend::StencilTest::Off
+            } else {
+                crate::backend::StencilTest::Unmark
+            },
         },
     )
 }

@@ -6,6 +6,18 @@ use crate::gpu_scene::GpuMesh;
 use crate::graph::{Access, Usage};
 use ash::vk;
 
+/// What a pass finds in its attachments when it begins.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Load {
+    /// Both cleared.
+    Clear,
+    /// The colour cleared; depth and stencil as earlier passes left them
+    /// (the room after the reflectors laid down their depth).
+    ClearColor,
+    /// Both as earlier passes left them.
+    Keep,
+}
+
 /// A colour + depth pair to render into (one MIP level, one layer).
 #[derive(Clone, Copy)]
 pub struct Target<'a> {
@@ -13,8 +25,8 @@ pub struct Target<'a> {
     pub depth: &'a Image,
     pub level: u32,
     pub layer: u32,
-    /// Clear both attachments first (else load what earlier passes drew).
-    pub clear: bool,
+    /// What the attachments hold when the pass begins.
+    pub load: Load,
     /// Winding of front faces as this target's projection sees them: cube
     /// faces are mirror images (see `cube.rs`), so they flip it.
     pub front_face: vk::FrontFace,
@@ -49,10 +61,10 @@ impl<'a> Target<'a> {
         cmd: vk::CommandBuffer,
         draw: impl FnOnce() -> GpuResult<()>,
     ) -> GpuResult<()> {
-        let load = if self.clear {
-            vk::AttachmentLoadOp::CLEAR
-        } else {
-            vk::AttachmentLoadOp::LOAD
+        let (load, depth_load) = match self.load {
+            Load::Clear => (vk::AttachmentLoadOp::CLEAR, vk::AttachmentLoadOp::CLEAR),
+            Load::ClearColor => (vk::AttachmentLoadOp::CLEAR, vk::AttachmentLoadOp::LOAD),
+            Load::Keep => (vk::AttachmentLoadOp::LOAD, vk::AttachmentLoadOp::LOAD),
         };
         let color = [vk::RenderingAttachmentInfo::default()
             .image_view(self.color.target_view(self.level, self.layer)?)
@@ -65,7 +77,7 @@ impl<'a> Target<'a> {
         let depth = vk::RenderingAttachmentInfo::default()
             .image_view(self.depth.target_view(self.level, self.layer)?)
             .image_layout(vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL)
-            .load_op(load)
+            .load_op(depth_load)
             .store_op(vk::AttachmentStoreOp::STORE)
             .clear_value(vk::ClearValue {
                 depth_stencil: vk::ClearDepthStencilValue {

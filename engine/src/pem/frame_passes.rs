@@ -12,14 +12,25 @@ use crate::passes::pem::{PemDraw, PemPass, Shading};
 use crate::passes::pem_deferred::{
     CompositeDraw, CompositePass, GBuffer, GBufferDraw, GBufferPass, vec4_of,
 };
-use crate::passes::target::{Target, area_of, screen_bounds};
+use crate::passes::target::{Load, Target, area_of, screen_bounds};
 use crate::shader_interface::CompositePush;
 use ash::vk;
 use glam::Mat4;
 
+/// A PEM frame's passes around the room pass.
+pub struct PemPasses<'a> {
+    /// Recorded first: they clear depth and stencil for the frame.
+    pub before_room: Vec<Box<dyn Pass + 'a>>,
+    /// What the room pass then finds in the frame's attachments.
+    pub room_load: Load,
+    /// Recorded over what the room drew.
+    pub after_room: Vec<Box<dyn Pass + 'a>>,
+}
+
 impl PemPlayer {
-    /// The G-buffer pass and one compositing pass (one stencil-masked
-    /// screen draw per reflector).
+    /// The G-buffer pass (before the room: the depth it lays down spares
+    /// the room's shading behind the reflectors) and one compositing pass
+    /// (one stencil-masked screen draw per reflector).
     pub(super) fn deferred_passes<'a>(
         &'a self,
         gpu: &'a GpuScene,
@@ -28,7 +39,7 @@ impl PemPlayer {
         slots: &[Vec<u32>],
         target: Target<'a>,
         view_proj: Mat4,
-    ) -> GpuResult<Vec<Box<dyn Pass + 'a>>> {
+    ) -> GpuResult<PemPasses<'a>> {
         let extent = target.extent();
         let layered = self.settings.kind == PemKind::Layered && self.settings.local_layer;
         let weights: Vec<f32> = blend.samples.iter().map(|s| s.1).collect();
@@ -57,12 +68,6 @@ impl PemPlayer {
                 },
             });
         }
-        let area = area_of(
-            view_proj,
-            self.reflectors.iter().map(|r| r.bounds),
-            extent.width,
-            extent.height,
-        );
         let fill = GBufferPass {
             device: &self.device,
             pipeline: &self.sets.deferred.gbuffer,
@@ -71,7 +76,6 @@ impl PemPlayer {
             depth: target.depth,
             draws: gdraws,
             sampled: self.sets.arrays.iter().collect(),
-            area,
             view_proj,
         };
         let composite = CompositePass {
@@ -83,7 +87,11 @@ impl PemPlayer {
             sampled: self.sets.composite_sampled(gbuffer),
             name: "pem_composite",
         };
-        Ok(vec![Box::new(fill), Box::new(composite)])
+        Ok(PemPasses {
+            before_room: vec![Box::new(fill)],
+            room_load: Load::ClearColor,
+            after_room: vec![Box::new(composite)],
+        })
     }
 
     /// The papers' formulation: the reflectors drawn once per sample, the
@@ -121,7 +129,7 @@ impl PemPlayer {
                 draws,
                 sampled: self.sets.forward_sampled(),
                 target: Target {
-                    clear: false,
+                    load: Load::Keep,
                     area,
                     ..target
                 },

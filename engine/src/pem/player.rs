@@ -5,6 +5,7 @@
 //! the scene and the eye need: no local layer on convex-hull triangles, one
 //! sample exactly on a grid line.
 
+use super::frame_passes::PemPasses;
 use super::frame_sets::FrameSets;
 use super::prefetch::{MapKey, Prefetcher, decode_into};
 use super::reflector::PemReflector;
@@ -16,9 +17,9 @@ use super::staging::StagingPool;
 use crate::backend::upload::level_regions;
 use crate::backend::{Buffer, Device, GpuError, GpuResult, Image, ImageDesc};
 use crate::gpu_scene::GpuScene;
-use crate::graph::{Executor, Pass};
+use crate::graph::Executor;
 use crate::passes::pem_deferred::GBuffer;
-use crate::passes::target::Target;
+use crate::passes::target::{Load, Target};
 use crate::passes::upload::{Upload, UploadPass};
 use anyhow::{Result, bail};
 use ash::vk;
@@ -300,7 +301,8 @@ impl PemPlayer {
         }))
     }
 
-    /// The passes that draw `blend`'s samples over what the room pass drew.
+    /// The passes that draw `blend`'s samples, before and after the room
+    /// pass (`target` is the frame's, as the room pass leaves it).
     pub fn draw_passes<'a>(
         &'a self,
         gpu: &'a GpuScene,
@@ -308,12 +310,16 @@ impl PemPlayer {
         blend: &SampleBlend,
         target: Target<'a>,
         view_proj: Mat4,
-    ) -> GpuResult<Vec<Box<dyn Pass + 'a>>> {
+    ) -> GpuResult<PemPasses<'a>> {
         let slots = self.slots_of(blend)?;
         if self.settings.deferred() {
             self.deferred_passes(gpu, gbuffer, blend, &slots, target, view_proj)
         } else {
-            self.multipass(gpu, blend, &slots, target, view_proj)
+            Ok(PemPasses {
+                before_room: Vec::new(),
+                room_load: Load::Clear,
+                after_room: self.multipass(gpu, blend, &slots, target, view_proj)?,
+            })
         }
     }
 

@@ -11,7 +11,7 @@ use crate::passes::mirror::MirrorRenderer;
 use crate::passes::pem_deferred::GBuffer;
 use crate::passes::readback::ReadbackPass;
 use crate::passes::room::RoomRenderer;
-use crate::passes::target::{Target, area_of};
+use crate::passes::target::{Load, Target, area_of};
 use crate::pem::player::PemPlayer;
 use crate::pem::samples::SampleBlend;
 use ash::vk;
@@ -55,7 +55,7 @@ pub(super) fn frame_passes<'a>(
         depth: parts.depth,
         level: 0,
         layer: 0,
-        clear: true,
+        load: Load::Clear,
         front_face: vk::FrontFace::COUNTER_CLOCKWISE,
         area: None,
     };
@@ -75,8 +75,11 @@ pub(super) fn frame_passes<'a>(
     Ok(passes)
 }
 
-/// The lit room (after the upload of the maps a PEM frame read), then the
-/// reflectors — from parameterized maps or static EMs — and the glass.
+/// The maps' upload (PEM frames), then the reflectors — from
+/// parameterized maps, static EMs or REM — around the lit room, and the
+/// glass. Reflectors go first where they can: the depth they lay down
+/// spares the room's shading behind them (about a tenth of the default
+/// frame on lavapipe).
 fn lit_passes<'a>(
     parts: &FrameParts<'a>,
     mode: FrameMode,
@@ -95,29 +98,22 @@ fn lit_passes<'a>(
     if let Some(lp) = parts.light_path {
         passes.extend(lp.passes(parts.device, parts.reflectors));
     }
-    let rem = parts.rem.map(|rem| (rem, rem.views.draws(parts.eye)));
-    if let Some((rem, (dest, draws))) = &rem {
-        passes.push(Box::new(rem.gpu.warp_pass(*dest, draws.clone())));
-    }
-    passes.push(Box::new(
-        parts.room.pass("room", parts.gpu, target, view_proj),
-    ));
     let later = Target {
-        clear: false,
+        load: Load::Keep,
         ..target
     };
-    if let Some((rem, (dest, _))) = rem {
-        let area = area_of(view_proj, [rem.bounds], parts.width, parts.height);
-        let target = Target { area, ..later };
-        passes.push(Box::new(
-            rem.gpu
-                .shade_pass(parts.gpu, target, view_proj, parts.eye, dest),
-        ));
-    } else if let (Some(pem), Some(b)) = (parts.pem, blend) {
-        passes.extend(pem.draw_passes(parts.gpu, parts.gbuffer, b, later, view_proj)?);
-    } else if !parts.reflectors.is_empty() {
-        passes.push(static_mirror_pass(parts, later, view_proj));
-    }
+    let around = reflector_passes(parts, blend, target, view_proj)?;
+    passes.extend(around.before_room);
+    passes.push(Box::new(parts.room.pass(
+        "room",
+        parts.gpu,
+        Target {
+            load: around.room_load,
+            ..target
+        },
+        view_proj,
+    )));
+    passes.extend(around.after_room);
     if let Some(g) = parts
         .glass
         .filter(|_| !matches!(mode, FrameMode::Pem | FrameMode::Rem))
@@ -128,24 +124,85 @@ fn lit_passes<'a>(
     Ok(passes)
 }
 
-/// Every reflector from its static EM, in one pass limited to their
-/// screen-space bounds.
+type Passes<'a> = Vec<Box<dyn Pass + 'a>>;
+
+/// A frame's reflector passes around its room pass, and what the room
+/// pass finds in the attachments.
+struct AroundRoom<'a> {
+    before_room: Vec<Box<dyn Pass + 'a>>,
+    room_load: Load,
+    after_room: Vec<Box<dyn Pass + 'a>>,
+}
+
+/// The reflectors' passes: REM (its warp first, its shading over the
+/// room), the PEM's (deferred: the G-buffer first, which clears depth and
+/// stencil, the composite after), or every static EM (first, clearing
+/// both attachments).
+fn reflector_passes<'a>(
+    parts: &FrameParts<'a>,
+    blend: Option<&SampleBlend>,
+    target: Target<'a>,
+    view_proj: Mat4,
+) -> GpuResult<AroundRoom<'a>> {
+    let later = Target {
+        load: Load::Keep,
+        ..target
+    };
+    let (before_room, after_room): (Passes<'a>, Passes<'a>) = if let Some(rem) = parts.rem {
+        let (dest, draws) = rem.views.draws(parts.eye);
+        let area = area_of(view_proj, [rem.bounds], parts.width, parts.height);
+        let shade = rem.gpu.shade_pass(
+            parts.gpu,
+            Target { area, ..later },
+            view_proj,
+            parts.eye,
+            dest,
+        );
+        (
+            vec![Box::new(rem.gpu.warp_pass(dest, draws))],
+            vec![Box::new(shade)],
+        )
+    } else if let (Some(pem), Some(b)) = (parts.pem, blend) {
+        let p = pem.draw_passes(parts.gpu, parts.gbuffer, b, later, view_proj)?;
+        return Ok(AroundRoom {
+            before_room: p.before_room,
+            room_load: p.room_load,
+            after_room: p.after_room,
+        });
+    } else if !parts.reflectors.is_empty() {
+        let first = Target {
+            load: Load::Clear,
+            ..target
+        };
+        let mirror = static_mirror_pass(parts, first, view_proj);
+        return Ok(AroundRoom {
+            before_room: vec![mirror],
+            room_load: Load::Keep,
+            after_room: Vec::new(),
+        });
+    } else {
+        (Vec::new(), Vec::new())
+    };
+    // REM's warp renders into its own sphere map, not the frame.
+    Ok(AroundRoom {
+        before_room,
+        room_load: Load::Clear,
+        after_room,
+    })
+}
+
+/// Every reflector from its static EM, in one pass (the frame's first: it
+/// clears the whole frame, so its render area is the whole frame).
 fn static_mirror_pass<'a>(
     parts: &FrameParts<'a>,
-    later: Target<'a>,
+    target: Target<'a>,
     view_proj: Mat4,
 ) -> Box<dyn Pass + 'a> {
-    let area = area_of(
-        view_proj,
-        parts.reflectors.iter().map(|r| r.bounds),
-        parts.width,
-        parts.height,
-    );
     Box::new(parts.mirror.pass(
         parts.gpu,
         parts.reflectors.iter().map(|r| &r.draw).collect(),
         parts.reflectors.iter().map(|r| &r.cube.color).collect(),
-        Target { area, ..later },
+        target,
         view_proj,
     ))
 }

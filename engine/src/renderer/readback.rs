@@ -4,7 +4,6 @@
 use super::Renderer;
 use crate::backend::{Buffer, GpuError, GpuResult};
 use crate::passes::readback::ReadbackPass;
-use crate::passes::target::area_of;
 use ash::vk;
 use glam::Vec3;
 use half::f16;
@@ -63,23 +62,7 @@ impl Renderer {
         )?;
         // A Vec<u8> need not be aligned for f32: collect, don't cast.
         let cos: Vec<f32> = bytemuck::pod_collect_to_vec(&bytes);
-        // Only the last G-buffer pass's area was cleared this frame.
-        let bounds = self.reflectors.iter().map(|r| r.bounds);
-        let full = vk::Rect2D {
-            offset: vk::Offset2D::default(),
-            extent: vk::Extent2D {
-                width: self.width,
-                height: self.height,
-            },
-        };
-        let a = area_of(self.last_view_proj, bounds, self.width, self.height).unwrap_or(full);
-        let (x0, y0) = (a.offset.x.max(0) as usize, a.offset.y.max(0) as usize);
-        let (x1, y1) = (x0 + a.extent.width as usize, y0 + a.extent.height as usize);
-        let w = self.width as usize;
-        Ok((y0..y1.min(self.height as usize))
-            .flat_map(|y| (x0..x1.min(w)).map(move |x| y * w + x))
-            .filter(|&i| cos[i] >= -1.5)
-            .count() as u64)
+        Ok(cos.iter().filter(|&&c| c >= -1.5).count() as u64)
     }
 
     /// The last REM frame's blended sphere map (Σ weight × radiance, the
