@@ -261,11 +261,18 @@ impl Run<'_> {
         let o = &self.orbit;
         let moving = self.variants.len() - 1;
         let mut covered = Vec::new();
-        for v in 0..self.views {
+        let view_eye = |v: u32| {
             let k =
                 ((v as f32 + 0.5) / self.views as f32 * o.samples.saturating_sub(1) as f32) as u32;
-            let eye = o.eye(o.between_deg(k, 0.5), self.between_rings());
-            for i in 0..self.warmup + self.per_view {
+            o.eye(o.between_deg(k, 0.5), self.between_rings())
+        };
+        let frames = self.warmup + self.per_view;
+        for v in 0..self.views {
+            let eye = view_eye(v);
+            for i in 0..frames {
+                // Frames in flight, as in playback: each renderer's next
+                // frame is this view again, or the next view's first.
+                let next = if i + 1 < frames { eye } else { view_eye(v + 1) };
                 if i == self.warmup {
                     // Decoding ahead, started by the new view, must not run
                     // behind the timed frames.
@@ -274,8 +281,9 @@ impl Run<'_> {
                 }
                 for (index, (_, draws)) in self.variants.iter().enumerate().take(moving) {
                     let start = Instant::now();
-                    let stats =
-                        renderers[self.which[index]].frame(mode(draws), eye, o.view(eye))?;
+                    let r = &mut renderers[self.which[index]];
+                    r.set_next_view(next, o.view(next));
+                    let stats = r.frame(mode(draws), eye, o.view(eye))?;
                     if i >= self.warmup {
                         let ms = start.elapsed().as_secs_f64() * 1e3;
                         logs[index].record(ms, &stats.passes, stats.cpu);
@@ -297,10 +305,13 @@ impl Run<'_> {
         let moving = self.variants.len() - 1;
         let last = o.samples.saturating_sub(1).max(1);
         let mut eyes = Vec::new();
+        let eye_of = |i: u32| o.eye(o.between_deg(i % last, 0.5), self.between_rings());
         for i in 0..self.warmup + self.views * self.per_view {
-            let eye = o.eye(o.between_deg(i % last, 0.5), self.between_rings());
+            let eye = eye_of(i);
             let start = Instant::now();
-            let stats = renderers[self.which[moving]].frame(FrameMode::Pem, eye, o.view(eye))?;
+            let r = &mut renderers[self.which[moving]];
+            r.set_next_view(eye_of(i + 1), o.view(eye_of(i + 1)));
+            let stats = r.frame(FrameMode::Pem, eye, o.view(eye))?;
             if i >= self.warmup {
                 let ms = start.elapsed().as_secs_f64() * 1e3;
                 logs[moving].record(ms, &stats.passes, stats.cpu);

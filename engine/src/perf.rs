@@ -36,6 +36,9 @@ pub struct CpuReport {
     pub maps_decoded: u64,
     /// Of those, decoded ahead on the worker while earlier frames drew.
     pub maps_prefetched: u64,
+    /// Reflector texgens computed during the previous frame (frames in
+    /// flight), summed over the frames.
+    pub texgen_ahead: u64,
 }
 
 #[derive(Serialize)]
@@ -128,6 +131,7 @@ impl PerfLog {
                     / self.cpu.len().max(1) as f64,
                 maps_decoded: self.cpu.iter().map(|c| u64::from(c.decoded_maps)).sum(),
                 maps_prefetched: self.cpu.iter().map(|c| u64::from(c.prefetched_maps)).sum(),
+                texgen_ahead: self.cpu.iter().map(|c| u64::from(c.texgen_ahead)).sum(),
             },
         }
     }

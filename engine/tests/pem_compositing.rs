@@ -64,6 +64,34 @@ fn deferred_and_multipass_frames_agree() {
             Compositing::Deferred,
             orbit.sample_eye(1).expect("eye"),
         ));
+        // Frames in flight: texgen and bands computed ahead for the view
+        // the player announced draw the same frame as computed in line,
+        // and a wrong announcement falls back to computing in line.
+        let between = orbit.eye(orbit.start_deg + 0.4 * orbit.step_deg, 0.0);
+        let inline = frame(Compositing::Deferred, between);
+        for (what, announced) in [
+            ("predicted", between),
+            ("mispredicted", orbit.eye(7.0, 5.0)),
+        ] {
+            let mut r = Renderer::new(&device, &scene, 96, 72).expect("renderer");
+            let settings = PemSettings::new(PemKind::Layered);
+            let source = MapSource::container(&scene, &out.join("teapot.ptxc")).expect("container");
+            r.set_pem(&scene, settings, source).expect("set-up");
+            let first = orbit.sample_eye(0).expect("eye");
+            r.set_next_view(announced, orbit.view(announced));
+            r.frame(FrameMode::Pem, first, orbit.view(first))
+                .expect("frame");
+            let stats = r
+                .frame(FrameMode::Pem, between, orbit.view(between))
+                .expect("frame");
+            let pixels = r.pixels().expect("pixels");
+            assert!(
+                pixels == inline,
+                "{name}: {what} next view drew another frame"
+            );
+            let expected = u32::from(what == "predicted");
+            assert_eq!(stats.cpu.texgen_ahead, expected, "{name}: {what}");
+        }
     }
     // The bias is applied: maps inferred and played with it draw another frame.
     let db = psnr(&on_sample[0], &on_sample[1]);

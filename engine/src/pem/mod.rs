@@ -3,6 +3,7 @@
 //! texgen and resident slots, the staging buffers and decoding ahead, and
 //! the default path through the viewpoints.
 
+pub mod ahead;
 pub mod bands;
 mod frame_passes;
 pub mod frame_sets;

@@ -5,6 +5,7 @@
 //! the scene and the eye need: no local layer on convex-hull triangles, one
 //! sample exactly on a grid line.
 
+use super::ahead::{TexgenFrame, TexgenInputs, TexgenRequest};
 use super::frame_passes::PemPasses;
 use super::frame_sets::FrameSets;
 use super::prefetch::{MapKey, Prefetcher, decode_into};
@@ -44,6 +45,9 @@ pub struct PemCpu {
     pub decoded_maps: u32,
     /// Maps the worker had decoded ahead, straight into staging.
     pub prefetched_maps: u32,
+    /// Reflectors whose texgen and bands were computed ahead, during the
+    /// previous frame ([`super::ahead`]).
+    pub texgen_ahead: u32,
 }
 
 pub struct PemPlayer {
@@ -186,7 +190,15 @@ impl PemPlayer {
         let needed: Vec<u32> = blend.indices().collect();
         for ri in 0..self.reflectors.len() {
             let start = Instant::now();
-            self.reflectors[ri].texgen(eye, view, &self.settings, &mut self.scratch)?;
+            let request = TexgenRequest {
+                eye,
+                view_proj: view.0,
+                size: view.1,
+                settings: self.settings,
+            };
+            if self.reflectors[ri].texgen(request, &mut self.scratch)? {
+                cpu.texgen_ahead += 1;
+            }
             cpu.texgen_ms += start.elapsed().as_secs_f64() * 1e3;
             let Some(fills) = self.reflectors[ri].table.assign(&needed, self.frame) else {
                 bail!(
@@ -200,6 +212,32 @@ impl PemPlayer {
         }
         self.prefetch_next(eye);
         Ok(cpu)
+    }
+
+    /// The next frame's texgen work (one job per reflector), for a worker
+    /// to run while this frame renders ([`super::ahead`]).
+    pub fn ahead_jobs(
+        &self,
+        eye: Vec3,
+        (view_proj, size): (glam::Mat4, (u32, u32)),
+    ) -> Vec<(TexgenInputs<'_>, TexgenRequest)> {
+        let request = TexgenRequest {
+            eye,
+            view_proj,
+            size,
+            settings: self.settings,
+        };
+        self.reflectors
+            .iter()
+            .map(|r| (r.inputs(), request))
+            .collect()
+    }
+
+    /// Hands each reflector what [`Self::ahead_jobs`]' worker computed.
+    pub fn set_ahead(&mut self, frames: Vec<TexgenFrame>) {
+        for (r, frame) in self.reflectors.iter_mut().zip(frames) {
+            r.set_ahead(frame);
+        }
     }
 
     /// Every layer of `sample` into staging for slot `slot` of reflector `ri`.

@@ -3,14 +3,15 @@
 //! streams, and which samples its slots hold (the slots themselves are
 //! elements of the player's map arrays, from `base` on).
 
+use super::ahead::{TexgenFrame, TexgenInputs, TexgenRequest};
 use super::residency::{SLOTS, SlotTable};
-use super::settings::{PemKind, PemSettings};
+use super::settings::PemSettings;
 use crate::backend::{Buffer, Device};
 use anyhow::{Result, bail};
 use ash::vk;
 use glam::Vec3;
 use gpu_allocator::MemoryLocation;
-use inference::em_geometry::{EmGeometry, bounding_ellipsoid, texgen};
+use inference::em_geometry::{EmGeometry, bounding_ellipsoid};
 use inference::scene::{Object, Scene};
 use inference::texgen::TexgenVertex;
 
@@ -45,6 +46,8 @@ pub struct PemReflector {
     pub table: SlotTable,
     /// The array element of this reflector's slot 0.
     pub base: u32,
+    /// The next frame's texgen and bands, computed while this one rendered.
+    ahead: Option<TexgenFrame>,
 }
 
 impl PemReflector {
@@ -111,6 +114,7 @@ impl PemReflector {
             texgen_local: stream("texgen local")?,
             table: SlotTable::new(SLOTS),
             base,
+            ahead: None,
         })
     }
 
@@ -126,21 +130,34 @@ impl PemReflector {
         self.table.find(sample).map(|slot| self.base + slot as u32)
     }
 
-    /// CPU texgen for `eye` into the streams `settings` draw with (`scratch`
-    /// is reused between calls), and beside it, on the other core, the
-    /// compositing bands of the frame `view` (view-projection, size) when
-    /// the frame composites deferred.
+    /// What this reflector's texgen reads, for a worker computing the
+    /// next frame's ([`super::ahead`]).
+    pub fn inputs(&self) -> TexgenInputs<'_> {
+        TexgenInputs {
+            positions: &self.positions,
+            normals: &self.normals,
+            triangles: &self.triangles,
+            origin: self.origin,
+            distant: self.distant,
+            local: self.local,
+        }
+    }
+
+    /// Keeps `frame` (computed ahead) for the frame it was made for.
+    pub fn set_ahead(&mut self, frame: TexgenFrame) {
+        self.ahead = Some(frame);
+    }
+
+    /// CPU texgen for `request` into the streams its settings draw with
+    /// (`scratch` is reused between calls), and beside it, on the other
+    /// core, the compositing bands of its frame when that composites
+    /// deferred — or both copied from what a worker computed ahead for
+    /// exactly this request (then it returns true).
     pub fn texgen(
         &mut self,
-        eye: Vec3,
-        (view_proj, size): (glam::Mat4, (u32, u32)),
-        settings: &PemSettings,
+        request: TexgenRequest,
         scratch: &mut Vec<TexgenVertex>,
-    ) -> Result<()> {
-        if settings.kind == PemKind::Ptm {
-            self.bands.clear();
-            return Ok(());
-        }
+    ) -> Result<bool> {
         let PemReflector {
             positions,
             normals,
@@ -152,38 +169,40 @@ impl PemReflector {
             distant,
             local,
             origin,
+            ahead,
             ..
         } = self;
-        let first = match settings.kind {
-            PemKind::Sphere => EmGeometry::SphereAtInfinity,
-            _ => *distant,
-        };
-        let mut streams = vec![(first, texgen_distant)];
-        if settings.kind == PemKind::Layered && settings.local_layer {
-            streams.push((*local, texgen_local));
+        let buffers = [texgen_distant, texgen_local];
+        if let Some(frame) = ahead.take().filter(|a| a.request == request) {
+            for (stream, buffer) in frame.streams.iter().zip(buffers) {
+                let bytes: &[u8] = bytemuck::cast_slice(stream);
+                buffer.mapped_mut()?[..bytes.len()].copy_from_slice(bytes);
+            }
+            *bands = frame.bands;
+            return Ok(true);
         }
-        let (written, ()) = rayon::join(
+        let inputs = TexgenInputs {
+            positions,
+            normals,
+            triangles,
+            origin: *origin,
+            distant: *distant,
+            local: *local,
+        };
+        let geometries = inputs.geometries(&request.settings);
+        let (written, new_bands) = rayon::join(
             || -> Result<()> {
-                scratch.resize(positions.len(), [0.0; 4]);
-                for (geometry, buffer) in streams {
-                    texgen(&geometry, *origin, eye, positions, normals, scratch);
+                for (geometry, buffer) in geometries.iter().zip(buffers) {
+                    inputs.stream(geometry, request.eye, scratch);
                     let bytes: &[u8] = bytemuck::cast_slice(scratch);
                     buffer.mapped_mut()?[..bytes.len()].copy_from_slice(bytes);
                 }
                 Ok(())
             },
-            || {
-                // Only the deferred composite draws by bands.
-                *bands = settings
-                    .deferred()
-                    .then(|| {
-                        super::bands::screen_bands(view_proj, positions, triangles, size, pixels)
-                    })
-                    .flatten()
-                    .unwrap_or_default();
-            },
+            || inputs.bands(&request, pixels),
         );
-        written
+        *bands = new_bands;
+        written.map(|()| false)
     }
 }
 

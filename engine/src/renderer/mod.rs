@@ -69,6 +69,8 @@ pub struct CpuTimes {
     pub decoded_maps: u32,
     /// Of those, maps decoded ahead on the worker thread.
     pub prefetched_maps: u32,
+    /// PEM reflectors whose texgen was computed during the previous frame.
+    pub texgen_ahead: u32,
 }
 
 pub struct FrameStats {
@@ -339,9 +341,34 @@ impl Renderer {
         };
         let passes = frame_passes(&parts, mode, blend.as_ref(), view_proj)?;
         let list: Vec<&dyn Pass> = passes.iter().map(|p| p.as_ref()).collect();
+        // Frames in flight: the next PEM frame's texgen and bands on a
+        // worker while the device renders this one (`pem::ahead`).
+        let jobs = match (self.pem.as_ref(), next) {
+            (Some(pem), Some((eye, view_proj))) if mode == FrameMode::Pem => {
+                pem.ahead_jobs(eye, (view_proj, size))
+            }
+            _ => Vec::new(),
+        };
         let start = Instant::now();
-        let timings = self.executor.run(&list)?;
+        let executor = &mut self.executor;
+        let (timings, ahead) = std::thread::scope(|s| {
+            let worker = (!jobs.is_empty()).then(|| {
+                s.spawn(move || {
+                    jobs.iter()
+                        .map(|(inputs, request)| inputs.compute(*request))
+                        .collect::<Vec<_>>()
+                })
+            });
+            let timings = executor.run(&list);
+            (timings, worker.and_then(|w| w.join().ok()))
+        });
+        let timings = timings?;
         cpu.submit_ms = start.elapsed().as_secs_f64() * 1e3;
+        drop(list);
+        drop(passes);
+        if let (Some(pem), Some(ahead)) = (self.pem.as_mut(), ahead) {
+            pem.set_ahead(ahead);
+        }
         Ok(FrameStats {
             passes: timings,
             cpu,
@@ -365,6 +392,7 @@ impl Renderer {
         cpu.decode_ms += prepared.decode_ms;
         cpu.decoded_maps += prepared.decoded_maps;
         cpu.prefetched_maps += prepared.prefetched_maps;
+        cpu.texgen_ahead += prepared.texgen_ahead;
         Ok(blend)
     }
 
