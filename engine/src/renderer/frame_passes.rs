@@ -77,9 +77,10 @@ pub(super) fn frame_passes<'a>(
 
 /// The maps' upload (PEM frames), then the reflectors — from
 /// parameterized maps, static EMs or REM — around the lit room, and the
-/// glass. Reflectors go first where they can: the depth they lay down
-/// spares the room's shading behind them (about a tenth of the default
-/// frame on lavapipe).
+/// glass. The deferred PEM's G-buffer pass goes first: the depth it lays
+/// down spares the room's shading behind the reflectors (about a tenth of
+/// the default frame on lavapipe), and its own attachments keep lavapipe
+/// from merging it with the room pass, so the timestamps of both hold.
 fn lit_passes<'a>(
     parts: &FrameParts<'a>,
     mode: FrameMode,
@@ -136,8 +137,7 @@ struct AroundRoom<'a> {
 
 /// The reflectors' passes: REM (its warp first, its shading over the
 /// room), the PEM's (deferred: the G-buffer first, which clears depth and
-/// stencil, the composite after), or every static EM (first, clearing
-/// both attachments).
+/// stencil, the composite after), or every static EM (after the room).
 fn reflector_passes<'a>(
     parts: &FrameParts<'a>,
     blend: Option<&SampleBlend>,
@@ -170,16 +170,13 @@ fn reflector_passes<'a>(
             after_room: p.after_room,
         });
     } else if !parts.reflectors.is_empty() {
-        let first = Target {
-            load: Load::Clear,
-            ..target
-        };
-        let mirror = static_mirror_pass(parts, first, view_proj);
-        return Ok(AroundRoom {
-            before_room: vec![mirror],
-            room_load: Load::Keep,
-            after_room: Vec::new(),
-        });
+        // After the room, although drawing it first measured 5% faster:
+        // lavapipe then merges the two passes over the same attachments
+        // and its timestamps give the room 0.1 ms for its ~5 ms.
+        (
+            Vec::new(),
+            vec![static_mirror_pass(parts, later, view_proj)],
+        )
     } else {
         (Vec::new(), Vec::new())
     };
@@ -191,18 +188,24 @@ fn reflector_passes<'a>(
     })
 }
 
-/// Every reflector from its static EM, in one pass (the frame's first: it
-/// clears the whole frame, so its render area is the whole frame).
+/// Every reflector from its static EM, in one pass limited to their
+/// screen-space bounds.
 fn static_mirror_pass<'a>(
     parts: &FrameParts<'a>,
-    target: Target<'a>,
+    later: Target<'a>,
     view_proj: Mat4,
 ) -> Box<dyn Pass + 'a> {
+    let area = area_of(
+        view_proj,
+        parts.reflectors.iter().map(|r| r.bounds),
+        parts.width,
+        parts.height,
+    );
     Box::new(parts.mirror.pass(
         parts.gpu,
         parts.reflectors.iter().map(|r| &r.draw).collect(),
         parts.reflectors.iter().map(|r| &r.cube.color).collect(),
-        target,
+        Target { area, ..later },
         view_proj,
     ))
 }

@@ -16,6 +16,8 @@ pub(super) struct Reflector {
     /// World-space vertices, the input of CPU texgen every frame.
     pub(super) positions: Vec<Vec3>,
     pub(super) normals: Vec<Vec3>,
+    /// World-space bounds, for the mirror pass's render area.
+    pub(super) bounds: (Vec3, Vec3),
 }
 
 /// One `Reflector` per mirror or glossy object of `scene` (scene order),
@@ -48,6 +50,7 @@ pub(super) fn static_em_reflectors(
             cube,
             positions: object.mesh.positions.clone(),
             normals: object.mesh.normals.clone(),
+            bounds: object.mesh.bounds(),
         });
     }
     Ok(reflectors)
