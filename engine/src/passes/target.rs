@@ -3,7 +3,7 @@
 
 use crate::backend::{Buffer, Device, GpuResult, Image};
 use crate::gpu_scene::GpuMesh;
-use crate::graph::{Access, Usage};
+use crate::graph::{Access, Pass, Usage};
 use ash::vk;
 
 /// What a pass finds in its attachments when it begins.
@@ -16,6 +16,17 @@ pub enum Load {
     ClearColor,
     /// Both as earlier passes left them.
     Keep,
+}
+
+/// A frame's passes around its room pass, and what the room pass then
+/// finds in the frame's attachments.
+pub struct AroundRoom<'a> {
+    /// Recorded first (the deferred G-buffer pass: it clears depth and
+    /// stencil, and the room's depth test then skips what it covers).
+    pub before_room: Vec<Box<dyn Pass + 'a>>,
+    pub room_load: Load,
+    /// Recorded over what the room drew.
+    pub after_room: Vec<Box<dyn Pass + 'a>>,
 }
 
 /// A colour + depth pair to render into (one MIP level, one layer).

@@ -12,20 +12,10 @@ use crate::passes::pem::{PemDraw, PemPass, Shading};
 use crate::passes::pem_deferred::{
     CompositeDraw, CompositePass, GBuffer, GBufferDraw, GBufferPass, vec4_of,
 };
-use crate::passes::target::{Load, Target, area_of, screen_bounds};
+use crate::passes::target::{AroundRoom, Load, Target, area_of, screen_bounds};
 use crate::shader_interface::CompositePush;
 use ash::vk;
 use glam::Mat4;
-
-/// A PEM frame's passes around the room pass.
-pub struct PemPasses<'a> {
-    /// Recorded first: they clear depth and stencil for the frame.
-    pub before_room: Vec<Box<dyn Pass + 'a>>,
-    /// What the room pass then finds in the frame's attachments.
-    pub room_load: Load,
-    /// Recorded over what the room drew.
-    pub after_room: Vec<Box<dyn Pass + 'a>>,
-}
 
 impl PemPlayer {
     /// The G-buffer pass (before the room: the depth it lays down spares
@@ -39,7 +29,7 @@ impl PemPlayer {
         slots: &[Vec<u32>],
         target: Target<'a>,
         view_proj: Mat4,
-    ) -> GpuResult<PemPasses<'a>> {
+    ) -> GpuResult<AroundRoom<'a>> {
         let extent = target.extent();
         let layered = self.settings.kind == PemKind::Layered && self.settings.local_layer;
         let weights: Vec<f32> = blend.samples.iter().map(|s| s.1).collect();
@@ -87,7 +77,7 @@ impl PemPlayer {
             sampled: self.sets.composite_sampled(gbuffer),
             name: "pem_composite",
         };
-        Ok(PemPasses {
+        Ok(AroundRoom {
             before_room: vec![Box::new(fill)],
             room_load: Load::ClearColor,
             after_room: vec![Box::new(composite)],

@@ -6,7 +6,6 @@
 //! sample exactly on a grid line.
 
 use super::ahead::{TexgenFrame, TexgenInputs, TexgenRequest};
-use super::frame_passes::PemPasses;
 use super::frame_sets::FrameSets;
 use super::prefetch::{MapKey, Prefetcher, decode_into};
 use super::reflector::PemReflector;
@@ -20,7 +19,7 @@ use crate::backend::{Buffer, Device, GpuError, GpuResult, Image, ImageDesc};
 use crate::gpu_scene::GpuScene;
 use crate::graph::Executor;
 use crate::passes::pem_deferred::GBuffer;
-use crate::passes::target::{Load, Target};
+use crate::passes::target::{AroundRoom, Load, Target};
 use crate::passes::upload::{Upload, UploadPass};
 use anyhow::{Result, bail};
 use ash::vk;
@@ -348,12 +347,12 @@ impl PemPlayer {
         blend: &SampleBlend,
         target: Target<'a>,
         view_proj: Mat4,
-    ) -> GpuResult<PemPasses<'a>> {
+    ) -> GpuResult<AroundRoom<'a>> {
         let slots = self.slots_of(blend)?;
         if self.settings.deferred() {
             self.deferred_passes(gpu, gbuffer, blend, &slots, target, view_proj)
         } else {
-            Ok(PemPasses {
+            Ok(AroundRoom {
                 before_room: Vec::new(),
                 room_load: Load::Clear,
                 after_room: self.multipass(gpu, blend, &slots, target, view_proj)?,

@@ -11,7 +11,7 @@ use crate::passes::mirror::MirrorRenderer;
 use crate::passes::pem_deferred::GBuffer;
 use crate::passes::readback::ReadbackPass;
 use crate::passes::room::RoomRenderer;
-use crate::passes::target::{Load, Target, area_of};
+use crate::passes::target::{AroundRoom, Load, Target, area_of};
 use crate::pem::player::PemPlayer;
 use crate::pem::samples::SampleBlend;
 use ash::vk;
@@ -127,14 +127,6 @@ fn lit_passes<'a>(
 
 type Passes<'a> = Vec<Box<dyn Pass + 'a>>;
 
-/// A frame's reflector passes around its room pass, and what the room
-/// pass finds in the attachments.
-struct AroundRoom<'a> {
-    before_room: Vec<Box<dyn Pass + 'a>>,
-    room_load: Load,
-    after_room: Vec<Box<dyn Pass + 'a>>,
-}
-
 /// The reflectors' passes: REM (its warp first, its shading over the
 /// room), the PEM's (deferred: the G-buffer first, which clears depth and
 /// stencil, the composite after), or every static EM (after the room).
@@ -163,12 +155,7 @@ fn reflector_passes<'a>(
             vec![Box::new(shade)],
         )
     } else if let (Some(pem), Some(b)) = (parts.pem, blend) {
-        let p = pem.draw_passes(parts.gpu, parts.gbuffer, b, later, view_proj)?;
-        return Ok(AroundRoom {
-            before_room: p.before_room,
-            room_load: p.room_load,
-            after_room: p.after_room,
-        });
+        return pem.draw_passes(parts.gpu, parts.gbuffer, b, later, view_proj);
     } else if !parts.reflectors.is_empty() {
         // After the room, although drawing it first measured 5% faster:
         // lavapipe then merges the two passes over the same attachments

@@ -15,6 +15,7 @@ use crate::passes::mirror::MirrorRenderer;
 use crate::passes::pem_deferred::GBuffer;
 use crate::passes::room::{RoomRenderer, RoomStyle};
 use crate::passes::room_maps::upload_room_maps;
+use crate::pem::ahead::{TexgenFrame, TexgenInputs, TexgenRequest};
 use crate::pem::player::{PemPlayer, PemSettings};
 use crate::pem::samples::SampleBlend;
 use crate::pem::source::MapSource;
@@ -350,18 +351,7 @@ impl Renderer {
             _ => Vec::new(),
         };
         let start = Instant::now();
-        let executor = &mut self.executor;
-        let (timings, ahead) = std::thread::scope(|s| {
-            let worker = (!jobs.is_empty()).then(|| {
-                s.spawn(move || {
-                    jobs.iter()
-                        .map(|(inputs, request)| inputs.compute(*request))
-                        .collect::<Vec<_>>()
-                })
-            });
-            let timings = executor.run(&list);
-            (timings, worker.and_then(|w| w.join().ok()))
-        });
+        let (timings, ahead) = run_beside(&mut self.executor, &list, jobs);
         let timings = timings?;
         cpu.submit_ms = start.elapsed().as_secs_f64() * 1e3;
         drop(list);
@@ -426,6 +416,26 @@ impl Renderer {
         }
         Ok(())
     }
+}
+
+/// Runs a frame's passes (waiting for the device) while a worker computes
+/// the next frame's texgen `jobs`; what the worker made, if anything.
+fn run_beside(
+    executor: &mut Executor,
+    list: &[&dyn Pass],
+    jobs: Vec<(TexgenInputs<'_>, TexgenRequest)>,
+) -> (GpuResult<Vec<PassTiming>>, Option<Vec<TexgenFrame>>) {
+    std::thread::scope(|s| {
+        let worker = (!jobs.is_empty()).then(|| {
+            s.spawn(move || {
+                jobs.iter()
+                    .map(|(inputs, request)| inputs.compute(*request))
+                    .collect::<Vec<_>>()
+            })
+        });
+        let timings = executor.run(list);
+        (timings, worker.and_then(|w| w.join().ok()))
+    })
 }
 
 /// The room (lit or bare) drawn into the frame's formats.
