@@ -5,7 +5,10 @@
 use std::path::{Path, PathBuf};
 
 fn main() {
-    let shader_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
+    // Read at run time, not baked in with env!(): one compiled build
+    // script may serve several checkouts sharing a target folder.
+    let manifest_dir = std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR");
+    let shader_dir = Path::new(&manifest_dir).join("../shaders");
     let out_dir = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
     println!("cargo:rerun-if-changed={}", shader_dir.display());
 
