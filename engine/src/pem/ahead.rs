@@ -7,7 +7,7 @@
 
 use super::settings::{PemKind, PemSettings};
 use ash::vk;
-use glam::{Mat4, Vec2, Vec3};
+use glam::{Mat4, Vec3};
 use inference::em_geometry::{EmGeometry, texgen};
 use inference::texgen::TexgenVertex;
 
@@ -51,22 +51,23 @@ impl TexgenInputs<'_> {
         }
     }
 
-    /// Texgen of one stream for `eye` into `out`.
-    pub fn stream(&self, geometry: &EmGeometry, eye: Vec3, out: &mut Vec<TexgenVertex>) {
-        out.resize(self.positions.len(), [0.0; 4]);
+    /// Texgen of one stream for `eye`.
+    fn stream(&self, geometry: &EmGeometry, eye: Vec3) -> Vec<TexgenVertex> {
+        let mut out = vec![[0.0; 4]; self.positions.len()];
         texgen(
             geometry,
             self.origin,
             eye,
             self.positions,
             self.normals,
-            out,
+            &mut out,
         );
+        out
     }
 
     /// The compositing bands of the frame `view_proj` (only deferred
     /// frames draw by bands; empty: draw the bounding rectangle).
-    pub fn bands(&self, request: &TexgenRequest, pixels: &mut Vec<Vec2>) -> Vec<vk::Rect2D> {
+    fn bands(&self, request: &TexgenRequest) -> Vec<vk::Rect2D> {
         request
             .settings
             .deferred()
@@ -76,25 +77,25 @@ impl TexgenInputs<'_> {
                     self.positions,
                     self.triangles,
                     request.size,
-                    pixels,
+                    &mut Vec::new(),
                 )
             })
             .flatten()
             .unwrap_or_default()
     }
 
-    /// Everything `request` needs, on the calling thread.
+    /// Everything `request` needs: the streams and, beside them on
+    /// rayon's other thread, the bands.
     pub fn compute(&self, request: TexgenRequest) -> TexgenFrame {
-        let streams = self
-            .geometries(&request.settings)
-            .iter()
-            .map(|g| {
-                let mut out = Vec::new();
-                self.stream(g, request.eye, &mut out);
-                out
-            })
-            .collect();
-        let bands = self.bands(&request, &mut Vec::new());
+        let (streams, bands) = rayon::join(
+            || {
+                self.geometries(&request.settings)
+                    .iter()
+                    .map(|g| self.stream(g, request.eye))
+                    .collect()
+            },
+            || self.bands(&request),
+        );
         TexgenFrame {
             request,
             streams,

@@ -25,7 +25,6 @@ use anyhow::{Result, bail};
 use ash::vk;
 use glam::{Mat4, Vec3};
 use inference::scene::{Material, Orbit, Scene};
-use inference::texgen::TexgenVertex;
 use std::time::Instant;
 
 /// A map read into staging this frame, waiting for its upload pass.
@@ -62,7 +61,6 @@ pub struct PemPlayer {
     orbit: Orbit,
     last_angles: Option<(f32, f32)>,
     frame: u64,
-    scratch: Vec<TexgenVertex>,
 }
 
 impl PemPlayer {
@@ -140,7 +138,6 @@ impl PemPlayer {
             orbit: scene.orbit.clone(),
             last_angles: None,
             frame: 0,
-            scratch: Vec::new(),
         })
     }
 
@@ -189,13 +186,8 @@ impl PemPlayer {
         let needed: Vec<u32> = blend.indices().collect();
         for ri in 0..self.reflectors.len() {
             let start = Instant::now();
-            let request = TexgenRequest {
-                eye,
-                view_proj: view.0,
-                size: view.1,
-                settings: self.settings,
-            };
-            if self.reflectors[ri].texgen(request, &mut self.scratch)? {
+            let request = self.texgen_request(eye, view);
+            if self.reflectors[ri].texgen(request)? {
                 cpu.texgen_ahead += 1;
             }
             cpu.texgen_ms += start.elapsed().as_secs_f64() * 1e3;
@@ -218,18 +210,28 @@ impl PemPlayer {
     pub fn ahead_jobs(
         &self,
         eye: Vec3,
-        (view_proj, size): (glam::Mat4, (u32, u32)),
+        view: (glam::Mat4, (u32, u32)),
     ) -> Vec<(TexgenInputs<'_>, TexgenRequest)> {
-        let request = TexgenRequest {
-            eye,
-            view_proj,
-            size,
-            settings: self.settings,
-        };
+        let request = self.texgen_request(eye, view);
         self.reflectors
             .iter()
             .map(|r| (r.inputs(), request))
             .collect()
+    }
+
+    /// What the texgen of a frame from `eye` through `view` (view-projection,
+    /// size) depends on.
+    fn texgen_request(
+        &self,
+        eye: Vec3,
+        (view_proj, size): (glam::Mat4, (u32, u32)),
+    ) -> TexgenRequest {
+        TexgenRequest {
+            eye,
+            view_proj,
+            size,
+            settings: self.settings,
+        }
     }
 
     /// Hands each reflector what [`Self::ahead_jobs`]' worker computed.

@@ -29,9 +29,8 @@ pub struct PemReflector {
     /// The mesh's triangles (the compositing bands' screen bounds).
     triangles: Vec<u32>,
     /// The compositing pass's scissor bands for the frame texgen last ran
-    /// for (empty: draw the bounding rectangle), and their scratch.
+    /// for (empty: draw the bounding rectangle).
     bands: Vec<vk::Rect2D>,
-    pixels: Vec<glam::Vec2>,
     origin: Vec3,
     /// World-space bounds: what the draw passes' render area must cover.
     pub bounds: (Vec3, Vec3),
@@ -91,7 +90,6 @@ impl PemReflector {
             normals: o.mesh.normals.clone(),
             triangles: o.mesh.indices.clone(),
             bands: Vec::new(),
-            pixels: Vec::new(),
             origin,
             bounds: o.mesh.bounds(),
             distant: EmGeometry::Box {
@@ -148,61 +146,21 @@ impl PemReflector {
         self.ahead = Some(frame);
     }
 
-    /// CPU texgen for `request` into the streams its settings draw with
-    /// (`scratch` is reused between calls), and beside it, on the other
-    /// core, the compositing bands of its frame when that composites
-    /// deferred — or both copied from what a worker computed ahead for
-    /// exactly this request (then it returns true).
-    pub fn texgen(
-        &mut self,
-        request: TexgenRequest,
-        scratch: &mut Vec<TexgenVertex>,
-    ) -> Result<bool> {
-        let PemReflector {
-            positions,
-            normals,
-            triangles,
-            bands,
-            pixels,
-            texgen_distant,
-            texgen_local,
-            distant,
-            local,
-            origin,
-            ahead,
-            ..
-        } = self;
-        let buffers = [texgen_distant, texgen_local];
-        if let Some(frame) = ahead.take().filter(|a| a.request == request) {
-            for (stream, buffer) in frame.streams.iter().zip(buffers) {
-                let bytes: &[u8] = bytemuck::cast_slice(stream);
-                buffer.mapped_mut()?[..bytes.len()].copy_from_slice(bytes);
-            }
-            *bands = frame.bands;
-            return Ok(true);
+    /// CPU texgen for `request` into the streams its settings draw with,
+    /// and the compositing bands of its frame — computed now, or copied
+    /// from what a worker computed ahead for exactly this request (then
+    /// it returns true).
+    pub fn texgen(&mut self, request: TexgenRequest) -> Result<bool> {
+        let ahead = self.ahead.take().filter(|a| a.request == request);
+        let served = ahead.is_some();
+        let frame = ahead.unwrap_or_else(|| self.inputs().compute(request));
+        let buffers = [&mut self.texgen_distant, &mut self.texgen_local];
+        for (stream, buffer) in frame.streams.iter().zip(buffers) {
+            let bytes: &[u8] = bytemuck::cast_slice(stream);
+            buffer.mapped_mut()?[..bytes.len()].copy_from_slice(bytes);
         }
-        let inputs = TexgenInputs {
-            positions,
-            normals,
-            triangles,
-            origin: *origin,
-            distant: *distant,
-            local: *local,
-        };
-        let geometries = inputs.geometries(&request.settings);
-        let (written, new_bands) = rayon::join(
-            || -> Result<()> {
-                for (geometry, buffer) in geometries.iter().zip(buffers) {
-                    inputs.stream(geometry, request.eye, scratch);
-                    let bytes: &[u8] = bytemuck::cast_slice(scratch);
-                    buffer.mapped_mut()?[..bytes.len()].copy_from_slice(bytes);
-                }
-                Ok(())
-            },
-            || inputs.bands(&request, pixels),
-        );
-        *bands = new_bands;
-        written.map(|()| false)
+        self.bands = frame.bands;
+        Ok(served)
     }
 }
 

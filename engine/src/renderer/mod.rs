@@ -102,8 +102,6 @@ pub struct Renderer {
     gbuffer: GBuffer,
     /// The scene's glass object (drawn in static-EM and hybrid frames).
     pub glass: Option<crate::glass::GlassPlayer>,
-    /// The last frame's view-projection (where its G-buffer was written).
-    last_view_proj: Mat4,
     /// The next frame's eye and view, when the caller knows it: its CPU
     /// work (glass paths) starts while this frame renders.
     next_view: Option<(Vec3, Mat4)>,
@@ -154,7 +152,6 @@ impl Renderer {
             light_path: None,
             gbuffer: GBuffer::new(device, width, height)?,
             glass,
-            last_view_proj: Mat4::IDENTITY,
             next_view: None,
             setup_timings: Vec::new(),
             map_bytes: None,
@@ -302,7 +299,6 @@ impl Renderer {
         view: Mat4,
     ) -> Result<FrameStats, RenderError> {
         let view_proj = self.projection * view;
-        self.last_view_proj = view_proj;
         let mut cpu = CpuTimes::default();
         if matches!(mode, FrameMode::StaticEm | FrameMode::Hybrid) {
             self.texgen(eye, &mut cpu)?;
