@@ -162,6 +162,7 @@ pub fn infer_layer(
         geometry,
         target: *target,
         weight: 1.0,
+        pixel_weights: None,
     };
     let views = Views {
         own,
@@ -204,13 +205,23 @@ pub fn infer_layer_with(
         let m = cache.get_or_build(n.id, layout.len(), || {
             build_matrix(&mut timed, n.geometry, &layout, shape, &mut |_, _| {})
         })?;
-        extras.push((m, &n.target, n.weight));
+        extras.push(Stacked {
+            matrix: m,
+            target: &n.target,
+            weight: n.weight,
+            pixel_weights: n.pixel_weights,
+        });
     }
     let build_time = start.elapsed();
     let probe_time = timed.spent;
     let verify = verify_matrix(&mut timed, geometry, &layout, &matrix, 1)?;
-    let (solutions, solve_time) =
-        solve_target(&matrix, target, &extras, &layout, warm_start, options)?;
+    let own_rows = Stacked {
+        matrix: Arc::clone(&matrix),
+        target,
+        weight: 1.0,
+        pixel_weights: own.pixel_weights,
+    };
+    let (solutions, solve_time) = solve_target(own_rows, &extras, &layout, warm_start, options)?;
     let forward = forward_maps(&matrix, target, &layout, geometry.width, expected);
     let map: Vec<Vec<f32>> = solutions.iter().map(|s| s.x.clone()).collect();
     let rendered_ls = render_with_alpha(&mut timed, geometry, &layout, &map)?;
@@ -269,49 +280,79 @@ fn check_target(geometry: &ProbeGeometry, target: &Target) -> Result<usize, Infe
     Ok(expected)
 }
 
-/// Least squares per channel of `A x = b` over the object's pixels, and
-/// the time the solve took.
+/// One view's rows in a solve: its rendering matrix and target, scaled by
+/// `weight` and, per pixel, by `pixel_weights`.
+struct Stacked<'m> {
+    matrix: Arc<RenderingMatrix>,
+    target: &'m Target<'m>,
+    weight: f32,
+    pixel_weights: Option<&'m [f32]>,
+}
+
+impl Stacked<'_> {
+    /// The factor on row `i` (pixel `matrix.pixels[i]`).
+    fn row_weight(&self, i: usize) -> f32 {
+        let pixel = |w: &[f32]| {
+            let p = self.matrix.pixels[i] as usize;
+            w.get(p).copied().unwrap_or(1.0)
+        };
+        self.weight * self.pixel_weights.map_or(1.0, pixel)
+    }
+
+    fn weighted(&self) -> bool {
+        self.weight != 1.0 || self.pixel_weights.is_some()
+    }
+}
+
+/// The regularized least-squares solve of the stacked views' rows, each
+/// row (and its target value) scaled by its view's factor.
 fn solve_target(
-    matrix: &RenderingMatrix,
-    target: &Target,
-    extras: &[(Arc<RenderingMatrix>, &Target, f32)],
+    own: Stacked,
+    extras: &[Stacked],
     layout: &TextureLayout,
     warm_start: Option<&[Vec<f32>]>,
     options: &SolveOptions,
 ) -> Result<(Vec<Solution>, Duration), InferError> {
-    let bs: Vec<Vec<f32>> = (0..target.channels)
+    let views: Vec<&Stacked> = std::iter::once(&own).chain(extras).collect();
+    let channels = own.target.channels;
+    let bs: Vec<Vec<f32>> = (0..channels)
         .map(|c| {
-            let mut b: Vec<f32> = matrix
-                .pixels
+            views
                 .iter()
-                .map(|&p| target.pixels[p as usize][c])
-                .collect();
-            for (m, t, w) in extras {
-                b.extend(m.pixels.iter().map(|&p| w * t.pixels[p as usize][c]));
-            }
-            b
+                .flat_map(|v| {
+                    v.matrix
+                        .pixels
+                        .iter()
+                        .enumerate()
+                        .map(move |(i, &p)| v.row_weight(i) * v.target.pixels[p as usize][c])
+                })
+                .collect()
         })
         .collect();
     let b_refs: Vec<&[f32]> = bs.iter().map(Vec::as_slice).collect();
     let stacked;
-    let a = if extras.is_empty() {
-        &matrix.a
+    let a = if views.len() == 1 && !own.weighted() {
+        &own.matrix.a
     } else {
-        let mut parts = vec![&matrix.a];
-        parts.extend(extras.iter().map(|(m, _, _)| &m.a));
+        let parts: Vec<&CsrMatrix> = views.iter().map(|v| &v.matrix.a).collect();
         let mut s = CsrMatrix::vstack(&parts)?;
-        // Each neighbour's rows scaled by its weight, as its b was.
-        let mut row = matrix.a.rows;
-        for (m, _, w) in extras {
-            let values = s.row_ptr[row]..s.row_ptr[row + m.a.rows];
-            s.values[values].iter_mut().for_each(|v| *v *= w);
-            row += m.a.rows;
+        // Each row scaled as its b was.
+        let mut row = 0;
+        for v in &views {
+            if v.weighted() {
+                for i in 0..v.matrix.a.rows {
+                    let w = v.row_weight(i);
+                    let values = s.row_ptr[row + i]..s.row_ptr[row + i + 1];
+                    s.values[values].iter_mut().for_each(|x| *x *= w);
+                }
+            }
+            row += v.matrix.a.rows;
         }
         stacked = s;
         &stacked
     };
     let warm: Option<Vec<&[f32]>> = warm_start
-        .filter(|w| w.len() == target.channels && w.iter().all(|m| m.len() == layout.len()))
+        .filter(|w| w.len() == channels && w.iter().all(|m| m.len() == layout.len()))
         .map(|w| w.iter().map(Vec::as_slice).collect());
     let start = Instant::now();
     let solutions = solve_channels(a, &b_refs, layout, warm.as_deref(), options)?;

@@ -197,52 +197,64 @@ fn a_four_channel_layer_is_scored_on_the_alpha_it_will_composite_with() {
     );
 }
 
+/// The exact fit (no smoothness) of `own` with `neighbour`'s rows stacked
+/// beside it, scaled by `w` and per pixel by `pixel_weights`.
+fn fit_beside(
+    own: &[[f32; 4]],
+    neighbour: &[[f32; 4]],
+    w: f32,
+    pixel_weights: Option<&[f32]>,
+) -> LayerResult {
+    let exact = SolveOptions {
+        eps_f: 0.0,
+        ..SolveOptions::default()
+    };
+    let target = Target {
+        name: "test.layer",
+        pixels: own,
+        channels: 3,
+    };
+    let g = geometry();
+    let views = Views {
+        own: View {
+            id: 0,
+            geometry: &g,
+            target,
+            weight: 1.0,
+            pixel_weights: None,
+        },
+        neighbours: &[View {
+            id: 1,
+            geometry: &g,
+            target: Target {
+                pixels: neighbour,
+                ..target
+            },
+            weight: w,
+            pixel_weights,
+        }],
+        cache: &mut MatrixCache::new(2),
+    };
+    infer_layer_with(
+        &mut Device { covered: true },
+        views,
+        SHAPE,
+        None,
+        &exact,
+        &mut |_, _| {},
+    )
+    .expect("infer")
+}
+
 #[test]
 fn a_neighbouring_view_pulls_the_fit_by_its_weight() {
     // Both views see the same texels; the neighbour's target is twice the
     // sample's. Rows scaled by w minimise |Ax − b|² + w²|Ax − 2b|², so the
     // render is (1 + 2w²) / (1 + w²) × b: 1.2 b at w = ½, 1.5 b at w = 1.
-    let exact = SolveOptions {
-        eps_f: 0.0,
-        ..SolveOptions::default()
-    };
     let own = gradient(1.0);
     let twice = gradient(2.0);
     for (w, expected) in [(0.5f32, 1.2f32), (1.0, 1.5)] {
-        let target = Target {
-            name: "test.layer",
-            pixels: &own,
-            channels: 3,
-        };
-        let neighbour = Target {
-            pixels: &twice,
-            ..target
-        };
-        let g = geometry();
-        let views = Views {
-            own: View {
-                id: 0,
-                geometry: &g,
-                target,
-                weight: 1.0,
-            },
-            neighbours: &[View {
-                id: 1,
-                geometry: &g,
-                target: neighbour,
-                weight: w,
-            }],
-            cache: &mut MatrixCache::new(2),
-        };
-        let r = infer_layer_with(
-            &mut Device { covered: true },
-            views,
-            SHAPE,
-            None,
-            &exact,
-            &mut |_, _| {},
-        )
-        .expect("infer");
+        let r = fit_beside(&own, &twice, w, None);
         for (&p, rendered) in r.pixels.iter().zip(&r.rendered_least_squares) {
             let want = expected * own[p as usize][0];
             assert!(
@@ -251,6 +263,34 @@ fn a_neighbouring_view_pulls_the_fit_by_its_weight() {
                 rendered[0]
             );
         }
+    }
+}
+
+#[test]
+fn pixel_weights_scale_their_own_rows_only() {
+    // As above at w = 1, but the neighbour's rows weighted per pixel: 0 on
+    // the left half (the own view alone decides: b), 1 on the right half
+    // (1.5 b). Weight 0 is what a pixel without confidence gets.
+    let own = gradient(1.0);
+    let twice = gradient(2.0);
+    let weights: Vec<f32> = (0..W * H)
+        .map(|p| if p % W < W / 2 { 0.0 } else { 1.0 })
+        .collect();
+    let r = fit_beside(&own, &twice, 1.0, Some(&weights));
+    // Pixels next to the halves' border share a texel with the other half.
+    for (&p, rendered) in r.pixels.iter().zip(&r.rendered_least_squares) {
+        let x = p % W;
+        let expected = match x {
+            _ if x + 1 < W / 2 => 1.0,
+            _ if x > W / 2 => 1.5,
+            _ => continue,
+        };
+        let want = expected * own[p as usize][0];
+        assert!(
+            (rendered[0] - want).abs() <= 1e-3 * want.max(1.0),
+            "pixel {p} (x {x}) renders {} for {want}",
+            rendered[0]
+        );
     }
 }
 
@@ -294,6 +334,7 @@ fn the_next_samples_solve_probes_no_view_already_kept() {
                 channels: 3,
             },
             weight: 0.5,
+            pixel_weights: None,
         };
         let views = Views {
             own: view(own_id),

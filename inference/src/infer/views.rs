@@ -17,6 +17,10 @@ pub struct View<'a> {
     pub geometry: &'a ProbeGeometry,
     pub target: Target<'a>,
     pub weight: f32,
+    /// Per pixel of the view (row-major), a further factor on that
+    /// pixel's row: how far the target there can be trusted (the glass
+    /// targets' confidence). None: every row alike.
+    pub pixel_weights: Option<&'a [f32]>,
 }
 
 /// A map's own view, the neighbouring views stacked beside it, and where

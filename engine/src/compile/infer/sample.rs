@@ -215,6 +215,7 @@ impl<'a> SampleRun<'a> {
                 geometry: &geometry,
                 target,
                 weight: 1.0,
+                pixel_weights: None,
             },
             neighbours: &stacked,
             cache: &mut self.matrices,
@@ -382,6 +383,7 @@ fn stacked_views<'a>(
                 ..target
             },
             weight: n.weight,
+            pixel_weights: None,
         })
         .collect()
 }
