@@ -20,6 +20,23 @@ pub fn shell_path(out: &Path) -> PathBuf {
     out.join("glass").join("room_shell.bin")
 }
 
+/// How the shell map of `size`² per face is traced.
+fn shell_settings(size: u32) -> TraceSettings {
+    TraceSettings {
+        width: size,
+        height: 6 * size,
+        spp: SHELL_SPP,
+        ..TraceSettings::default()
+    }
+}
+
+/// What the cached shell map of `scene`'s lens `skip` at `origin` depends on.
+pub fn shell_key(scene: &Scene, skip: u32, origin: Vec3, size: u32) -> inference::key::Key {
+    cache::image_key(&cache::scene_key(scene), origin, &shell_settings(size))
+        .with("glass shell", SHELL_VERSION)
+        .with("lens", u64::from(skip))
+}
+
 /// The f16 RGBA bytes (every level, level-major, face, rows) of the room
 /// shell map at `origin`, `size`² per face, the object `skip` (the lens)
 /// transparent: read from `out` when fresh, else traced and written.
@@ -30,15 +47,8 @@ pub fn room_shell_bytes(
     origin: Vec3,
     size: u32,
 ) -> Result<Vec<u8>> {
-    let settings = TraceSettings {
-        width: size,
-        height: 6 * size,
-        spp: SHELL_SPP,
-        ..TraceSettings::default()
-    };
-    let key = cache::image_key(&cache::scene_key(scene), origin, &settings)
-        .with("glass shell", SHELL_VERSION)
-        .with("lens", u64::from(skip));
+    let settings = shell_settings(size);
+    let key = shell_key(scene, skip, origin, size);
     let file = shell_path(out);
     if inference::key::freshness(&file, &key) == Freshness::Fresh {
         match inference::key::read_verified(&file) {

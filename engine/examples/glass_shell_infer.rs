@@ -1,0 +1,248 @@
+//! Infers the glass scene's room shell map from traced views (thesis
+//! §6.3.3) instead of tracing it from the shell's origin, and writes it
+//! where playback reads the traced one, so `engine eval --scene glass
+//! --data COPY` scores the inferred map.
+//!
+//! Per view: the lens tessellated to τ, each vertex's two exit-ray lookups
+//! into the room shell, the tracer's per-term targets (the radiance along
+//! the greedy paths' exit rays) with their confidence; probe renders give
+//! each term's rendering matrix, and one regularized solve fits the map to
+//! both terms of every view at once, each row weighted by √confidence.
+//!
+//! `cargo run --release -p engine --example glass_shell_infer -- DATA_DIR
+//!  [--azimuths 0,25,50,75] [--elevations 0] [--spp 16] [--tau 5] [--warm]
+//!  [--r-weight W] [--write-traced]`
+//!
+//! `--warm` starts the solve from the traced map, `--r-weight` scales the
+//! reflection term's rows against the refraction term's, `--write-traced`
+//! writes the traced map instead (a check of the file path).
+//! (DATA_DIR holds `glass/room_shell.bin`, traced when missing; it is
+//! overwritten with the inferred map under the same key.)
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use engine::backend::{DeviceOptions, create_device};
+use engine::probe::VulkanProbe;
+use glam::Vec3;
+use half::f16;
+use inference::glass::targets::trace_targets;
+use inference::glass::vertices::{Term, term_lookups};
+use inference::glass::{Lens, Screen, Shell, ShellSet, ShellShape, TessSettings, tessellate};
+use inference::infer::{MatrixCache, Target, View, Views, infer_layer_with};
+use inference::probe::{Lookup, ProbeGeometry};
+use inference::scene::Scene;
+use inference::solve::SolveOptions;
+use inference::solve::layout::{TextureLayout, TextureShape};
+use inference::trace::{TraceSettings, Tracer};
+
+struct Args {
+    data: PathBuf,
+    azimuths: Vec<f32>,
+    elevations: Vec<f32>,
+    spp: u32,
+    tau: f32,
+    warm: bool,
+    r_weight: f32,
+    write_traced: bool,
+}
+
+fn list(s: &str) -> Result<Vec<f32>, std::num::ParseFloatError> {
+    s.split(',').map(|v| v.trim().parse()).collect()
+}
+
+fn parse() -> Result<Args, Box<dyn std::error::Error>> {
+    let mut it = std::env::args().skip(1);
+    let mut a = Args {
+        data: PathBuf::from(
+            it.next()
+                .ok_or("usage: glass_shell_infer DATA_DIR [options]")?,
+        ),
+        azimuths: vec![0.0, 25.0, 50.0, 75.0],
+        elevations: vec![0.0],
+        spp: 16,
+        tau: 5.0,
+        warm: false,
+        r_weight: 1.0,
+        write_traced: false,
+    };
+    while let Some(flag) = it.next() {
+        let mut v = || it.next().ok_or(format!("{flag} needs a value"));
+        match flag.as_str() {
+            "--azimuths" => a.azimuths = list(&v()?)?,
+            "--elevations" => a.elevations = list(&v()?)?,
+            "--spp" => a.spp = v()?.parse()?,
+            "--tau" => a.tau = v()?.parse()?,
+            "--warm" => a.warm = true,
+            "--r-weight" => a.r_weight = v()?.parse()?,
+            "--write-traced" => a.write_traced = true,
+            other => return Err(format!("unknown option {other}").into()),
+        }
+    }
+    Ok(a)
+}
+
+/// One term of one view: what the probe renders draw and what they fit.
+struct TermView {
+    term: Term,
+    geometry: ProbeGeometry,
+    pixels: Vec<[f32; 4]>,
+    weights: Vec<f32>,
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args = parse()?;
+    let scene = Scene::load("glass")?;
+    let object = scene
+        .objects
+        .iter()
+        .position(|o| o.glass.is_some())
+        .ok_or("the scene has no glass object")?;
+    let o = &scene.objects[object];
+    let size = o.glass.as_ref().map_or(256, |g| g.resolution);
+    let lens = Lens::new(&scene, &o.name)?;
+    let origin = o.mesh.area_weighted_centroid();
+    let (min, max) = inference::glass::room_box(&scene);
+    let shells = ShellSet {
+        origin: origin.to_array(),
+        shells: vec![Shell {
+            shape: ShellShape::Box {
+                min: min.to_array(),
+                max: max.to_array(),
+            },
+            objects: inference::glass::room_objects(&scene),
+            distance: 0.0,
+        }],
+    };
+    let traced =
+        engine::glass::shell::room_shell_bytes(&scene, &args.data, object as u32, origin, size)?;
+    let tracer = Tracer::new(&scene)?;
+    let (width, height) = (640u32, 480u32);
+    let projection = inference::trace::camera::projection(&scene, width, height);
+    let settings = TraceSettings {
+        width,
+        height,
+        spp: args.spp,
+        ..TraceSettings::default()
+    };
+    let mut terms = Vec::new();
+    for &el in &args.elevations {
+        for &az in &args.azimuths {
+            let start = Instant::now();
+            let eye: Vec3 = scene.orbit.eye(az, el);
+            let view_proj = projection * scene.orbit.view(eye);
+            let screen = Screen {
+                view_proj,
+                width,
+                height,
+            };
+            let tess = tessellate(&lens, eye, screen, TessSettings::new(args.tau));
+            let targets = trace_targets(&tracer, &lens, &shells, eye, &settings);
+            for (term, images) in [(Term::T, &targets.t), (Term::R, &targets.r)] {
+                let dirs = term_lookups(&tess, &shells, term, 0);
+                let key = (terms.len() as u64 + 1) * 0x9e37_79b9_7f4a_7c15;
+                terms.push(TermView {
+                    term,
+                    geometry: ProbeGeometry {
+                        key,
+                        positions: tess.positions.clone(),
+                        indices: tess.indices.clone(),
+                        lookup: Lookup::Cube {
+                            dirs,
+                            lod_bias: 0.0,
+                        },
+                        view_proj,
+                        width,
+                        height,
+                    },
+                    pixels: images.shells[0].clone(),
+                    weights: images
+                        .confidence
+                        .iter()
+                        .map(|c| c.max(0.0).sqrt())
+                        .collect(),
+                });
+            }
+            eprintln!(
+                "view az {az} el {el}: {} vertices, targets traced, {:.1} s",
+                tess.positions.len(),
+                start.elapsed().as_secs_f64()
+            );
+        }
+    }
+    let views: Vec<View> = terms
+        .iter()
+        .enumerate()
+        .map(|(i, t)| View {
+            id: i as u64,
+            geometry: &t.geometry,
+            target: Target {
+                name: "glass.room_shell",
+                pixels: &t.pixels,
+                channels: 3,
+            },
+            weight: if t.term == Term::R {
+                args.r_weight
+            } else {
+                1.0
+            },
+            pixel_weights: Some(&t.weights),
+        })
+        .collect();
+    let (own, neighbours) = views.split_first().ok_or("no views")?;
+    let device = create_device(&DeviceOptions::default())?;
+    let mut probe = VulkanProbe::new(&device)?;
+    let shape = TextureShape::Cube { size };
+    let layout = TextureLayout::full_chain(shape);
+    let warm: Vec<Vec<f32>> = {
+        let halves: &[f16] = bytemuck::cast_slice(&traced);
+        (0..3)
+            .map(|c| halves.chunks_exact(4).map(|t| t[c].to_f32()).collect())
+            .collect()
+    };
+    let start = Instant::now();
+    let result = infer_layer_with(
+        &mut probe,
+        Views {
+            own: *own,
+            neighbours,
+            cache: &mut MatrixCache::new(terms.len()),
+        },
+        shape,
+        args.warm.then_some(warm.as_slice()),
+        &SolveOptions::default(),
+        &mut |_, _| {},
+    )?;
+    eprintln!(
+        "solved {} rows in {:.1} s (probes {:.1} s, solve {:.1} s, {} renders); own view: least squares {:.2} dB, forward {:.2} dB",
+        result.rows,
+        start.elapsed().as_secs_f64(),
+        result.probe_time.as_secs_f64(),
+        result.solve_time.as_secs_f64(),
+        result.probe_renders,
+        result.psnr_least_squares_db,
+        result.psnr_forward_db
+    );
+    if result.layout != layout {
+        return Err("the solve's layout is not the shell map's".into());
+    }
+    // --write-traced: the traced map through the same writer (a check
+    // that the eval then scores exactly the traced map).
+    let map = if args.write_traced {
+        &warm
+    } else {
+        &result.map
+    };
+    let halves: Vec<f16> = (0..layout.len())
+        .flat_map(|i| {
+            let c = |k: usize| f16::from_f32(map[k][i].max(0.0));
+            [c(0), c(1), c(2), f16::ONE]
+        })
+        .collect();
+    let file = engine::glass::shell::shell_path(&args.data);
+    inference::files::write_bytes(&file, bytemuck::cast_slice(&halves))?;
+    let key = engine::glass::shell::shell_key(&scene, object as u32, origin, size);
+    inference::key::write_record(&file, &key)?;
+    eprintln!("wrote the inferred shell map to {}", file.display());
+    Ok(())
+}
