@@ -11,11 +11,13 @@
 //!
 //! `cargo run --release -p engine --example glass_shell_infer -- DATA_DIR
 //!  [--azimuths 0,25,50,75] [--elevations 0] [--spp 16] [--tau 5] [--warm]
-//!  [--r-weight W] [--write-traced]`
+//!  [--r-weight W] [--refine λ] [--write-traced]`
 //!
 //! `--warm` starts the solve from the traced map, `--r-weight` scales the
-//! reflection term's rows against the refraction term's, `--write-traced`
-//! writes the traced map instead (a check of the file path).
+//! reflection term's rows against the refraction term's, `--refine λ`
+//! solves for a correction to the traced map (targets less its render,
+//! prior λ‖δ‖²), `--write-traced` writes the traced map instead (a check
+//! of the file path).
 //! (DATA_DIR holds `glass/room_shell.bin`, traced when missing; it is
 //! overwritten with the inferred map under the same key.)
 
@@ -30,7 +32,7 @@ use inference::glass::targets::trace_targets;
 use inference::glass::vertices::{Term, term_lookups};
 use inference::glass::{Lens, Screen, Shell, ShellSet, ShellShape, TessSettings, tessellate};
 use inference::infer::{MatrixCache, Target, View, Views, infer_layer_with};
-use inference::probe::{Lookup, ProbeGeometry};
+use inference::probe::{Lookup, ProbeGeometry, ProbeRenderer};
 use inference::scene::Scene;
 use inference::solve::SolveOptions;
 use inference::solve::layout::{TextureLayout, TextureShape};
@@ -45,6 +47,7 @@ struct Args {
     warm: bool,
     r_weight: f32,
     write_traced: bool,
+    refine: Option<f32>,
 }
 
 fn list(s: &str) -> Result<Vec<f32>, std::num::ParseFloatError> {
@@ -65,6 +68,7 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
         warm: false,
         r_weight: 1.0,
         write_traced: false,
+        refine: None,
     };
     while let Some(flag) = it.next() {
         let mut v = || it.next().ok_or(format!("{flag} needs a value"));
@@ -76,6 +80,7 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
             "--warm" => a.warm = true,
             "--r-weight" => a.r_weight = v()?.parse()?,
             "--write-traced" => a.write_traced = true,
+            "--refine" => a.refine = Some(v()?.parse()?),
             other => return Err(format!("unknown option {other}").into()),
         }
     }
@@ -90,35 +95,58 @@ struct TermView {
     weights: Vec<f32>,
 }
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args = parse()?;
-    let scene = Scene::load("glass")?;
-    let object = scene
-        .objects
-        .iter()
-        .position(|o| o.glass.is_some())
-        .ok_or("the scene has no glass object")?;
-    let o = &scene.objects[object];
-    let size = o.glass.as_ref().map_or(256, |g| g.resolution);
-    let lens = Lens::new(&scene, &o.name)?;
-    let origin = o.mesh.area_weighted_centroid();
-    let (min, max) = inference::glass::room_box(&scene);
-    let shells = ShellSet {
-        origin: origin.to_array(),
-        shells: vec![Shell {
-            shape: ShellShape::Box {
-                min: min.to_array(),
-                max: max.to_array(),
-            },
-            objects: inference::glass::room_objects(&scene),
-            distance: 0.0,
-        }],
-    };
-    let traced =
-        engine::glass::shell::room_shell_bytes(&scene, &args.data, object as u32, origin, size)?;
-    let tracer = Tracer::new(&scene)?;
-    let (width, height) = (640u32, 480u32);
-    let projection = inference::trace::camera::projection(&scene, width, height);
+/// The scene's glass object and its room shell.
+struct Glass {
+    scene: Scene,
+    object: usize,
+    lens: Lens,
+    origin: Vec3,
+    size: u32,
+    shells: ShellSet,
+}
+
+impl Glass {
+    fn load() -> Result<Self, Box<dyn std::error::Error>> {
+        let scene = Scene::load("glass")?;
+        let object = scene
+            .objects
+            .iter()
+            .position(|o| o.glass.is_some())
+            .ok_or("the scene has no glass object")?;
+        let o = &scene.objects[object];
+        let size = o.glass.as_ref().map_or(256, |g| g.resolution);
+        let lens = Lens::new(&scene, &o.name)?;
+        let origin = o.mesh.area_weighted_centroid();
+        let (min, max) = inference::glass::room_box(&scene);
+        let shells = ShellSet {
+            origin: origin.to_array(),
+            shells: vec![Shell {
+                shape: ShellShape::Box {
+                    min: min.to_array(),
+                    max: max.to_array(),
+                },
+                objects: inference::glass::room_objects(&scene),
+                distance: 0.0,
+            }],
+        };
+        Ok(Self {
+            scene,
+            object,
+            lens,
+            origin,
+            size,
+            shells,
+        })
+    }
+}
+
+const SIZE: (u32, u32) = (640, 480);
+
+/// Both terms of every view `args` names: tessellation, lookups, targets.
+fn term_views(g: &Glass, args: &Args) -> Result<Vec<TermView>, Box<dyn std::error::Error>> {
+    let tracer = Tracer::new(&g.scene)?;
+    let (width, height) = SIZE;
+    let projection = inference::trace::camera::projection(&g.scene, width, height);
     let settings = TraceSettings {
         width,
         height,
@@ -129,38 +157,35 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for &el in &args.elevations {
         for &az in &args.azimuths {
             let start = Instant::now();
-            let eye: Vec3 = scene.orbit.eye(az, el);
-            let view_proj = projection * scene.orbit.view(eye);
+            let eye: Vec3 = g.scene.orbit.eye(az, el);
+            let view_proj = projection * g.scene.orbit.view(eye);
             let screen = Screen {
                 view_proj,
                 width,
                 height,
             };
-            let tess = tessellate(&lens, eye, screen, TessSettings::new(args.tau));
-            let targets = trace_targets(&tracer, &lens, &shells, eye, &settings);
+            let tess = tessellate(&g.lens, eye, screen, TessSettings::new(args.tau));
+            let targets = trace_targets(&tracer, &g.lens, &g.shells, eye, &settings);
             for (term, images) in [(Term::T, &targets.t), (Term::R, &targets.r)] {
-                let dirs = term_lookups(&tess, &shells, term, 0);
                 let key = (terms.len() as u64 + 1) * 0x9e37_79b9_7f4a_7c15;
+                let lookup = Lookup::Cube {
+                    dirs: term_lookups(&tess, &g.shells, term, 0),
+                    lod_bias: 0.0,
+                };
+                let weights = images.confidence.iter().map(|c| c.max(0.0).sqrt());
                 terms.push(TermView {
                     term,
                     geometry: ProbeGeometry {
                         key,
                         positions: tess.positions.clone(),
                         indices: tess.indices.clone(),
-                        lookup: Lookup::Cube {
-                            dirs,
-                            lod_bias: 0.0,
-                        },
+                        lookup,
                         view_proj,
                         width,
                         height,
                     },
                     pixels: images.shells[0].clone(),
-                    weights: images
-                        .confidence
-                        .iter()
-                        .map(|c| c.max(0.0).sqrt())
-                        .collect(),
+                    weights: weights.collect(),
                 });
             }
             eprintln!(
@@ -169,6 +194,62 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 start.elapsed().as_secs_f64()
             );
         }
+    }
+    Ok(terms)
+}
+
+/// Each target less the traced map's render: what a correction must fit.
+fn subtract_render(
+    probe: &mut VulkanProbe,
+    terms: &mut [TermView],
+    layout: &TextureLayout,
+    traced: &[[f32; 4]],
+) -> Result<(), Box<dyn std::error::Error>> {
+    for t in terms {
+        let image = probe.render(&t.geometry, layout, traced)?;
+        for (px, r) in t.pixels.iter_mut().zip(&image) {
+            for c in 0..3 {
+                px[c] -= r[c];
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The map's channels as f16 RGBA texels, negative values clamped.
+fn shell_halves(map: &[Vec<f32>], len: usize) -> Vec<f16> {
+    (0..len)
+        .flat_map(|i| {
+            let c = |k: usize| f16::from_f32(map[k][i].max(0.0));
+            [c(0), c(1), c(2), f16::ONE]
+        })
+        .collect()
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args = parse()?;
+    let g = Glass::load()?;
+    let traced = engine::glass::shell::room_shell_bytes(
+        &g.scene,
+        &args.data,
+        g.object as u32,
+        g.origin,
+        g.size,
+    )?;
+    let mut terms = term_views(&g, &args)?;
+    let device = create_device(&DeviceOptions::default())?;
+    let mut probe = VulkanProbe::new(&device)?;
+    let shape = TextureShape::Cube { size: g.size };
+    let layout = TextureLayout::full_chain(shape);
+    let warm: Vec<Vec<f32>> = {
+        let halves: &[f16] = bytemuck::cast_slice(&traced);
+        (0..3)
+            .map(|c| halves.chunks_exact(4).map(|t| t[c].to_f32()).collect())
+            .collect()
+    };
+    let traced_texels = inference::infer::layer::texels(&warm, layout.len());
+    if args.refine.is_some() {
+        subtract_render(&mut probe, &mut terms, &layout, &traced_texels)?;
     }
     let views: Vec<View> = terms
         .iter()
@@ -190,16 +271,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         })
         .collect();
     let (own, neighbours) = views.split_first().ok_or("no views")?;
-    let device = create_device(&DeviceOptions::default())?;
-    let mut probe = VulkanProbe::new(&device)?;
-    let shape = TextureShape::Cube { size };
-    let layout = TextureLayout::full_chain(shape);
-    let warm: Vec<Vec<f32>> = {
-        let halves: &[f16] = bytemuck::cast_slice(&traced);
-        (0..3)
-            .map(|c| halves.chunks_exact(4).map(|t| t[c].to_f32()).collect())
-            .collect()
-    };
     let start = Instant::now();
     let result = infer_layer_with(
         &mut probe,
@@ -210,39 +281,51 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         },
         shape,
         args.warm.then_some(warm.as_slice()),
-        &SolveOptions::default(),
+        &SolveOptions {
+            eps_prior: args.refine.unwrap_or(0.0),
+            ..SolveOptions::default()
+        },
         &mut |_, _| {},
     )?;
     eprintln!(
-        "solved {} rows in {:.1} s (probes {:.1} s, solve {:.1} s, {} renders); own view: least squares {:.2} dB, forward {:.2} dB",
+        "solved {} rows in {:.1} s (probes {:.1} s, solve {:.1} s); own view: least squares {:.2} dB, forward {:.2} dB",
         result.rows,
         start.elapsed().as_secs_f64(),
         result.probe_time.as_secs_f64(),
         result.solve_time.as_secs_f64(),
-        result.probe_renders,
         result.psnr_least_squares_db,
         result.psnr_forward_db
+    );
+    // The traced map against the same target through the same renders: is
+    // the fit limited by the targets or by the solve?
+    let own_image = probe.render(own.geometry, &layout, &traced_texels)?;
+    eprintln!(
+        "own view: the traced map renders {:.2} dB against the same target",
+        inference::infer::layer::psnr_over_rows(&own_image, &own.target, &result.pixels)
     );
     if result.layout != layout {
         return Err("the solve's layout is not the shell map's".into());
     }
-    // --write-traced: the traced map through the same writer (a check
-    // that the eval then scores exactly the traced map).
-    let map = if args.write_traced {
-        &warm
-    } else {
-        &result.map
+    // --write-traced: the traced map through the same writer (a check that
+    // the eval then scores exactly the traced map); --refine: traced + δ.
+    let map: Vec<Vec<f32>> = match (args.write_traced, args.refine) {
+        (true, _) => warm,
+        (false, Some(_)) => (0..3)
+            .map(|c| {
+                warm[c]
+                    .iter()
+                    .zip(&result.map[c])
+                    .map(|(t, d)| t + d)
+                    .collect()
+            })
+            .collect(),
+        (false, None) => result.map,
     };
-    let halves: Vec<f16> = (0..layout.len())
-        .flat_map(|i| {
-            let c = |k: usize| f16::from_f32(map[k][i].max(0.0));
-            [c(0), c(1), c(2), f16::ONE]
-        })
-        .collect();
     let file = engine::glass::shell::shell_path(&args.data);
+    let halves = shell_halves(&map, layout.len());
     inference::files::write_bytes(&file, bytemuck::cast_slice(&halves))?;
-    let key = engine::glass::shell::shell_key(&scene, object as u32, origin, size);
+    let key = engine::glass::shell::shell_key(&g.scene, g.object as u32, g.origin, g.size);
     inference::key::write_record(&file, &key)?;
-    eprintln!("wrote the inferred shell map to {}", file.display());
+    eprintln!("wrote the shell map to {}", file.display());
     Ok(())
 }
