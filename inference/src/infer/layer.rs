@@ -88,6 +88,20 @@ pub enum InferError {
         got: usize,
         expected: usize,
     },
+    #[error(
+        "layer {layer}: pixel weights: {got} values, the view has {expected} pixels (expected one finite weight ≥ 0 per pixel)"
+    )]
+    WeightCount {
+        layer: String,
+        got: usize,
+        expected: usize,
+    },
+    #[error("layer {layer}: pixel weight {value} at pixel {pixel} (expected finite and ≥ 0)")]
+    BadWeight {
+        layer: String,
+        pixel: usize,
+        value: f32,
+    },
 }
 
 /// Interleaves per-channel maps into RGBA texels (alpha 1 when absent).
@@ -190,6 +204,7 @@ pub fn infer_layer_with(
     } = views;
     let (geometry, target) = (own.geometry, &own.target);
     let expected = check_target(geometry, target)?;
+    check_weights(&own)?;
     let layout = TextureLayout::full_chain(shape);
     let mut timed = Timed {
         inner: renderer,
@@ -202,6 +217,7 @@ pub fn infer_layer_with(
     let mut extras = Vec::new();
     for n in neighbours {
         check_target(n.geometry, &n.target)?;
+        check_weights(n)?;
         let m = cache.get_or_build(n.id, layout.len(), || {
             build_matrix(&mut timed, n.geometry, &layout, shape, &mut |_, _| {})
         })?;
@@ -280,6 +296,30 @@ fn check_target(geometry: &ProbeGeometry, target: &Target) -> Result<usize, Infe
     Ok(expected)
 }
 
+/// A view's pixel weights, if it has them: one per pixel, finite, ≥ 0.
+fn check_weights(view: &View) -> Result<(), InferError> {
+    let Some(weights) = view.pixel_weights else {
+        return Ok(());
+    };
+    let layer = || view.target.name.to_string();
+    let expected = view.geometry.width as usize * view.geometry.height as usize;
+    if weights.len() != expected {
+        return Err(InferError::WeightCount {
+            layer: layer(),
+            got: weights.len(),
+            expected,
+        });
+    }
+    match weights.iter().position(|w| !(w.is_finite() && *w >= 0.0)) {
+        Some(pixel) => Err(InferError::BadWeight {
+            layer: layer(),
+            pixel,
+            value: weights[pixel],
+        }),
+        None => Ok(()),
+    }
+}
+
 /// One view's rows in a solve: its rendering matrix and target, scaled by
 /// `weight` and, per pixel, by `pixel_weights`.
 struct Stacked<'m> {
@@ -292,6 +332,7 @@ struct Stacked<'m> {
 impl Stacked<'_> {
     /// The factor on row `i` (pixel `matrix.pixels[i]`).
     fn row_weight(&self, i: usize) -> f32 {
+        // check_weights saw one weight per pixel of the view.
         let pixel = |w: &[f32]| {
             let p = self.matrix.pixels[i] as usize;
             w.get(p).copied().unwrap_or(1.0)

@@ -205,6 +205,15 @@ fn fit_beside(
     w: f32,
     pixel_weights: Option<&[f32]>,
 ) -> LayerResult {
+    try_fit_beside(own, neighbour, w, pixel_weights).expect("infer")
+}
+
+fn try_fit_beside(
+    own: &[[f32; 4]],
+    neighbour: &[[f32; 4]],
+    w: f32,
+    pixel_weights: Option<&[f32]>,
+) -> Result<LayerResult, InferError> {
     let exact = SolveOptions {
         eps_f: 0.0,
         ..SolveOptions::default()
@@ -243,7 +252,6 @@ fn fit_beside(
         &exact,
         &mut |_, _| {},
     )
-    .expect("infer")
 }
 
 #[test]
@@ -290,6 +298,31 @@ fn pixel_weights_scale_their_own_rows_only() {
             (rendered[0] - want).abs() <= 1e-3 * want.max(1.0),
             "pixel {p} (x {x}) renders {} for {want}",
             rendered[0]
+        );
+    }
+}
+
+#[test]
+fn pixel_weights_of_the_wrong_count_or_not_finite_name_the_layer() {
+    let own = gradient(1.0);
+    let short = vec![1.0f32; (W * H - 1) as usize];
+    let mut nan = vec![1.0f32; (W * H) as usize];
+    nan[5] = f32::NAN;
+    let negative: Vec<f32> = (0..W * H)
+        .map(|p| if p == 7 { -1.0 } else { 1.0 })
+        .collect();
+    for (weights, expect) in [
+        (&short, "95 values"),
+        (&nan, "at pixel 5"),
+        (&negative, "at pixel 7"),
+    ] {
+        let Err(err) = try_fit_beside(&own, &own, 1.0, Some(weights)) else {
+            panic!("weights {expect}: accepted");
+        };
+        let text = err.to_string();
+        assert!(
+            text.contains("test.layer") && text.contains(expect),
+            "{text}"
         );
     }
 }
