@@ -21,6 +21,9 @@
 //! (DATA_DIR holds `glass/room_shell.bin`, traced when missing; it is
 //! overwritten with the inferred map under the same key.)
 
+#[path = "glass_shell/frame.rs"]
+mod frame;
+
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -48,6 +51,7 @@ struct Args {
     r_weight: f32,
     write_traced: bool,
     refine: Option<f32>,
+    frame: bool,
 }
 
 fn list(s: &str) -> Result<Vec<f32>, std::num::ParseFloatError> {
@@ -69,6 +73,7 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
         r_weight: 1.0,
         write_traced: false,
         refine: None,
+        frame: false,
     };
     while let Some(flag) = it.next() {
         let mut v = || it.next().ok_or(format!("{flag} needs a value"));
@@ -81,6 +86,7 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
             "--r-weight" => a.r_weight = v()?.parse()?,
             "--write-traced" => a.write_traced = true,
             "--refine" => a.refine = Some(v()?.parse()?),
+            "--frame" => a.frame = true,
             other => return Err(format!("unknown option {other}").into()),
         }
     }
@@ -142,8 +148,11 @@ impl Glass {
 
 const SIZE: (u32, u32) = (640, 480);
 
-/// Both terms of every view `args` names: tessellation, lookups, targets.
-fn term_views(g: &Glass, args: &Args) -> Result<Vec<TermView>, Box<dyn std::error::Error>> {
+/// Both terms of every view `args` names: tessellation, lookups, targets;
+/// with `--frame`, each view's frame too.
+type Traced = (Vec<TermView>, Vec<frame::FrameView>);
+
+fn term_views(g: &Glass, args: &Args) -> Result<Traced, Box<dyn std::error::Error>> {
     let tracer = Tracer::new(&g.scene)?;
     let (width, height) = SIZE;
     let projection = inference::trace::camera::projection(&g.scene, width, height);
@@ -154,6 +163,7 @@ fn term_views(g: &Glass, args: &Args) -> Result<Vec<TermView>, Box<dyn std::erro
         ..TraceSettings::default()
     };
     let mut terms = Vec::new();
+    let mut frames = Vec::new();
     for &el in &args.elevations {
         for &az in &args.azimuths {
             let start = Instant::now();
@@ -166,6 +176,7 @@ fn term_views(g: &Glass, args: &Args) -> Result<Vec<TermView>, Box<dyn std::erro
             };
             let tess = tessellate(&g.lens, eye, screen, TessSettings::new(args.tau));
             let targets = trace_targets(&tracer, &g.lens, &g.shells, eye, &settings);
+            let first = terms.len();
             for (term, images) in [(Term::T, &targets.t), (Term::R, &targets.r)] {
                 let key = (terms.len() as u64 + 1) * 0x9e37_79b9_7f4a_7c15;
                 let lookup = Lookup::Cube {
@@ -188,6 +199,28 @@ fn term_views(g: &Glass, args: &Args) -> Result<Vec<TermView>, Box<dyn std::erro
                     weights: weights.collect(),
                 });
             }
+            if args.frame {
+                // An independent trace of the whole frame (another seed than
+                // the eval's references).
+                let beauty = tracer.render(
+                    eye,
+                    &TraceSettings {
+                        seed: 1,
+                        ..settings
+                    },
+                )?;
+                let rgb = beauty.layer("beauty").ok_or("no beauty layer")?;
+                frames.push(frame::FrameView {
+                    t: terms[first].geometry.clone(),
+                    r: terms[first + 1].geometry.clone(),
+                    targets,
+                    beauty: rgb
+                        .pixels
+                        .chunks_exact(3)
+                        .map(|p| [p[0], p[1], p[2]])
+                        .collect(),
+                });
+            }
             eprintln!(
                 "view az {az} el {el}: {} vertices, targets traced, {:.1} s",
                 tess.positions.len(),
@@ -195,7 +228,7 @@ fn term_views(g: &Glass, args: &Args) -> Result<Vec<TermView>, Box<dyn std::erro
             );
         }
     }
-    Ok(terms)
+    Ok((terms, frames))
 }
 
 /// Each target less the traced map's render: what a correction must fit.
@@ -236,7 +269,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         g.origin,
         g.size,
     )?;
-    let mut terms = term_views(&g, &args)?;
+    let (mut terms, frames) = term_views(&g, &args)?;
     let device = create_device(&DeviceOptions::default())?;
     let mut probe = VulkanProbe::new(&device)?;
     let shape = TextureShape::Cube { size: g.size };
@@ -248,6 +281,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .collect()
     };
     let traced_texels = inference::infer::layer::texels(&warm, layout.len());
+    if args.frame {
+        let map = frame::solve_frames(&mut probe, &frames, shape, &warm, args.refine)?;
+        return write_map(&g, &args, &map, &layout);
+    }
     if args.refine.is_some() {
         subtract_render(&mut probe, &mut terms, &layout, &traced_texels)?;
     }
@@ -321,8 +358,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .collect(),
         (false, None) => result.map,
     };
+    write_map(&g, &args, &map, &layout)
+}
+
+/// Writes `map` where playback reads the traced shell map, under its key.
+fn write_map(
+    g: &Glass,
+    args: &Args,
+    map: &[Vec<f32>],
+    layout: &TextureLayout,
+) -> Result<(), Box<dyn std::error::Error>> {
     let file = engine::glass::shell::shell_path(&args.data);
-    let halves = shell_halves(&map, layout.len());
+    let halves = shell_halves(map, layout.len());
     inference::files::write_bytes(&file, bytemuck::cast_slice(&halves))?;
     let key = engine::glass::shell::shell_key(&g.scene, g.object as u32, g.origin, g.size);
     inference::key::write_record(&file, &key)?;

@@ -152,3 +152,53 @@ fn confidence_falls_to_zero_at_five_degrees() {
     assert!((confidence(&[a, tilt(2.5)]) - 0.75).abs() < 1e-3);
     assert_eq!(confidence(&[a, tilt(1.0), tilt(6.0)]), 0.0);
 }
+
+#[test]
+fn traced_targets_hold_each_terms_weight_per_pixel() {
+    use super::{Lens, Shell, ShellSet, ShellShape, room_box, room_objects, targets};
+    use crate::scene::Scene;
+    use crate::trace::{TraceSettings, Tracer};
+    let scene = Scene::load("glass").expect("built-in glass scene");
+    let lens = Lens::new(&scene, "teapot").expect("glass teapot");
+    let (min, max) = room_box(&scene);
+    let shells = ShellSet {
+        origin: lens.mesh.area_weighted_centroid().to_array(),
+        shells: vec![Shell {
+            shape: ShellShape::Box {
+                min: min.to_array(),
+                max: max.to_array(),
+            },
+            objects: room_objects(&scene),
+            distance: 0.0,
+        }],
+    };
+    let tracer = Tracer::new(&scene).expect("tracer");
+    let settings = TraceSettings {
+        width: 32,
+        height: 24,
+        spp: 2,
+        ..TraceSettings::default()
+    };
+    let eye = scene.orbit.eye(30.0, 0.0);
+    let t = targets::trace_targets(&tracer, &lens, &shells, eye, &settings);
+    let n = (settings.width * settings.height) as usize;
+    assert_eq!((t.t.weight.len(), t.r.weight.len()), (n, n));
+    let mut on_lens = 0;
+    for p in 0..n {
+        let (wt, wr) = (t.t.weight[p], t.r.weight[p]);
+        for c in 0..3 {
+            // F and 1 − F split the light; absorption only takes away.
+            assert!(wt[c] >= 0.0 && wr[c] >= 0.0, "pixel {p}: {wt:?} {wr:?}");
+            assert!(wt[c] + wr[c] <= 1.0 + 1e-5, "pixel {p}: {wt:?} {wr:?}");
+        }
+        if t.coverage[p] == 0.0 {
+            assert_eq!((wt, wr), ([0.0; 3], [0.0; 3]), "pixel {p} misses the lens");
+        } else if t.coverage[p] == 1.0 {
+            on_lens += 1;
+        }
+    }
+    assert!(on_lens > 20, "{on_lens} pixels wholly on the lens");
+    // Clear glass: the refraction term carries most of the light.
+    let mean = |w: &[[f32; 3]]| w.iter().map(|v| v[1]).sum::<f32>() / w.len() as f32;
+    assert!(mean(&t.t.weight) > 2.0 * mean(&t.r.weight));
+}

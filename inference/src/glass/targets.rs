@@ -31,6 +31,10 @@ pub struct TermImages {
     /// Per shell, premultiplied RGBA per pixel (row-major from the top).
     pub shells: Vec<Vec<[f32; 4]>>,
     pub confidence: Vec<f32>,
+    /// Per pixel, the term's `F·G` per channel, the mean over the samples
+    /// whose first hit is the lens (0 where its path never leaves): what
+    /// the pixel's shell radiance is multiplied by in the frame.
+    pub weight: Vec<[f32; 3]>,
 }
 
 /// Both terms' images of one view.
@@ -81,6 +85,7 @@ pub fn trace_targets(
         t: TermImages {
             shells: vec![Vec::with_capacity((width * height) as usize); n],
             confidence: Vec::new(),
+            weight: Vec::new(),
         },
         coverage: Vec::new(),
         ..GlassTargets::default()
@@ -92,6 +97,7 @@ pub fn trace_targets(
             out.coverage.push(p.coverage);
             for (images, term) in [(&mut out.t, &p.t), (&mut out.r, &p.r)] {
                 images.confidence.push(term.confidence);
+                images.weight.push(term.weight);
                 for (i, image) in images.shells.iter_mut().enumerate() {
                     image.push(term.shells.get(i).copied().unwrap_or([0.0; 4]));
                 }
@@ -121,6 +127,7 @@ struct PixelResult {
 struct TermPixel {
     shells: Vec<[f32; 4]>,
     confidence: f32,
+    weight: [f32; 3],
 }
 
 /// One term's sums over a pixel's samples.
@@ -128,6 +135,8 @@ struct TermSums {
     /// Per shell: Σ radiance·[hit], Σ [hit].
     shells: Vec<([f64; 3], u32)>,
     dirs: Vec<Vec3>,
+    /// Σ F·G over the samples on the lens.
+    weight: Vec3,
 }
 
 impl View<'_> {
@@ -138,6 +147,7 @@ impl View<'_> {
         let mut sums = [0, 1].map(|_| TermSums {
             shells: vec![([0.0; 3], 0); n],
             dirs: Vec::new(),
+            weight: Vec3::ZERO,
         });
         let mut on_lens = 0u32;
         for k in 0..s.spp {
@@ -157,12 +167,13 @@ impl View<'_> {
             *rays +=
                 u64::from(paths.t.topology.interfaces) + u64::from(paths.r.topology.interfaces);
             for (term, path) in sums.iter_mut().zip([&paths.t, &paths.r]) {
+                term.weight += path.weight;
                 if path.exited() {
                     self.exit(path, term, &mut rng, rays);
                 }
             }
         }
-        let [t, r] = sums.map(|term| finish(term, s.spp));
+        let [t, r] = sums.map(|term| finish(term, s.spp, on_lens));
         PixelResult {
             coverage: on_lens as f32 / s.spp.max(1) as f32,
             t,
@@ -196,13 +207,16 @@ impl View<'_> {
     }
 }
 
-/// A pixel's term images and confidence from its sums over `spp` samples.
-fn finish(term: TermSums, spp: u32) -> TermPixel {
+/// A pixel's term images, confidence and weight from its sums over `spp`
+/// samples, `on_lens` of which hit the lens first.
+fn finish(term: TermSums, spp: u32, on_lens: u32) -> TermPixel {
+    let weight = (term.weight / on_lens.max(1) as f32).to_array();
     let exiting = term.dirs.len();
     if exiting == 0 {
         return TermPixel {
             shells: vec![[0.0; 4]; term.shells.len()],
             confidence: 0.0,
+            weight,
         };
     }
     let shells = term
@@ -221,6 +235,7 @@ fn finish(term: TermSums, spp: u32) -> TermPixel {
     TermPixel {
         shells,
         confidence: confidence(&term.dirs) * exiting as f32 / spp.max(1) as f32,
+        weight,
     }
 }
 
