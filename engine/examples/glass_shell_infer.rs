@@ -33,7 +33,7 @@ use glam::Vec3;
 use half::f16;
 use inference::glass::targets::trace_targets;
 use inference::glass::vertices::{Term, term_lookups};
-use inference::glass::{Lens, Screen, Shell, ShellSet, ShellShape, TessSettings, tessellate};
+use inference::glass::{Lens, Screen, ShellSet, TessSettings, tessellate};
 use inference::infer::{MatrixCache, Target, View, Views, infer_layer_with};
 use inference::probe::{Lookup, ProbeGeometry, ProbeRenderer};
 use inference::scene::Scene;
@@ -123,18 +123,8 @@ impl Glass {
         let size = o.glass.as_ref().map_or(256, |g| g.resolution);
         let lens = Lens::new(&scene, &o.name)?;
         let origin = o.mesh.area_weighted_centroid();
-        let (min, max) = inference::glass::room_box(&scene);
-        let shells = ShellSet {
-            origin: origin.to_array(),
-            shells: vec![Shell {
-                shape: ShellShape::Box {
-                    min: min.to_array(),
-                    max: max.to_array(),
-                },
-                objects: inference::glass::room_objects(&scene),
-                distance: 0.0,
-            }],
-        };
+        let shells =
+            inference::glass::room_shell(&scene, origin, inference::glass::room_box_shape(&scene));
         Ok(Self {
             scene,
             object,

@@ -20,7 +20,7 @@ use ahead::{Ahead, PathRequest};
 use ash::vk;
 use glam::{Mat4, Vec3};
 use inference::glass::vertices::vertex_stream;
-use inference::glass::{Lens, Shell, ShellSet, ShellShape};
+use inference::glass::{Lens, ShellSet, ShellShape};
 use inference::scene::Scene;
 use std::sync::Arc;
 use std::time::Instant;
@@ -84,20 +84,9 @@ impl GlassPlayer {
             origin,
         )?;
         let geometry = GlassGeometry::new(device, &cube.color, formats)?;
-        let (min, max) = inference::glass::room_box(scene);
-        let shell = |shape| ShellSet {
-            origin: origin.to_array(),
-            shells: vec![Shell {
-                shape,
-                objects: inference::glass::room_objects(scene),
-                distance: 0.0,
-            }],
-        };
+        let shell = |shape| inference::glass::room_shell(scene, origin, shape);
         Ok(Some(GlassPlayer {
-            room: shell(ShellShape::Box {
-                min: min.to_array(),
-                max: max.to_array(),
-            }),
+            room: shell(inference::glass::room_box_shape(scene)),
             infinity: shell(ShellShape::Infinity),
             bounds: object.mesh.bounds(),
             lens: Arc::new(lens),

@@ -53,6 +53,29 @@ pub fn room_objects(scene: &Scene) -> Vec<u32> {
         .collect()
 }
 
+/// One shell of `shape` around `origin` holding the room's objects: what
+/// playback reads the room shell map with (`ShellShape::Box` of
+/// [`room_box`]), or at infinity (the static refraction EM baseline).
+pub fn room_shell(scene: &Scene, origin: glam::Vec3, shape: ShellShape) -> ShellSet {
+    ShellSet {
+        origin: origin.to_array(),
+        shells: vec![Shell {
+            shape,
+            objects: room_objects(scene),
+            distance: 0.0,
+        }],
+    }
+}
+
+/// The room's box as a shell shape.
+pub fn room_box_shape(scene: &Scene) -> ShellShape {
+    let (min, max) = room_box(scene);
+    ShellShape::Box {
+        min: min.to_array(),
+        max: max.to_array(),
+    }
+}
+
 /// The room's box: the bounds of its objects.
 pub fn room_box(scene: &Scene) -> (glam::Vec3, glam::Vec3) {
     let room = room_objects(scene);

@@ -155,23 +155,13 @@ fn confidence_falls_to_zero_at_five_degrees() {
 
 #[test]
 fn traced_targets_hold_each_terms_weight_per_pixel() {
-    use super::{Lens, Shell, ShellSet, ShellShape, room_box, room_objects, targets};
+    use super::{Lens, room_box_shape, room_shell, targets};
     use crate::scene::Scene;
     use crate::trace::{TraceSettings, Tracer};
     let scene = Scene::load("glass").expect("built-in glass scene");
     let lens = Lens::new(&scene, "teapot").expect("glass teapot");
-    let (min, max) = room_box(&scene);
-    let shells = ShellSet {
-        origin: lens.mesh.area_weighted_centroid().to_array(),
-        shells: vec![Shell {
-            shape: ShellShape::Box {
-                min: min.to_array(),
-                max: max.to_array(),
-            },
-            objects: room_objects(&scene),
-            distance: 0.0,
-        }],
-    };
+    let origin = lens.mesh.area_weighted_centroid();
+    let shells = room_shell(&scene, origin, room_box_shape(&scene));
     let tracer = Tracer::new(&scene).expect("tracer");
     let settings = TraceSettings {
         width: 32,
