@@ -154,6 +154,8 @@ fn term_views(g: &Glass, args: &Args) -> Result<Traced, Box<dyn std::error::Erro
     };
     let mut terms = Vec::new();
     let mut frames = Vec::new();
+    // Probe renders keep a mesh by key: one per term of every view.
+    let mut next_key = 0u64;
     for &el in &args.elevations {
         for &az in &args.azimuths {
             let start = Instant::now();
@@ -168,7 +170,8 @@ fn term_views(g: &Glass, args: &Args) -> Result<Traced, Box<dyn std::error::Erro
             let targets = trace_targets(&tracer, &g.lens, &g.shells, eye, &settings);
             let first = terms.len();
             for (term, images) in [(Term::T, &targets.t), (Term::R, &targets.r)] {
-                let key = (terms.len() as u64 + 1) * 0x9e37_79b9_7f4a_7c15;
+                next_key += 1;
+                let key = next_key * 0x9e37_79b9_7f4a_7c15;
                 let lookup = Lookup::Cube {
                     dirs: term_lookups(&tess, &g.shells, term, 0),
                     lod_bias: 0.0,
@@ -200,9 +203,15 @@ fn term_views(g: &Glass, args: &Args) -> Result<Traced, Box<dyn std::error::Erro
                     },
                 )?;
                 let rgb = beauty.layer("beauty").ok_or("no beauty layer")?;
+                // The frame solve uses the two terms' geometry, not their
+                // per-term targets.
+                let mut pair = terms.split_off(first).into_iter().map(|t| t.geometry);
+                let (Some(t), Some(r)) = (pair.next(), pair.next()) else {
+                    return Err("a view without its two terms".into());
+                };
                 frames.push(frame::FrameView {
-                    t: terms[first].geometry.clone(),
-                    r: terms[first + 1].geometry.clone(),
+                    t,
+                    r,
                     targets,
                     beauty: rgb
                         .pixels
@@ -270,11 +279,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .map(|c| halves.chunks_exact(4).map(|t| t[c].to_f32()).collect())
             .collect()
     };
-    let traced_texels = inference::infer::layer::texels(&warm, layout.len());
     if args.frame {
         let map = frame::solve_frames(&mut probe, &frames, shape, &warm, args.refine)?;
         return write_map(&g, &args, &map, &layout);
     }
+    let traced_texels = inference::infer::layer::texels(&warm, layout.len());
     if args.refine.is_some() {
         subtract_render(&mut probe, &mut terms, &layout, &traced_texels)?;
     }

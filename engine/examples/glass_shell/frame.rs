@@ -10,7 +10,7 @@ use std::collections::HashMap;
 use engine::probe::VulkanProbe;
 use inference::glass::targets::GlassTargets;
 use inference::probe::{ProbeGeometry, build_matrix};
-use inference::solve::csr::CsrMatrix;
+use inference::solve::csr::{CsrBuilder, CsrMatrix};
 use inference::solve::layout::{TextureLayout, TextureShape};
 use inference::solve::{SolveOptions, solve_channels};
 
@@ -26,7 +26,7 @@ pub struct FrameView {
 }
 
 /// Row `row` of `a` scaled by `s`, appended to `entries`.
-fn push_row(entries: &mut Vec<(u32, f32)>, a: &CsrMatrix, row: usize, s: f32) {
+fn extend_scaled_row(entries: &mut Vec<(u32, f32)>, a: &CsrMatrix, row: usize, s: f32) {
     let span = a.row_ptr[row]..a.row_ptr[row + 1];
     entries.extend(
         a.col_idx[span.clone()]
@@ -36,26 +36,6 @@ fn push_row(entries: &mut Vec<(u32, f32)>, a: &CsrMatrix, row: usize, s: f32) {
     );
 }
 
-/// Sorted, merged entries of one row appended to `m`.
-fn close_row(m: &mut CsrMatrix, entries: &mut Vec<(u32, f32)>) {
-    entries.sort_unstable_by_key(|e| e.0);
-    let mut last: Option<u32> = None;
-    for &(c, v) in entries.iter() {
-        if last == Some(c) {
-            if let Some(x) = m.values.last_mut() {
-                *x += v;
-            }
-        } else {
-            m.col_idx.push(c);
-            m.values.push(v);
-            last = Some(c);
-        }
-    }
-    entries.clear();
-    m.rows += 1;
-    m.row_ptr.push(m.values.len());
-}
-
 /// Per channel, the combined rows of every view and their targets.
 fn system(
     probe: &mut VulkanProbe,
@@ -63,7 +43,7 @@ fn system(
     layout: &TextureLayout,
     shape: TextureShape,
 ) -> Result<(Vec<CsrMatrix>, Vec<Vec<f32>>), Error> {
-    let mut a: Vec<CsrMatrix> = (0..3).map(|_| CsrMatrix::zeros(0, layout.len())).collect();
+    let mut a: Vec<CsrBuilder> = (0..3).map(|_| CsrBuilder::new(layout.len())).collect();
     let mut b: Vec<Vec<f32>> = vec![Vec::new(); 3];
     let mut entries = Vec::new();
     for v in views {
@@ -81,29 +61,22 @@ fn system(
             }
             let (wt, wr) = (v.targets.t.weight[pu], v.targets.r.weight[pu]);
             for c in 0..3 {
-                push_row(&mut entries, &at.a, i, wt[c]);
-                push_row(&mut entries, &ar.a, j, wr[c]);
-                close_row(&mut a[c], &mut entries);
+                entries.clear();
+                extend_scaled_row(&mut entries, &at.a, i, wt[c]);
+                extend_scaled_row(&mut entries, &ar.a, j, wr[c]);
+                a[c].push_row(&entries)?;
                 b[c].push(v.beauty[pu][c]);
             }
         }
     }
-    Ok((a, b))
+    Ok((a.into_iter().map(CsrBuilder::finish).collect(), b))
 }
 
 /// `b − A x`.
 fn residual(a: &CsrMatrix, x: &[f32], b: &[f32]) -> Vec<f32> {
-    (0..a.rows)
-        .map(|r| {
-            let span = a.row_ptr[r]..a.row_ptr[r + 1];
-            let ax: f32 = a.col_idx[span.clone()]
-                .iter()
-                .zip(&a.values[span])
-                .map(|(&c, &v)| v * x[c as usize])
-                .sum();
-            b[r] - ax
-        })
-        .collect()
+    let mut ax = vec![0.0; a.rows];
+    a.mul(x, &mut ax);
+    b.iter().zip(&ax).map(|(b, ax)| b - ax).collect()
 }
 
 /// The shell map (per channel, layout order) fitted to the views' frames.
