@@ -254,6 +254,20 @@ fn try_fit_beside(
     )
 }
 
+/// Asserts every pixel of `r` renders `scale(x)` × its `own` value, x the
+/// pixel's column (pixels whose scale is None are not checked).
+fn assert_renders_scaled(r: &LayerResult, own: &[[f32; 4]], scale: impl Fn(u32) -> Option<f32>) {
+    for (&p, rendered) in r.pixels.iter().zip(&r.rendered_least_squares) {
+        let Some(s) = scale(p % W) else { continue };
+        let want = s * own[p as usize][0];
+        assert!(
+            (rendered[0] - want).abs() <= 1e-3 * want.max(1.0),
+            "pixel {p} renders {} for {want} ({s} b)",
+            rendered[0]
+        );
+    }
+}
+
 #[test]
 fn a_neighbouring_view_pulls_the_fit_by_its_weight() {
     // Both views see the same texels; the neighbour's target is twice the
@@ -263,14 +277,7 @@ fn a_neighbouring_view_pulls_the_fit_by_its_weight() {
     let twice = gradient(2.0);
     for (w, expected) in [(0.5f32, 1.2f32), (1.0, 1.5)] {
         let r = fit_beside(&own, &twice, w, None);
-        for (&p, rendered) in r.pixels.iter().zip(&r.rendered_least_squares) {
-            let want = expected * own[p as usize][0];
-            assert!(
-                (rendered[0] - want).abs() <= 1e-3 * want.max(1.0),
-                "w = {w}: pixel {p} renders {} for {want}",
-                rendered[0]
-            );
-        }
+        assert_renders_scaled(&r, &own, |_| Some(expected));
     }
 }
 
@@ -286,20 +293,11 @@ fn pixel_weights_scale_their_own_rows_only() {
         .collect();
     let r = fit_beside(&own, &twice, 1.0, Some(&weights));
     // Pixels next to the halves' border share a texel with the other half.
-    for (&p, rendered) in r.pixels.iter().zip(&r.rendered_least_squares) {
-        let x = p % W;
-        let expected = match x {
-            _ if x + 1 < W / 2 => 1.0,
-            _ if x > W / 2 => 1.5,
-            _ => continue,
-        };
-        let want = expected * own[p as usize][0];
-        assert!(
-            (rendered[0] - want).abs() <= 1e-3 * want.max(1.0),
-            "pixel {p} (x {x}) renders {} for {want}",
-            rendered[0]
-        );
-    }
+    assert_renders_scaled(&r, &own, |x| match x {
+        _ if x + 1 < W / 2 => Some(1.0),
+        _ if x > W / 2 => Some(1.5),
+        _ => None,
+    });
 }
 
 #[test]
