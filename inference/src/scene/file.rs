@@ -215,6 +215,7 @@ pub struct GlassFile {
     pub tau: Option<f32>,
     pub views: Option<u32>,
     pub view_spread_deg: Option<f32>,
+    pub shell_every: Option<u32>,
 }
 
 fn default_line_width() -> f32 {

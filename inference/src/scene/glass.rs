@@ -16,6 +16,9 @@ pub struct GlassSettings {
     /// others spread over `view_spread_deg` above and below it.
     pub views: u32,
     pub view_spread_deg: f32,
+    /// Azimuth lines of the orbit between per-sample inferred room-shell
+    /// maps, blended in playback (0: the one traced shell for every view).
+    pub shell_every: u32,
 }
 
 impl Default for GlassSettings {
@@ -26,16 +29,33 @@ impl Default for GlassSettings {
             tau: 3.0,
             views: 5,
             view_spread_deg: 7.0,
+            shell_every: 0,
         }
     }
 }
 
 /// Viewpoints per sample a scene may ask for.
 pub const GLASS_VIEWS: std::ops::RangeInclusive<u32> = 1..=9;
+/// The largest `shell_every` a scene may ask for (orbit lines).
+pub const MAX_SHELL_EVERY: u32 = 10_000;
 /// τ a scene may ask for, in subpixels.
 pub const GLASS_TAU: std::ops::RangeInclusive<f32> = 0.1..=1000.0;
 
 impl GlassSettings {
+    /// The orbit lines (of `lines`) that get a per-sample shell map: every
+    /// `shell_every`-th from 0, and the last, so every azimuth on the orbit
+    /// lies between two of them; none when `shell_every` is 0.
+    pub fn shell_lines(&self, lines: u32) -> Vec<u32> {
+        if self.shell_every == 0 || lines == 0 {
+            return Vec::new();
+        }
+        let mut out: Vec<u32> = (0..lines).step_by(self.shell_every as usize).collect();
+        if out.last() != Some(&(lines - 1)) {
+            out.push(lines - 1);
+        }
+        out
+    }
+
     /// The elevation offsets (degrees) of the views solved for one sample:
     /// 0 first, then evenly over ±`view_spread_deg`.
     pub fn view_elevations(&self) -> Vec<f32> {

@@ -55,6 +55,11 @@ fn bad_glass_settings_name_their_field() {
             "material = \"floor\"",
             "objects[0].glass",
         ),
+        (
+            "tau = 5.0",
+            "tau = 5.0\nshell_every = 20000",
+            "objects[0].glass.shell_every",
+        ),
         ("tau = 5.0", "tau = 5.0\nbogus = 1", "bogus"),
     ];
     for (from, to, field) in cases {
@@ -69,4 +74,24 @@ fn bad_glass_settings_name_their_field() {
         .expect_err("two glass objects")
         .to_string();
     assert!(e.contains("objects[1].glass"), "{e}");
+}
+
+#[test]
+fn shell_lines_cover_the_orbit_ends() {
+    let every = |k| GlassSettings {
+        shell_every: k,
+        ..GlassSettings::default()
+    };
+    assert!(every(0).shell_lines(100).is_empty(), "0 is off");
+    assert_eq!(every(10).shell_lines(100).len(), 11);
+    assert_eq!(every(10).shell_lines(100)[..3], [0, 10, 20]);
+    assert_eq!(every(10).shell_lines(100).last(), Some(&99));
+    assert_eq!(every(10).shell_lines(91).last(), Some(&90), "no duplicate");
+    assert_eq!(every(1).shell_lines(3), [0, 1, 2]);
+    assert_eq!(every(500).shell_lines(3), [0, 2]);
+    assert_eq!(every(5).shell_lines(1), [0]);
+    assert!(every(5).shell_lines(0).is_empty());
+    let s = load_edited("tau = 5.0", "tau = 5.0\nshell_every = 10").expect("loads");
+    let g = s.objects.iter().find_map(|o| o.glass.as_ref());
+    assert_eq!(g.map(|g| g.shell_every), Some(10));
 }

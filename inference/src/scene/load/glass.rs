@@ -5,7 +5,7 @@ use super::Loader;
 use crate::glass::MAX_SHELLS;
 use crate::scene::error::SceneError;
 use crate::scene::file::GlassFile;
-use crate::scene::glass::{GLASS_TAU, GLASS_VIEWS, GlassSettings};
+use crate::scene::glass::{GLASS_TAU, GLASS_VIEWS, GlassSettings, MAX_SHELL_EVERY};
 use crate::scene::material::{EM_RESOLUTIONS, Material};
 
 impl Loader<'_> {
@@ -79,12 +79,20 @@ impl Loader<'_> {
                 format!("{spread} outside [0, 45] degrees"),
             ));
         }
+        let shell_every = g.shell_every.unwrap_or(d.shell_every);
+        if shell_every > MAX_SHELL_EVERY {
+            return Err(self.err(
+                format!("{field}.shell_every"),
+                format!("{shell_every} outside 0..={MAX_SHELL_EVERY} orbit lines (0: off)"),
+            ));
+        }
         Ok(GlassSettings {
             resolution,
             shells,
             tau,
             views,
             view_spread_deg: spread,
+            shell_every,
         })
     }
 }
