@@ -182,11 +182,14 @@ pub struct RelightPush {
     pub power: Vec4,
 }
 
-/// `shaders/glass.vert` / `glass.frag` push constants.
+/// `shaders/glass.vert` / `glass.frag` / `glass_blend.frag` push constants.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GlassPush {
     pub view_proj: Mat4,
+    /// `glass_blend.frag`: the two samples' array layers and the second's
+    /// weight (x, y, z); unused by `glass.frag`.
+    pub blend: Vec4,
 }
 
 /// `shaders/glass.vert`: one interleaved stream of
@@ -270,6 +273,7 @@ pub mod spirv {
     pub const PANORAMA_CUBE_FRAG: &[u8] = shader!("panorama_cube.frag");
     pub const GLASS_VERT: &[u8] = shader!("glass.vert");
     pub const GLASS_FRAG: &[u8] = shader!("glass.frag");
+    pub const GLASS_BLEND_FRAG: &[u8] = shader!("glass_blend.frag");
     pub const REM_WARP_FRAG: &[u8] = shader!("rem_warp.frag");
     pub const REM_VERT: &[u8] = shader!("rem.vert");
     pub const REM_FRAG: &[u8] = shader!("rem.frag");

@@ -4,12 +4,15 @@
 //!
 //! Hybrid frames tessellate the lens adaptively to τ subpixels and index
 //! ONE shell: the room's box, whose map is the static EM captured at the
-//! lens centroid (lookup = exit ray's hit on the box − centroid). The
+//! lens centroid (lookup = exit ray's hit on the box − centroid) or, where
+//! the scene asks for them (`[objects.glass] shell_every`), the two nearest
+//! per-sample maps inferred from traced frames ([`samples`]), blended. The
 //! baseline (static refraction EM) draws the lens's own mesh with one
-//! refraction at the front surface, the same map read at infinity.
-//! Inferred, layered shells are not played yet.
+//! refraction at the front surface, the traced map read at infinity.
+//! Layered shells (several per sample) are not played yet.
 
 pub mod ahead;
+pub mod samples;
 pub mod shell;
 
 use crate::backend::{Device, GpuError, GpuResult, Image};
@@ -18,7 +21,7 @@ use crate::passes::glass::{GlassGeometry, GlassPass};
 use crate::passes::target::Target;
 use ahead::{Ahead, PathRequest};
 use ash::vk;
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec3, Vec4};
 use inference::glass::vertices::vertex_stream;
 use inference::glass::{Lens, ShellSet, ShellShape};
 use inference::scene::Scene;
@@ -57,6 +60,11 @@ pub struct GlassPlayer {
     /// Tessellation threshold, subpixels.
     pub tau: f32,
     bounds: (Vec3, Vec3),
+    /// The per-sample maps (a cube-map array) and their azimuths.
+    samples: Option<(Image, Vec<f32>)>,
+    /// This frame's blend of them (layers, weight), hybrid frames only.
+    blend: Option<Vec4>,
+    orbit: inference::scene::Orbit,
     stream: Vec<f32>,
     /// The next frame's paths, being traced (see [`GlassPlayer::prepare`]).
     ahead: Option<Ahead>,
@@ -89,6 +97,9 @@ impl GlassPlayer {
             room: shell(inference::glass::room_box_shape(scene)),
             infinity: shell(ShellShape::Infinity),
             bounds: object.mesh.bounds(),
+            samples: None,
+            blend: None,
+            orbit: scene.orbit.clone(),
             lens: Arc::new(lens),
             cube,
             geometry,
@@ -97,6 +108,11 @@ impl GlassPlayer {
             ahead: None,
             last: GlassFrameStats::default(),
         }))
+    }
+
+    /// The scene object index of the lens.
+    pub fn lens_object(&self) -> u32 {
+        self.lens.object
     }
 
     /// The lens's world-space bounds (the pass's render area).
@@ -140,6 +156,14 @@ impl GlassPlayer {
             GlassKind::Hybrid => &self.room,
             GlassKind::StaticEm => &self.infinity,
         };
+        self.blend = match (&self.samples, request.kind) {
+            (Some((_, azimuths)), GlassKind::Hybrid) => {
+                let az = self.orbit.angles(request.eye).0;
+                samples::blend_of(azimuths, az)
+                    .map(|(a, b, w)| Vec4::new(a as f32, b as f32, w, 0.0))
+            }
+            _ => None,
+        };
         let traced = Instant::now();
         vertex_stream(&tess, shells, &mut self.stream);
         let streamed = Instant::now();
@@ -159,7 +183,31 @@ impl GlassPlayer {
 
     /// The pass drawing what [`GlassPlayer::prepare`] uploaded.
     pub fn pass<'a>(&'a self, target: Target<'a>, view_proj: Mat4) -> GlassPass<'a> {
-        self.geometry.pass(&self.cube.color, target, view_proj)
+        let samples = match (&self.samples, self.blend) {
+            (Some((image, _)), Some(blend)) => Some((image, blend)),
+            _ => None,
+        };
+        self.geometry
+            .pass(&self.cube.color, samples, target, view_proj)
+    }
+
+    /// Plays hybrid frames from `image` (the per-sample maps at
+    /// `azimuths`, uploaded and ready for sampling) instead of the one map.
+    pub fn set_samples(&mut self, image: Image, azimuths: Vec<f32>) -> GpuResult<()> {
+        self.geometry.set_samples(&image)?;
+        self.samples = Some((image, azimuths));
+        Ok(())
+    }
+
+    /// Back to the one map for every view.
+    pub fn clear_samples(&mut self) {
+        self.samples = None;
+        self.blend = None;
+    }
+
+    /// How many per-sample maps hybrid frames blend (0: the one map).
+    pub fn sample_count(&self) -> usize {
+        self.samples.as_ref().map_or(0, |s| s.1.len())
     }
 
     /// The shell map (the capture renders into it).
@@ -200,7 +248,8 @@ pub fn prepare_frame(
 }
 
 /// Sets `renderer` up for hybrid frames with `tau` (the scene's when
-/// None), the room shell map compiled under `out` when missing.
+/// None), the room shell map compiled under `out` when missing, and no
+/// per-sample maps (`compile::glass_shells::load` adds them).
 pub fn setup(
     renderer: &mut crate::renderer::Renderer,
     scene: &Scene,
@@ -214,6 +263,7 @@ pub fn setup(
             scene.source.display()
         );
     };
+    glass.clear_samples();
     if let Some(tau) = tau {
         let range = inference::scene::glass::GLASS_TAU;
         if !range.contains(&tau) {

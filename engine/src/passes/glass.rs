@@ -1,26 +1,29 @@
 //! The glass pass: the lens's per-frame tessellation (CPU vertex ray
 //! paths, `inference::glass`) drawn over the room, each pixel
-//! `T·F_T·G_T + R·F_R·G_R` read from the shell cube map.
+//! `T·F_T·G_T + R·F_R·G_R` read from the shell cube map, or mixed from
+//! two per-sample shell maps of a cube-map array.
 
 use super::target::Target;
 use crate::backend::{Binding, Buffer, Device, GpuResult, Pipeline, PipelineDesc, Sampler};
 use crate::graph::{Access, Pass};
 use crate::shader_interface::{GLASS_ATTRIBUTES, GLASS_BINDING, GlassPush, spirv};
 use ash::vk;
-use glam::Mat4;
+use glam::{Mat4, Vec4};
 
-/// The glass pipeline (back faces culled: the CPU emits front faces only).
+/// The glass pipeline (back faces culled: the CPU emits front faces only)
+/// with `fragment` (`glass.frag` or `glass_blend.frag`).
 pub fn glass_pipeline(
     device: &Device,
+    (name, fragment): (&str, &[u8]),
     color_format: vk::Format,
     depth_format: vk::Format,
 ) -> GpuResult<Pipeline> {
     Pipeline::new(
         device,
         &PipelineDesc {
-            name: "glass",
+            name,
             vertex_spirv: spirv::GLASS_VERT,
-            fragment_spirv: spirv::GLASS_FRAG,
+            fragment_spirv: fragment,
             vertex_bindings: &[GLASS_BINDING],
             vertex_attributes: &GLASS_ATTRIBUTES,
             color_formats: &[color_format],
@@ -40,9 +43,12 @@ pub fn glass_pipeline(
 /// before they are rewritten).
 pub struct GlassGeometry {
     device: Device,
+    formats: (vk::Format, vk::Format),
     pipeline: Pipeline,
-    _sampler: Sampler,
+    sampler: Sampler,
     set: vk::DescriptorSet,
+    /// The blending pipeline and its set over the per-sample maps.
+    blend: Option<(Pipeline, vk::DescriptorSet)>,
     vertices: Option<Buffer>,
     indices: Option<Buffer>,
     pub index_count: u32,
@@ -55,18 +61,30 @@ impl GlassGeometry {
         shell: &crate::backend::Image,
         formats: (vk::Format, vk::Format),
     ) -> GpuResult<Self> {
-        let pipeline = glass_pipeline(device, formats.0, formats.1)?;
+        let pipeline = glass_pipeline(device, ("glass", spirv::GLASS_FRAG), formats.0, formats.1)?;
         let sampler = Sampler::trilinear(device, vk::SamplerAddressMode::CLAMP_TO_EDGE)?;
         let set = pipeline.descriptor_set(&[Binding::Image(shell.view, sampler.raw)])?;
         Ok(Self {
             device: device.clone(),
+            formats,
             pipeline,
-            _sampler: sampler,
+            sampler,
             set,
+            blend: None,
             vertices: None,
             indices: None,
             index_count: 0,
         })
+    }
+
+    /// Makes the blending pipeline, reading the cube-map array `samples`.
+    pub fn set_samples(&mut self, samples: &crate::backend::Image) -> GpuResult<()> {
+        let (color, depth) = self.formats;
+        let names = ("glass blend", spirv::GLASS_BLEND_FRAG);
+        let pipeline = glass_pipeline(&self.device, names, color, depth)?;
+        let set = pipeline.descriptor_set(&[Binding::Image(samples.view, self.sampler.raw)])?;
+        self.blend = Some((pipeline, set));
+        Ok(())
     }
 
     /// Copies a frame's vertex stream and indices into the buffers.
@@ -90,15 +108,19 @@ impl GlassGeometry {
         Ok(())
     }
 
+    /// The pass reading `shell`, or with `samples` (the array given to
+    /// [`GlassGeometry::set_samples`] and the blend: layers, weight) those.
     pub fn pass<'a>(
         &'a self,
         shell: &'a crate::backend::Image,
+        samples: Option<(&'a crate::backend::Image, Vec4)>,
         target: Target<'a>,
         view_proj: Mat4,
     ) -> GlassPass<'a> {
         GlassPass {
             geometry: self,
             shell,
+            samples: samples.filter(|_| self.blend.is_some()),
             target,
             view_proj,
         }
@@ -134,6 +156,7 @@ fn fill(
 pub struct GlassPass<'a> {
     geometry: &'a GlassGeometry,
     shell: &'a crate::backend::Image,
+    samples: Option<(&'a crate::backend::Image, Vec4)>,
     target: Target<'a>,
     view_proj: Mat4,
 }
@@ -143,7 +166,10 @@ impl Pass for GlassPass<'_> {
         "glass"
     }
     fn accesses(&self) -> Vec<Access<'_>> {
-        self.target.accesses(&[self.shell])
+        match self.samples {
+            Some((samples, _)) => self.target.accesses(&[samples]),
+            None => self.target.accesses(&[self.shell]),
+        }
     }
     fn record(&self, cmd: vk::CommandBuffer) -> GpuResult<()> {
         let g = self.geometry;
@@ -154,13 +180,15 @@ impl Pass for GlassPass<'_> {
             if g.index_count == 0 {
                 return Ok(());
             }
-            g.pipeline.bind(
-                cmd,
-                Some(g.set),
-                &GlassPush {
-                    view_proj: self.view_proj,
-                },
-            )?;
+            let (pipeline, set, blend) = match (self.samples, &g.blend) {
+                (Some((_, blend)), Some((pipeline, set))) => (pipeline, *set, blend),
+                _ => (&g.pipeline, g.set, Vec4::ZERO),
+            };
+            let push = GlassPush {
+                view_proj: self.view_proj,
+                blend,
+            };
+            pipeline.bind(cmd, Some(set), &push)?;
             // SAFETY: the glass pipeline is bound inside dynamic rendering;
             // the buffers hold index_count indices into the uploaded vertices.
             unsafe {

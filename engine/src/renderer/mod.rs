@@ -2,6 +2,7 @@
 //! explicit list of passes — only the passes the scene requires.
 
 mod frame_passes;
+mod glass;
 mod light_path;
 mod readback;
 mod reflectors;
@@ -107,8 +108,9 @@ pub struct Renderer {
     next_view: Option<(Vec3, Mat4)>,
     /// What set-up cost on the GPU (static EM capture, MIP chain).
     pub setup_timings: Vec<PassTiming>,
-    /// Bytes of the maps the last `set_pem` (container) or `set_rem`
-    /// (source maps on the device) set up, for the eval table.
+    /// Bytes of the maps the last `set_pem` (container), `set_rem` (source
+    /// maps on the device) or glass per-sample shells (their container, or
+    /// raw) set up, for the eval table.
     pub map_bytes: Option<u64>,
     /// Minutes the last `set_pem`'s container took to compile, as its key
     /// record keeps them (None when unknown or reading EXR maps).
@@ -380,20 +382,6 @@ impl Renderer {
         cpu.prefetched_maps += prepared.prefetched_maps;
         cpu.texgen_ahead += prepared.texgen_ahead;
         Ok(blend)
-    }
-
-    /// Replaces the glass object's shell map (all levels, f16 RGBA in
-    /// upload order) — the traced room instead of the rasterised capture.
-    pub fn load_glass_shell(&mut self, bytes: &[u8]) -> GpuResult<()> {
-        let Some(g) = self.glass.as_ref() else {
-            return Err(GpuError::Invalid("no glass object".into()));
-        };
-        let image = g.shell_map();
-        crate::backend::upload::upload_image(&self.device, self.executor.commands(), image, bytes)?;
-        self.executor
-            .states
-            .assume(image, crate::graph::Usage::Sampled);
-        Ok(())
     }
 
     /// CPU texgen for every reflector, then the copy into its vertex buffer

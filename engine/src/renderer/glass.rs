@@ -1,0 +1,65 @@
+//! The glass object's shell maps on the device: the one traced map, or
+//! the per-sample maps in one cube-map array.
+
+use super::Renderer;
+use crate::backend::{GpuError, GpuResult, Image};
+use ash::vk;
+
+impl Renderer {
+    /// Replaces the glass object's shell map (all levels, f16 RGBA in
+    /// upload order) — the traced room instead of the rasterised capture.
+    pub fn load_glass_shell(&mut self, bytes: &[u8]) -> GpuResult<()> {
+        let Some(g) = self.glass.as_ref() else {
+            return Err(GpuError::Invalid("no glass object".into()));
+        };
+        let image = g.shell_map();
+        crate::backend::upload::upload_image(&self.device, self.executor.commands(), image, bytes)?;
+        self.executor
+            .states
+            .assume(image, crate::graph::Usage::Sampled);
+        Ok(())
+    }
+
+    /// Uploads the glass object's per-sample shell maps into one cube-map
+    /// array and has hybrid frames blend them.
+    pub fn load_glass_samples(
+        &mut self,
+        shells: &crate::glass::samples::SampleShells,
+    ) -> GpuResult<()> {
+        let Some(g) = self.glass.as_mut() else {
+            return Err(GpuError::Invalid("no glass object".into()));
+        };
+        let single = g.shell_map().desc;
+        let desc = crate::backend::ImageDesc {
+            usage: vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+            mip_levels: single.mip_levels,
+            ..crate::backend::ImageDesc::new_cube_array(
+                single.format,
+                single.width,
+                shells.maps.len() as u32,
+            )
+        };
+        // One map's bytes per level, as the single shell map uploads them.
+        let (regions, _) = crate::backend::upload::level_regions(&single)?;
+        let texel = crate::backend::upload::texel_size(single.format).unwrap_or(8);
+        let per_level: Vec<usize> = regions
+            .iter()
+            .map(|r| (u64::from(r.image_extent.width * r.image_extent.height) * 6 * texel) as usize)
+            .collect();
+        let bytes =
+            crate::glass::samples::array_bytes(&shells.maps, &per_level).ok_or_else(|| {
+                GpuError::Invalid("per-sample shell maps of another size than the shell map".into())
+            })?;
+        let image = Image::new(&self.device, "glass per-sample shell maps", desc)?;
+        crate::backend::upload::upload_image(
+            &self.device,
+            self.executor.commands(),
+            &image,
+            &bytes,
+        )?;
+        self.executor
+            .states
+            .assume(&image, crate::graph::Usage::Sampled);
+        g.set_samples(image, shells.azimuths.clone())
+    }
+}
