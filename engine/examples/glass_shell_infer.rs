@@ -21,8 +21,7 @@
 //! (DATA_DIR holds `glass/room_shell.bin`, traced when missing; it is
 //! overwritten with the inferred map under the same key.)
 
-#[path = "glass_shell/frame.rs"]
-mod frame;
+use engine::compile::glass_shells::solve as frame;
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -280,7 +279,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .collect()
     };
     if args.frame {
-        let map = frame::solve_frames(&mut probe, &frames, shape, &warm, args.refine)?;
+        let (map, stats) = frame::solve_frames(&mut probe, &frames, shape, &warm, args.refine)?;
+        for (c, s) in stats.iter().enumerate() {
+            eprintln!(
+                "channel {c}: {} rows, {} CG iterations, relative residual {:.2e}",
+                s.rows, s.iterations, s.relative_residual
+            );
+        }
         return write_map(&g, &args, &map, &layout);
     }
     let traced_texels = inference::infer::layer::texels(&warm, layout.len());

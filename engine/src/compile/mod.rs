@@ -5,6 +5,7 @@
 //! and an edited scene is never played from old maps.
 
 pub mod encode;
+pub mod glass_shells;
 pub mod infer;
 pub mod room;
 pub mod scene;

@@ -1,20 +1,18 @@
-//! The thesis's formulation of the shell solve (`--frame` of
-//! `glass_shell_infer`): the traced frame itself, both terms at once. Row p,
-//! channel c: `w_T,c(p)·A_T[p] + w_R,c(p)·A_R[p]` against the traced
-//! frame's pixel, over the pixels the lens covers wholly; `A_T`, `A_R` the
-//! probe-rendered matrices of the two terms' lookups, `w` the traced mean
-//! `F·G` of each term at the pixel.
+//! The thesis's shell solve (§6.3.3): the traced frame itself, both terms
+//! at once. Row p, channel c: `w_T,c(p)·A_T[p] + w_R,c(p)·A_R[p]` against
+//! the traced frame's pixel, over the pixels the lens covers wholly; `A_T`,
+//! `A_R` the probe-rendered matrices of the two terms' lookups, `w` the
+//! traced mean `F·G` of each term at the pixel.
 
 use std::collections::HashMap;
 
-use engine::probe::VulkanProbe;
+use crate::probe::VulkanProbe;
+use anyhow::{Context, Result};
 use inference::glass::targets::GlassTargets;
 use inference::probe::{ProbeGeometry, build_matrix};
 use inference::solve::csr::{CsrBuilder, CsrMatrix};
 use inference::solve::layout::{TextureLayout, TextureShape};
 use inference::solve::{SolveOptions, solve_channels};
-
-type Error = Box<dyn std::error::Error>;
 
 /// One view: the two terms' probe geometry, the targets (weights,
 /// coverage) and an independently traced frame (RGB per pixel).
@@ -23,6 +21,14 @@ pub struct FrameView {
     pub r: ProbeGeometry,
     pub targets: GlassTargets,
     pub beauty: Vec<[f32; 3]>,
+}
+
+/// What one channel's solve did.
+#[derive(Clone, Copy, Debug)]
+pub struct ChannelStats {
+    pub rows: usize,
+    pub iterations: u32,
+    pub relative_residual: f32,
 }
 
 /// Row `row` of `a` scaled by `s`, appended to `entries`.
@@ -42,7 +48,7 @@ fn system(
     views: &[FrameView],
     layout: &TextureLayout,
     shape: TextureShape,
-) -> Result<(Vec<CsrMatrix>, Vec<Vec<f32>>), Error> {
+) -> Result<(Vec<CsrMatrix>, Vec<Vec<f32>>)> {
     let mut a: Vec<CsrBuilder> = (0..3).map(|_| CsrBuilder::new(layout.len())).collect();
     let mut b: Vec<Vec<f32>> = vec![Vec::new(); 3];
     let mut entries = Vec::new();
@@ -56,16 +62,22 @@ fn system(
             let (Some(&j), Some(&cov)) = (rows_r.get(&p), v.targets.coverage.get(pu)) else {
                 continue;
             };
+            let (Some(&wt), Some(&wr), Some(px)) = (
+                v.targets.t.weight.get(pu),
+                v.targets.r.weight.get(pu),
+                v.beauty.get(pu),
+            ) else {
+                continue;
+            };
             if cov < 1.0 {
                 continue;
             }
-            let (wt, wr) = (v.targets.t.weight[pu], v.targets.r.weight[pu]);
             for c in 0..3 {
                 entries.clear();
                 extend_scaled_row(&mut entries, &at.a, i, wt[c]);
                 extend_scaled_row(&mut entries, &ar.a, j, wr[c]);
                 a[c].push_row(&entries)?;
-                b[c].push(v.beauty[pu][c]);
+                b[c].push(px[c]);
             }
         }
     }
@@ -90,14 +102,14 @@ pub fn solve_frames(
     shape: TextureShape,
     traced: &[Vec<f32>],
     refine: Option<f32>,
-) -> Result<Vec<Vec<f32>>, Error> {
+) -> Result<(Vec<Vec<f32>>, Vec<ChannelStats>)> {
     let layout = TextureLayout::full_chain(shape);
     let (a, b) = system(probe, views, &layout, shape)?;
     let options = SolveOptions {
         eps_prior: refine.unwrap_or(0.0),
         ..SolveOptions::default()
     };
-    let mut map = Vec::new();
+    let (mut map, mut stats) = (Vec::new(), Vec::new());
     for c in 0..3 {
         let (rhs, x0) = match refine {
             Some(_) => (residual(&a[c], &traced[c], &b[c]), None),
@@ -110,15 +122,19 @@ pub fn solve_frames(
             x0.as_ref().map(|x| &x[..]),
             &options,
         )?;
-        let x = s.into_iter().next().ok_or("no solution")?;
-        eprintln!(
-            "channel {c}: {} rows, {} CG iterations, relative residual {:.2e}",
-            a[c].rows, x.iterations, x.relative_residual
-        );
+        let x = s
+            .into_iter()
+            .next()
+            .context("the solve returned no channel")?;
+        stats.push(ChannelStats {
+            rows: a[c].rows,
+            iterations: x.iterations,
+            relative_residual: x.relative_residual,
+        });
         map.push(match refine {
             Some(_) => traced[c].iter().zip(&x.x).map(|(t, d)| t + d).collect(),
             None => x.x,
         });
     }
-    Ok(map)
+    Ok((map, stats))
 }
