@@ -102,6 +102,8 @@ pub struct PemOptions {
     /// Hybrid glass: tessellation threshold in subpixels [default: the
     /// scene's `[objects.glass] tau`].
     pub tau: Option<f32>,
+    /// Hybrid glass: the one traced shell map, not the per-sample ones.
+    pub traced_shell: bool,
     /// How the room is lit.
     pub room: RoomShading,
     /// Reflection-space IBR: source sphere-map resolution.
@@ -123,6 +125,7 @@ impl Default for PemOptions {
             filtering: Filtering::Trilinear,
             compositing: Compositing::Deferred,
             tau: None,
+            traced_shell: false,
             room: RoomShading::Inferred,
             rem_size: crate::rem::sources::RemSettings::default().size,
             rem_level: 0,
@@ -159,6 +162,9 @@ impl PemOptions {
         }
         if let Some(tau) = self.tau {
             f.push(("tau".into(), Some(tau.to_string())));
+        }
+        if self.traced_shell {
+            f.push(("traced-shell".into(), None));
         }
         if self.room != d.room {
             f.push(("room".into(), Some("analytic".into())));

@@ -117,6 +117,10 @@ pub fn setup_mode<'s>(
         }
         Mode::Hybrid => {
             crate::glass::setup(renderer, ctx.scene, ctx.out, pem.tau)?;
+            if !pem.traced_shell {
+                let raw = pem.maps == crate::options::Maps::Exr;
+                crate::compile::glass_shells::load(ctx, renderer, raw)?;
+            }
             FrameSource::Raster(FrameMode::Hybrid)
         }
         Mode::Rem => {

@@ -1,7 +1,8 @@
 //! `engine --scene glass` end to end, on a small copy of the glass scene:
-//! the first run traces the room shell map and plays hybrid frames (the
-//! default mode for glass) with validation clean; the second compiles
-//! nothing; a bad τ and hybrid without glass fail cleanly.
+//! the first run traces the room shell map, solves the per-sample shell
+//! maps and plays hybrid frames (the default mode for glass) with
+//! validation clean; later runs compile nothing; a damaged per-sample map
+//! is solved again; a bad τ and hybrid without glass fail cleanly.
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -13,13 +14,15 @@ fn engine(args: &[&str]) -> Output {
         .expect("run engine")
 }
 
-/// glass.toml with a 16² shell map and a coarse teapot, in `dir`.
+/// glass.toml with a 16² shell map, a coarse teapot and per-sample shell
+/// maps at orbit lines 0, 50 and 99 (one view each), in `dir`.
 fn small_glass(dir: &Path) -> String {
     let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/scenes/glass.toml");
     let mut text = std::fs::read_to_string(source).expect("glass.toml");
     for (from, to) in [
         ("resolution = 256", "resolution = 16"),
         ("segments = 25 }", "segments = 6 }"),
+        ("tau = 5.0", "tau = 5.0\nshell_every = 50\nviews = 1"),
     ] {
         assert!(text.contains(from), "glass.toml lacks {from:?}");
         text = text.replacen(from, to, 1);
@@ -55,7 +58,22 @@ fn glass_compiles_its_shell_once_and_plays_hybrid() {
         "{stdout}"
     );
     assert!(stderr.contains("traced the room shell map"), "{stderr}");
+    assert!(
+        stderr.contains("solved 3 per-sample shell maps"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("compressed 3 per-sample shell maps"),
+        "{stderr}"
+    );
+    assert!(out.join("glass/room_shells.ptxc").is_file());
     assert!(out.join("glass/room_shell.bin").is_file());
+    for line in ["0000", "0050", "0099"] {
+        assert!(
+            out.join(format!("glass/room_shell_line{line}.bin"))
+                .is_file()
+        );
+    }
     let perf: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("perf.json")).expect("perf.json"))
             .expect("valid JSON");
@@ -73,6 +91,34 @@ fn glass_compiles_its_shell_once_and_plays_hybrid() {
     let stderr = String::from_utf8_lossy(&second.stderr);
     assert!(second.status.success(), "stderr:\n{stderr}");
     assert!(!stderr.contains("traced the room shell map"), "{stderr}");
+    assert!(!stderr.contains("per-sample"), "{stderr}");
+
+    // A damaged container is compressed again from the maps; a damaged
+    // map, played as solved (`--maps exr`), is solved again (that one
+    // only); the traced shell alone plays without them.
+    std::fs::write(out.join("glass/room_shells.ptxc"), b"not a container").expect("damage");
+    let third = run(&scene, &out, &[]);
+    let stderr = String::from_utf8_lossy(&third.stderr);
+    assert!(third.status.success(), "stderr:\n{stderr}");
+    assert!(
+        stderr.contains("compressed 3 per-sample shell maps"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("solved"), "{stderr}");
+    let damaged = out.join("glass/room_shell_line0050.bin");
+    std::fs::write(&damaged, b"not a map").expect("damage a map");
+    let raw = run(&scene, &out, &["--maps", "exr"]);
+    let stderr = String::from_utf8_lossy(&raw.stderr);
+    assert!(raw.status.success(), "stderr:\n{stderr}");
+    assert!(
+        stderr.contains("solved 1 per-sample shell maps"),
+        "{stderr}"
+    );
+    let traced = run(&scene, &out, &["--traced-shell"]);
+    let stderr = String::from_utf8_lossy(&traced.stderr);
+    assert!(traced.status.success(), "stderr:\n{stderr}");
+    assert!(!stderr.contains("per-sample"), "{stderr}");
+    eval_states_the_shells(&scene, &out, dir.path());
 
     let bad_tau = run(&scene, &out, &["--tau", "0"]);
     let stderr = String::from_utf8_lossy(&bad_tau.stderr);
@@ -86,6 +132,59 @@ fn glass_compiles_its_shell_once_and_plays_hybrid() {
             .any(|l| l.starts_with("error:") && l.contains("--tau 0")),
         "{stderr}"
     );
+}
+
+/// `engine eval` on the compiled `out`: the hybrid row plays the three
+/// per-sample maps (its samples and container bytes stated), the
+/// traced-shell row the one traced map (none stated, other frames).
+fn eval_states_the_shells(scene: &str, out: &Path, dir: &Path) {
+    let eval_out = dir.join("eval");
+    let o = engine(&[
+        "eval",
+        "--scene",
+        scene,
+        "--data",
+        out.to_str().expect("utf-8"),
+        "--out",
+        eval_out.to_str().expect("utf-8"),
+        "--size",
+        "96x64",
+        "--views",
+        "1",
+        "--spp",
+        "2",
+        "--repeats",
+        "1",
+        "--elevation",
+        "10",
+        "--validate",
+        "--rows",
+        "hybrid,hybrid traced-shell",
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "stderr:\n{stderr}");
+    let eval: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(eval_out.join("eval.json")).expect("eval.json"))
+            .expect("valid JSON");
+    let rows = eval["rows"].as_array().expect("rows");
+    let row = |label: &str| {
+        rows.iter()
+            .find(|r| r["settings"]["label"] == label)
+            .unwrap_or_else(|| panic!("no row {label}: {eval}"))
+    };
+    let (blended, traced) = (row("hybrid"), row("hybrid traced-shell"));
+    assert_eq!(blended["samples"], 3, "{blended}");
+    assert!(
+        blended["map_bytes"].as_u64().is_some_and(|b| b > 0),
+        "{blended}"
+    );
+    assert!(
+        traced["samples"].is_null() && traced["map_bytes"].is_null(),
+        "{traced}"
+    );
+    let on = |r: &serde_json::Value| r["psnr_on_db"].as_f64().expect("psnr_on_db");
+    assert!(on(blended).is_finite() && on(traced).is_finite());
+    assert_ne!(on(blended), on(traced), "the rows played the same maps");
 }
 
 #[test]

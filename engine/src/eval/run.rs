@@ -95,8 +95,15 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
                 continue;
             }
         };
+        // Glass: the per-sample shell maps' bytes where it plays them.
+        let glass_samples = (renderer.glass.as_ref())
+            .map_or(0, |g| g.sample_count())
+            .try_into()
+            .ok()
+            .filter(|&n: &u32| n > 0 && row.mode == Mode::Hybrid);
         let map_bytes = match row.mode {
             Mode::Rem | Mode::LayeredPem | Mode::SpherePem | Mode::Ptm => renderer.map_bytes,
+            Mode::Hybrid => glass_samples.and(renderer.map_bytes),
             _ => None,
         };
         let (results, frames) = run.measure_row(&mut source, &mut renderer, &scene, &progress)?;
@@ -104,7 +111,8 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
             pictures.push((row.label.clone(), frames));
         }
         let samples = matches!(row.mode, Mode::LayeredPem | Mode::SpherePem | Mode::Ptm)
-            .then(|| scene.orbit.sample_count());
+            .then(|| scene.orbit.sample_count())
+            .or(glass_samples);
         let compile_minutes = samples.and(renderer.map_compile_minutes);
         table_rows.push(EvalRow {
             map_bytes,

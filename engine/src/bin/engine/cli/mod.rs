@@ -330,6 +330,10 @@ pub struct PemArgs {
     /// the scene's `[objects.glass] tau`].
     #[arg(long)]
     pub tau: Option<f32>,
+    /// Hybrid glass: play the one traced room shell map even where the
+    /// scene asks for per-sample shell maps (`[objects.glass] shell_every`).
+    #[arg(long)]
+    pub traced_shell: bool,
     /// How the room is lit: `inferred` light maps of the traced light
     /// (compiled with the maps, cached under `<out>/room/`) or the
     /// `analytic` point light plus ambient.
@@ -411,6 +415,7 @@ impl PemArgs {
             filtering: self.filtering,
             compositing: self.compositing,
             tau: self.tau,
+            traced_shell: self.traced_shell,
             room: self.room,
             rem_size: self.rem_size,
             rem_level: self.rem_level,
