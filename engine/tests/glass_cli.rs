@@ -22,7 +22,8 @@ fn small_glass(dir: &Path) -> String {
     for (from, to) in [
         ("resolution = 256", "resolution = 16"),
         ("segments = 25 }", "segments = 6 }"),
-        ("tau = 5.0", "tau = 5.0\nshell_every = 50\nviews = 1"),
+        ("shell_every = 10", "shell_every = 50"),
+        ("views = 3", "views = 1"),
     ] {
         assert!(text.contains(from), "glass.toml lacks {from:?}");
         text = text.replacen(from, to, 1);

@@ -14,6 +14,9 @@ fn shipped_glass_scene_has_one_glass_teapot() {
     let g = glass[0].glass.as_ref().expect("settings");
     assert_eq!((g.resolution, g.tau), (256, 5.0));
     assert_eq!(g.shells, GlassSettings::default().shells);
+    // Per-sample shell maps every 10th line, each from 3 views.
+    assert_eq!((g.shell_every, g.views), (10, 3));
+    assert_eq!(g.shell_lines(s.orbit.samples).len(), 11);
 }
 
 /// The shipped glass scene with `from` replaced by `to`, loaded from a temp file.
@@ -41,8 +44,8 @@ fn bad_glass_settings_name_their_field() {
             "objects[0].glass.resolution",
         ),
         (
-            "tau = 5.0",
-            "tau = 5.0\nviews = 0",
+            "views = 3",
+            "views = 0",
             "objects[0].glass.views",
         ),
         (
@@ -56,8 +59,8 @@ fn bad_glass_settings_name_their_field() {
             "objects[0].glass",
         ),
         (
-            "tau = 5.0",
-            "tau = 5.0\nshell_every = 20000",
+            "shell_every = 10",
+            "shell_every = 20000",
             "objects[0].glass.shell_every",
         ),
         ("tau = 5.0", "tau = 5.0\nbogus = 1", "bogus"),
@@ -91,7 +94,7 @@ fn shell_lines_cover_the_orbit_ends() {
     assert_eq!(every(500).shell_lines(3), [0, 2]);
     assert_eq!(every(5).shell_lines(1), [0]);
     assert!(every(5).shell_lines(0).is_empty());
-    let s = load_edited("tau = 5.0", "tau = 5.0\nshell_every = 10").expect("loads");
+    let s = load_edited("shell_every = 10", "shell_every = 7").expect("loads");
     let g = s.objects.iter().find_map(|o| o.glass.as_ref());
-    assert_eq!(g.map(|g| g.shell_every), Some(10));
+    assert_eq!(g.map(|g| g.shell_every), Some(7));
 }
