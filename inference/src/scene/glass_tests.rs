@@ -43,11 +43,7 @@ fn bad_glass_settings_name_their_field() {
             "resolution = 100\ntau",
             "objects[0].glass.resolution",
         ),
-        (
-            "views = 3",
-            "views = 0",
-            "objects[0].glass.views",
-        ),
+        ("views = 3", "views = 0", "objects[0].glass.views"),
         (
             "tau = 5.0",
             "tau = 5.0\nview_spread_deg = 90.0",

@@ -36,7 +36,7 @@ pub const SHELL_SOLVE_TAU: f32 = 3.0;
 /// The prior on the correction to the traced map (λ‖δ‖²).
 pub const SHELL_REFINE: f32 = 0.1;
 /// Bumped when what a per-sample map holds changes.
-const VERSION: u64 = 1;
+const VERSION: u64 = 2;
 
 /// The glass object the maps belong to, and its room shell.
 pub struct GlassObject<'a> {

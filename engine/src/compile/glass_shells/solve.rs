@@ -2,7 +2,8 @@
 //! at once. Row p, channel c: `w_T,c(p)·A_T[p] + w_R,c(p)·A_R[p]` against
 //! the traced frame's pixel, over the pixels the lens covers wholly; `A_T`,
 //! `A_R` the probe-rendered matrices of the two terms' lookups, `w` the
-//! traced mean `F·G` of each term at the pixel.
+//! traced mean `F·G` of each term at the pixel; each row weighted by the
+//! pixel's √confidence (thesis §6.3.3, θ_c = 5°).
 
 use std::collections::HashMap;
 
@@ -42,6 +43,21 @@ fn extend_scaled_row(entries: &mut Vec<(u32, f32)>, a: &CsrMatrix, row: usize, s
     );
 }
 
+/// √confidence of a pixel's row: the two terms' confidences
+/// (`1 − min(θ_m², θ_c²)/θ_c²`, θ_m the widest angle between the pixel's
+/// exit rays) weighted by each term's share `F·G` of the pixel, so a
+/// pixel whose one lookup per term stands for a wide spread of exit rays
+/// pulls the map less.
+fn row_weight((wt, ct): (f32, f32), (wr, cr): (f32, f32)) -> f32 {
+    let share = wt.abs() + wr.abs();
+    match share > 0.0 {
+        true => ((wt.abs() * ct + wr.abs() * cr) / share)
+            .clamp(0.0, 1.0)
+            .sqrt(),
+        false => 0.0,
+    }
+}
+
 /// Per channel, the combined rows of every view and their targets.
 fn system(
     probe: &mut VulkanProbe,
@@ -72,12 +88,20 @@ fn system(
             if cov < 1.0 {
                 continue;
             }
+            let confidence = [&v.targets.t, &v.targets.r].map(|term| term.confidence.get(pu));
+            let [Some(&ct), Some(&cr)] = confidence else {
+                continue;
+            };
             for c in 0..3 {
+                let s = row_weight((wt[c], ct), (wr[c], cr));
+                if s == 0.0 {
+                    continue;
+                }
                 entries.clear();
-                extend_scaled_row(&mut entries, &at.a, i, wt[c]);
-                extend_scaled_row(&mut entries, &ar.a, j, wr[c]);
+                extend_scaled_row(&mut entries, &at.a, i, s * wt[c]);
+                extend_scaled_row(&mut entries, &ar.a, j, s * wr[c]);
                 a[c].push_row(&entries)?;
-                b[c].push(px[c]);
+                b[c].push(s * px[c]);
             }
         }
     }
@@ -137,4 +161,21 @@ pub fn solve_frames(
         });
     }
     Ok((map, stats))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::row_weight;
+
+    #[test]
+    fn row_weight_follows_the_larger_terms_confidence() {
+        assert_eq!(row_weight((1.0, 1.0), (0.0, 0.0)), 1.0);
+        assert_eq!(row_weight((0.0, 0.0), (0.0, 0.0)), 0.0, "no light, no row");
+        // Transmission carries 0.9 of the pixel but its rays spread wide.
+        let w = row_weight((0.9, 0.0), (0.1, 1.0));
+        assert!((w - 0.1f32.sqrt()).abs() < 1e-6, "{w}");
+        // A confident pixel outweighs an unsure one, whatever the scale.
+        assert!(row_weight((2.0, 0.8), (0.2, 0.8)) > row_weight((0.5, 0.2), (0.05, 0.2)));
+        assert!(row_weight((1.0, 1.5), (0.0, 0.0)) <= 1.0, "clamped");
+    }
 }
