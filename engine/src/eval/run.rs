@@ -96,11 +96,14 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
             }
         };
         // Glass: the per-sample shell maps' bytes where it plays them.
-        let glass_samples = (renderer.glass.as_ref())
-            .map_or(0, |g| g.sample_count())
-            .try_into()
-            .ok()
-            .filter(|&n: &u32| n > 0 && row.mode == Mode::Hybrid);
+        let glass_samples = (row.mode == Mode::Hybrid)
+            .then(|| {
+                renderer
+                    .glass
+                    .as_ref()
+                    .map_or(0, |g| g.sample_count() as u32)
+            })
+            .filter(|&n| n > 0);
         let map_bytes = match row.mode {
             Mode::Rem | Mode::LayeredPem | Mode::SpherePem | Mode::Ptm => renderer.map_bytes,
             Mode::Hybrid => glass_samples.and(renderer.map_bytes),

@@ -40,11 +40,14 @@ impl Renderer {
             )
         };
         // One map's bytes per level, as the single shell map uploads them.
-        let (regions, _) = crate::backend::upload::level_regions(&single)?;
-        let texel = crate::backend::upload::texel_size(single.format).unwrap_or(8);
-        let per_level: Vec<usize> = regions
+        let (regions, total) = crate::backend::upload::level_regions(&single)?;
+        let ends = regions
             .iter()
-            .map(|r| (u64::from(r.image_extent.width * r.image_extent.height) * 6 * texel) as usize)
+            .skip(1)
+            .map(|r| r.buffer_offset)
+            .chain([total]);
+        let per_level: Vec<usize> = (regions.iter().zip(ends))
+            .map(|(r, end)| (end - r.buffer_offset) as usize)
             .collect();
         let bytes =
             crate::glass::samples::array_bytes(&shells.maps, &per_level).ok_or_else(|| {

@@ -84,6 +84,9 @@ pub fn sample_shells(
         .map(|&line| read_fresh(&sample_path(out, line), &sample_key(g, line, size)))
         .collect();
     let todo: Vec<usize> = (0..lines.len()).filter(|&i| maps[i].is_none()).collect();
+    for &i in &todo {
+        crate::util::files::check_overwrite_keyed(&sample_path(out, lines[i]))?;
+    }
     if !todo.is_empty() {
         let mut solver = Solver::new(g, device, size, traced)?;
         let bar = progress(todo.len());
@@ -135,6 +138,7 @@ fn pack_shells(
     size: u32,
 ) -> Result<(SampleShells, u64)> {
     let file = pack::container_path(out);
+    crate::util::files::check_overwrite_keyed(&file)?;
     let start = Instant::now();
     let bytes = pack::encode(&shells, size, pack::SHELL_RATIO)?;
     inference::files::write_bytes(&file, &bytes)?;
