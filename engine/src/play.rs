@@ -117,7 +117,9 @@ pub fn setup_mode<'s>(
         }
         Mode::Hybrid => {
             crate::glass::setup(renderer, ctx.scene, ctx.out, pem.tau)?;
-            if !pem.traced_shell {
+            // Layered scenes play their traced layers; one-shell scenes
+            // their per-sample maps, if any.
+            if !pem.traced_shell && crate::glass::layers::load(renderer, ctx.scene, ctx.out)? == 1 {
                 let raw = pem.maps == crate::options::Maps::Exr;
                 crate::compile::glass_shells::load(ctx, renderer, raw)?;
             }

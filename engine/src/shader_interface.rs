@@ -188,7 +188,8 @@ pub struct RelightPush {
 pub struct GlassPush {
     pub view_proj: Mat4,
     /// `glass_blend.frag`: the two samples' array layers and the second's
-    /// weight (x, y, z); unused by `glass.frag`.
+    /// weight (x, y, z); `glass_layers.frag`: the layers (x); unused by
+    /// `glass.frag`.
     pub blend: Vec4,
 }
 
@@ -206,6 +207,27 @@ pub const GLASS_ATTRIBUTES: [vk::VertexInputAttributeDescription; 5] = [
     attribute(2, 0, vk::Format::R32G32B32_SFLOAT, 24),
     attribute(3, 0, vk::Format::R32G32B32_SFLOAT, 36),
     attribute(4, 0, vk::Format::R32G32B32_SFLOAT, 48),
+];
+
+/// `shaders/glass_layers.vert`: the stream of `vertex_stream` for
+/// [`inference::glass::MAX_SHELLS`] shells — position, the two weights,
+/// the refraction term's lookups nearest first, the reflection term's.
+pub const GLASS_LAYERS_BINDING: vk::VertexInputBindingDescription =
+    vk::VertexInputBindingDescription {
+        binding: 0,
+        stride: 27 * 4,
+        input_rate: vk::VertexInputRate::VERTEX,
+    };
+pub const GLASS_LAYERS_ATTRIBUTES: [vk::VertexInputAttributeDescription; 9] = [
+    attribute(0, 0, vk::Format::R32G32B32_SFLOAT, 0),
+    attribute(1, 0, vk::Format::R32G32B32_SFLOAT, 12),
+    attribute(2, 0, vk::Format::R32G32B32_SFLOAT, 24),
+    attribute(3, 0, vk::Format::R32G32B32_SFLOAT, 36),
+    attribute(4, 0, vk::Format::R32G32B32_SFLOAT, 48),
+    attribute(5, 0, vk::Format::R32G32B32_SFLOAT, 60),
+    attribute(6, 0, vk::Format::R32G32B32_SFLOAT, 72),
+    attribute(7, 0, vk::Format::R32G32B32_SFLOAT, 84),
+    attribute(8, 0, vk::Format::R32G32B32_SFLOAT, 96),
 ];
 
 /// `shaders/rem_warp.frag` push constants: the (up to) three source maps
@@ -274,6 +296,8 @@ pub mod spirv {
     pub const GLASS_VERT: &[u8] = shader!("glass.vert");
     pub const GLASS_FRAG: &[u8] = shader!("glass.frag");
     pub const GLASS_BLEND_FRAG: &[u8] = shader!("glass_blend.frag");
+    pub const GLASS_LAYERS_VERT: &[u8] = shader!("glass_layers.vert");
+    pub const GLASS_LAYERS_FRAG: &[u8] = shader!("glass_layers.frag");
     pub const REM_WARP_FRAG: &[u8] = shader!("rem_warp.frag");
     pub const REM_VERT: &[u8] = shader!("rem.vert");
     pub const REM_FRAG: &[u8] = shader!("rem.frag");

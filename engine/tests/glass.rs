@@ -1,5 +1,6 @@
 //! Hybrid glass on the device: validation-clean frames; at IOR 1 the glass
-//! vanishes (the frame equals the room without it); at IOR 1.5 it shows.
+//! vanishes (the frame equals the room without it); at IOR 1.5 it shows;
+//! per-sample maps blend by azimuth and layered shells composite "over".
 
 mod common;
 
@@ -151,8 +152,13 @@ fn ior_one_glass_vanishes_and_real_glass_shows() {
 /// A shell map of `size`² per face, every texel of every level `rgb`
 /// (f16 RGBA bytes, as the per-sample maps are stored).
 fn constant_map(size: u32, rgb: [f32; 3]) -> Vec<u8> {
+    constant_rgba(size, [rgb[0], rgb[1], rgb[2], 1.0])
+}
+
+/// [`constant_map`] with alpha (premultiplied, as inner layers are stored).
+fn constant_rgba(size: u32, rgba: [f32; 4]) -> Vec<u8> {
     let texels: u32 = (0..=size.ilog2()).map(|l| 6 * (size >> l).pow(2)).sum();
-    let texel = [rgb[0], rgb[1], rgb[2], 1.0].map(half::f16::from_f32);
+    let texel = rgba.map(half::f16::from_f32);
     (0..texels)
         .flat_map(|_| texel)
         .flat_map(half::f16::to_le_bytes)
@@ -217,4 +223,70 @@ fn per_sample_shells_blend_by_the_eyes_azimuth() {
             .zip(&all_red)
             .any(|(m, r)| (m[2] - r[2]).abs() > 0.05)
     );
+}
+
+#[test]
+fn layered_shells_composite_each_inner_layer_over_the_outer() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = glass_scene(
+        dir.path(),
+        "glass",
+        &[("resolution = 256", "resolution = 16")],
+    );
+    let g = scene
+        .objects
+        .iter()
+        .find(|o| o.glass.is_some())
+        .expect("glass");
+    let origin = g.mesh.area_weighted_centroid();
+    let mut set =
+        inference::glass::room_shell(&scene, origin, inference::glass::room_box_shape(&scene));
+    let inner = inference::glass::Shell {
+        shape: inference::glass::ShellShape::Sphere { radius: 0.8 },
+        objects: Vec::new(),
+        distance: 0.8,
+    };
+    set.shells.insert(0, inner);
+    let device = validated_device();
+    let render = |inner: [f32; 4], outer: [f32; 3]| {
+        let mut renderer = Renderer::new(&device, &scene, W, H).expect("renderer");
+        let maps = vec![constant_rgba(16, inner), constant_map(16, outer)];
+        renderer.load_glass_layers(&maps, &set).expect("layers");
+        assert_eq!(renderer.glass.as_ref().map(|g| g.layer_count()), Some(2));
+        let eye = scene.orbit.eye(15.0, 5.0);
+        renderer
+            .frame(FrameMode::Hybrid, eye, scene.orbit.view(eye))
+            .expect("frame");
+        renderer.pixels().expect("pixels")
+    };
+    let (red, blue) = ([1.0, 0.0, 0.0], [0.0, 0.0, 1.0]);
+    let clear = [0.0; 4];
+    let (all_red, all_blue) = (render(clear, red), render(clear, blue));
+    // An opaque inner layer hides the outer one entirely.
+    let opaque = render([1.0, 0.0, 0.0, 1.0], blue);
+    // A quarter-covered one (premultiplied) lets three quarters through.
+    let quarter = render([0.25, 0.0, 0.0, 0.25], blue);
+    let mut glass = 0;
+    for (((o, q), r), b) in opaque.iter().zip(&quarter).zip(&all_red).zip(&all_blue) {
+        if r[0] > 0.05 && b[2] > 0.05 {
+            glass += 1;
+        }
+        for c in 0..3 {
+            assert!(
+                (o[c] - r[c]).abs() <= 4e-3 * r[c].max(1.0),
+                "opaque inner layer, channel {c}: {} against {}",
+                o[c],
+                r[c]
+            );
+            let expected = 0.25 * r[c] + 0.75 * b[c];
+            assert!(
+                (q[c] - expected).abs() <= 4e-3 * expected.max(1.0),
+                "quarter inner layer, channel {c}: {} against 0.25 · {} + 0.75 · {}",
+                q[c],
+                r[c],
+                b[c]
+            );
+        }
+    }
+    assert!(glass > (W * H / 20) as usize, "glass covers {glass} pixels");
 }

@@ -2,7 +2,8 @@
 //! the first run traces the room shell map, solves the per-sample shell
 //! maps and plays hybrid frames (the default mode for glass) with
 //! validation clean; later runs compile nothing; a damaged per-sample map
-//! is solved again; a bad τ and hybrid without glass fail cleanly.
+//! is solved again; a bad τ and hybrid without glass fail cleanly; an
+//! object near the glass plays as a layer of its own, traced once.
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -139,40 +140,8 @@ fn glass_compiles_its_shell_once_and_plays_hybrid() {
 /// per-sample maps (its samples and container bytes stated), the
 /// traced-shell row the one traced map (none stated, other frames).
 fn eval_states_the_shells(scene: &str, out: &Path, dir: &Path) {
-    let eval_out = dir.join("eval");
-    let o = engine(&[
-        "eval",
-        "--scene",
-        scene,
-        "--data",
-        out.to_str().expect("utf-8"),
-        "--out",
-        eval_out.to_str().expect("utf-8"),
-        "--size",
-        "96x64",
-        "--views",
-        "1",
-        "--spp",
-        "2",
-        "--repeats",
-        "1",
-        "--elevation",
-        "10",
-        "--validate",
-        "--rows",
-        "hybrid,hybrid traced-shell",
-    ]);
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "stderr:\n{stderr}");
-    let eval: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(eval_out.join("eval.json")).expect("eval.json"))
-            .expect("valid JSON");
-    let rows = eval["rows"].as_array().expect("rows");
-    let row = |label: &str| {
-        rows.iter()
-            .find(|r| r["settings"]["label"] == label)
-            .unwrap_or_else(|| panic!("no row {label}: {eval}"))
-    };
+    let eval = eval_hybrid_rows(scene, out, &dir.join("eval"));
+    let row = |label: &str| eval_row(&eval, label);
     let (blended, traced) = (row("hybrid"), row("hybrid traced-shell"));
     assert_eq!(blended["samples"], 3, "{blended}");
     assert!(
@@ -202,4 +171,127 @@ fn hybrid_without_glass_fails_cleanly() {
         .find(|l| l.starts_with("error:"))
         .unwrap_or_default();
     assert!(line.contains("[objects.glass]"), "{stderr}");
+}
+
+/// glass_near.toml with a 16² shell map and a coarse glass teapot, in `dir`.
+fn small_glass_near(dir: &Path) -> String {
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/scenes/glass_near.toml");
+    let mut text = std::fs::read_to_string(source).expect("glass_near.toml");
+    for (from, to) in [
+        ("resolution = 256", "resolution = 16"),
+        ("segments = 25 }", "segments = 6 }"),
+    ] {
+        assert!(text.contains(from), "glass_near.toml lacks {from:?}");
+        text = text.replacen(from, to, 1);
+    }
+    let path = dir.join("small_glass_near.toml");
+    std::fs::write(&path, text).expect("write scene");
+    path.to_str().expect("utf-8 path").to_owned()
+}
+
+#[test]
+fn a_near_object_plays_as_a_layer_traced_once() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = small_glass_near(dir.path());
+    let out = dir.path().join("out");
+    let first = run(&scene, &out, &[]);
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&first.stdout),
+        String::from_utf8_lossy(&first.stderr),
+    );
+    assert!(first.status.success(), "stderr:\n{stderr}");
+    assert!(
+        stdout.lines().any(|l| l == "validation messages: 0"),
+        "{stdout}"
+    );
+    for i in 1..=2 {
+        assert!(
+            stderr.contains(&format!("traced shell layer {i} of 2")),
+            "{stderr}"
+        );
+    }
+    assert!(
+        stderr.contains("hybrid glass reads 2 shell layers, nearest first: quad"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("per-sample"), "{stderr}");
+    assert!(stderr.contains("placed in"), "{stderr}");
+    assert!(out.join("glass/shells.json").is_file());
+
+    // Cached: nothing placed or traced again. A damaged layer is traced again (that
+    // one only); the one room shell plays without the layers.
+    let second = run(&scene, &out, &[]);
+    let stderr = String::from_utf8_lossy(&second.stderr);
+    assert!(second.status.success(), "stderr:\n{stderr}");
+    assert!(!stderr.contains("traced shell layer"), "{stderr}");
+    assert!(!stderr.contains("traced the room"), "{stderr}");
+    assert!(!stderr.contains("placed in"), "{stderr}");
+    std::fs::write(out.join("glass/layer_1.bin"), b"not a map").expect("damage");
+    let third = run(&scene, &out, &[]);
+    let stderr = String::from_utf8_lossy(&third.stderr);
+    assert!(third.status.success(), "stderr:\n{stderr}");
+    assert!(stderr.contains("traced shell layer 2 of 2"), "{stderr}");
+    assert!(!stderr.contains("traced shell layer 1 of 2"), "{stderr}");
+    let one = run(&scene, &out, &["--traced-shell"]);
+    let stderr = String::from_utf8_lossy(&one.stderr);
+    assert!(one.status.success(), "stderr:\n{stderr}");
+    assert!(!stderr.contains("shell layers"), "{stderr}");
+    eval_states_the_layers(&scene, &out, dir.path());
+}
+
+/// `engine eval` on the compiled `out`: the hybrid row reads two layers,
+/// the traced-shell row one, and they score differently.
+fn eval_states_the_layers(scene: &str, out: &Path, dir: &Path) {
+    let eval = eval_hybrid_rows(scene, out, &dir.join("eval_layers"));
+    let row = |label: &str| eval_row(&eval, label);
+    let (layered, one) = (row("hybrid"), row("hybrid traced-shell"));
+    assert_eq!(layered["shell_layers"], 2, "{layered}");
+    assert_eq!(one["shell_layers"], 1, "{one}");
+    let between = |r: &serde_json::Value| r["psnr_between_db"].as_f64().expect("psnr");
+    assert_ne!(
+        between(layered),
+        between(one),
+        "the rows played the same maps"
+    );
+}
+
+/// `engine eval` of the rows `hybrid` and `hybrid traced-shell` on the
+/// compiled `out` (small frames, one view per kind), its `eval.json`.
+fn eval_hybrid_rows(scene: &str, out: &Path, eval_out: &Path) -> serde_json::Value {
+    let o = engine(&[
+        "eval",
+        "--scene",
+        scene,
+        "--data",
+        out.to_str().expect("utf-8"),
+        "--out",
+        eval_out.to_str().expect("utf-8"),
+        "--size",
+        "96x64",
+        "--views",
+        "1",
+        "--spp",
+        "2",
+        "--repeats",
+        "1",
+        "--elevation",
+        "10",
+        "--validate",
+        "--rows",
+        "hybrid,hybrid traced-shell",
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "stderr:\n{stderr}");
+    serde_json::from_slice(&std::fs::read(eval_out.join("eval.json")).expect("eval.json"))
+        .expect("valid JSON")
+}
+
+/// The row labelled `label` of `eval`.
+fn eval_row<'a>(eval: &'a serde_json::Value, label: &str) -> &'a serde_json::Value {
+    eval["rows"]
+        .as_array()
+        .expect("rows")
+        .iter()
+        .find(|r| r["settings"]["label"] == label)
+        .unwrap_or_else(|| panic!("no row {label}: {eval}"))
 }

@@ -117,9 +117,13 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
             .then(|| scene.orbit.sample_count())
             .or(glass_samples);
         let compile_minutes = samples.and(renderer.map_compile_minutes);
+        let shell_layers = (row.mode == Mode::Hybrid)
+            .then(|| renderer.glass.as_ref().map(|g| g.layer_count()))
+            .flatten();
         table_rows.push(EvalRow {
             map_bytes,
             samples,
+            shell_layers,
             compile_minutes,
             ..table_row(row, &results, opts.views)
         });
@@ -475,6 +479,7 @@ fn table_row(row: &Row, results: &[ViewResult], views: u32) -> EvalRow {
         }),
         map_bytes: None,
         samples: None,
+        shell_layers: None,
         compile_minutes: None,
         above,
     }

@@ -75,6 +75,9 @@ pub struct EvalRow {
     /// modes that read per-sample maps.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub samples: Option<u32>,
+    /// Shell layers a hybrid glass row reads (1: the room's box alone).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shell_layers: Option<u32>,
     /// Minutes those maps took to compile (traces, inference and encode,
     /// as the container's key record keeps them), when known.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -319,6 +322,7 @@ mod tests {
             views: None,
             map_bytes: None,
             samples: None,
+            shell_layers: None,
             compile_minutes: None,
             above: Vec::new(),
         }

@@ -3,27 +3,29 @@
 //! by the glass pass.
 //!
 //! Hybrid frames tessellate the lens adaptively to τ subpixels and index
-//! ONE shell: the room's box, whose map is the static EM captured at the
-//! lens centroid (lookup = exit ray's hit on the box − centroid) or, where
-//! the scene asks for them (`[objects.glass] shell_every`), the two nearest
-//! per-sample maps inferred from traced frames ([`samples`]), blended. The
-//! baseline (static refraction EM) draws the lens's own mesh with one
-//! refraction at the front surface, the traced map read at infinity.
-//! Layered shells (several per sample) are not played yet.
+//! the room's box, whose map is the room traced from the lens centroid
+//! (lookup = exit ray's hit on the box − centroid) or, where the scene
+//! asks for them (`[objects.glass] shell_every`), the two nearest
+//! per-sample maps inferred from traced frames ([`samples`]), blended;
+//! where objects stand near the glass, layered shells ([`layers`]), each
+//! exit ray reading every layer nearest first. The baseline (static
+//! refraction EM) draws the lens's own mesh with one refraction at the
+//! front surface, the traced map read at infinity.
 
 pub mod ahead;
+pub mod layers;
 pub mod samples;
 pub mod shell;
 
 use crate::backend::{Device, GpuError, GpuResult, Image};
 use crate::passes::em_capture::CubeTarget;
-use crate::passes::glass::{GlassGeometry, GlassPass};
+use crate::passes::glass::{GlassGeometry, GlassPass, ShellSource};
 use crate::passes::target::Target;
 use ahead::{Ahead, PathRequest};
 use ash::vk;
 use glam::{Mat4, Vec3, Vec4};
 use inference::glass::vertices::vertex_stream;
-use inference::glass::{Lens, ShellSet, ShellShape};
+use inference::glass::{Lens, MAX_SHELLS, ShellSet, ShellShape};
 use inference::scene::Scene;
 use std::sync::Arc;
 use std::time::Instant;
@@ -64,6 +66,11 @@ pub struct GlassPlayer {
     samples: Option<(Image, Vec<f32>)>,
     /// This frame's blend of them (layers, weight), hybrid frames only.
     blend: Option<Vec4>,
+    /// Layered shells: their maps (a cube-map array, nearest first) and
+    /// the shells, padded to [`MAX_SHELLS`] with the outermost.
+    layers: Option<(Image, ShellSet, u32)>,
+    /// Whether this frame reads the layers (hybrid frames with layers).
+    layered_frame: bool,
     orbit: inference::scene::Orbit,
     stream: Vec<f32>,
     /// The next frame's paths, being traced (see [`GlassPlayer::prepare`]).
@@ -99,6 +106,8 @@ impl GlassPlayer {
             bounds: object.mesh.bounds(),
             samples: None,
             blend: None,
+            layers: None,
+            layered_frame: false,
             orbit: scene.orbit.clone(),
             lens: Arc::new(lens),
             cube,
@@ -152,9 +161,11 @@ impl GlassPlayer {
             .unwrap_or_else(|| ahead::trace(&self.lens, &request));
         // The one worker was just taken: never two at once.
         self.ahead = next.and_then(|next| Ahead::start(self.lens.clone(), next));
-        let shells = match request.kind {
-            GlassKind::Hybrid => &self.room,
-            GlassKind::StaticEm => &self.infinity,
+        self.layered_frame = request.kind == GlassKind::Hybrid && self.layers.is_some();
+        let shells = match (request.kind, &self.layers) {
+            (GlassKind::Hybrid, Some((_, padded, _))) => padded,
+            (GlassKind::Hybrid, None) => &self.room,
+            (GlassKind::StaticEm, _) => &self.infinity,
         };
         self.blend = match (&self.samples, request.kind) {
             (Some((_, azimuths)), GlassKind::Hybrid) => {
@@ -183,12 +194,35 @@ impl GlassPlayer {
 
     /// The pass drawing what [`GlassPlayer::prepare`] uploaded.
     pub fn pass<'a>(&'a self, target: Target<'a>, view_proj: Mat4) -> GlassPass<'a> {
-        let samples = match (&self.samples, self.blend) {
-            (Some((image, _)), Some(blend)) => Some((image, blend)),
-            _ => None,
+        let source = match (&self.samples, self.blend, &self.layers) {
+            (_, _, Some((image, _, n))) if self.layered_frame => ShellSource::Layers(image, *n),
+            (Some((image, _)), Some(blend), _) => ShellSource::Samples(image, blend),
+            _ => ShellSource::One(&self.cube.color),
         };
-        self.geometry
-            .pass(&self.cube.color, samples, target, view_proj)
+        self.geometry.pass(source, target, view_proj)
+    }
+
+    /// Plays hybrid frames from layered shells: `image` holds `set`'s maps
+    /// (nearest first, uploaded and ready for sampling).
+    pub fn set_layers(&mut self, image: Image, set: &ShellSet) -> GpuResult<()> {
+        let n = set.shells.len();
+        if !(1..=MAX_SHELLS).contains(&n) {
+            return Err(GpuError::Invalid(format!(
+                "{n} shell layers: expected 1 to {MAX_SHELLS}"
+            )));
+        }
+        self.geometry.set_layers(&image)?;
+        let mut padded = set.clone();
+        while padded.shells.len() < MAX_SHELLS {
+            padded.shells.push(set.shells[n - 1].clone());
+        }
+        self.layers = Some((image, padded, n as u32));
+        Ok(())
+    }
+
+    /// How many shell layers hybrid frames read (1: the room's box alone).
+    pub fn layer_count(&self) -> u32 {
+        self.layers.as_ref().map_or(1, |l| l.2)
     }
 
     /// Plays hybrid frames from `image` (the per-sample maps at
@@ -199,10 +233,12 @@ impl GlassPlayer {
         Ok(())
     }
 
-    /// Back to the one map for every view.
+    /// Back to the one map for every view (no per-sample maps, no layers).
     pub fn clear_samples(&mut self) {
         self.samples = None;
         self.blend = None;
+        self.layers = None;
+        self.layered_frame = false;
     }
 
     /// How many per-sample maps hybrid frames blend (0: the one map).

@@ -20,8 +20,8 @@ pub fn shell_path(out: &Path) -> PathBuf {
     out.join("glass").join("room_shell.bin")
 }
 
-/// How the shell map of `size`² per face is traced.
-fn shell_settings(size: u32) -> TraceSettings {
+/// How a shell map of `size`² per face is traced.
+pub fn shell_settings(size: u32) -> TraceSettings {
     TraceSettings {
         width: size,
         height: 6 * size,
@@ -47,32 +47,48 @@ pub fn room_shell_bytes(
     origin: Vec3,
     size: u32,
 ) -> Result<Vec<u8>> {
-    let settings = shell_settings(size);
     let key = shell_key(scene, skip, origin, size);
-    let file = shell_path(out);
-    if inference::key::freshness(&file, &key) == Freshness::Fresh {
-        match inference::key::read_verified(&file) {
+    cached_map(&shell_path(out), &key, size, "the room shell map", || {
+        let tracer = Tracer::new(scene)?;
+        let settings = shell_settings(size);
+        let rgb =
+            inference::glass::shell_map::trace_shell_map(&tracer, skip, origin, size, &settings);
+        Ok(rgb.into_iter().map(|[r, g, b]| [r, g, b, 1.0]).collect())
+    })
+}
+
+/// A traced cube map's f16 RGBA bytes (every level, level-major, face,
+/// rows), cached at `file` under `key`: read when fresh, else `trace`d
+/// (level 0, `size`² × 6 texels), box-filtered down its MIP chain and
+/// written with the key (never over a file the engine did not write).
+pub fn cached_map(
+    file: &Path,
+    key: &inference::key::Key,
+    size: u32,
+    what: &str,
+    trace: impl FnOnce() -> Result<Vec<[f32; 4]>>,
+) -> Result<Vec<u8>> {
+    if inference::key::freshness(file, key) == Freshness::Fresh {
+        match inference::key::read_verified(file) {
             Ok(bytes) => return Ok(bytes),
             Err(why) => eprintln!("{why}: tracing it again"),
         }
     }
+    crate::util::files::check_overwrite_keyed(file)?;
     let start = std::time::Instant::now();
-    let tracer = Tracer::new(scene)?;
-    let level0 =
-        inference::glass::shell_map::trace_shell_map(&tracer, skip, origin, size, &settings);
-    let levels = inference::glass::shell_map::mip_chain(level0, size);
+    let levels = inference::glass::shell_map::mip_chain(trace()?, size);
     let halves: Vec<f16> = levels
         .iter()
         .flatten()
-        .flat_map(|t| [t[0], t[1], t[2], 1.0].map(f16::from_f32))
+        .flat_map(|t| t.map(f16::from_f32))
         .collect();
     let bytes: Vec<u8> = bytemuck::cast_slice(&halves).to_vec();
-    let dir = file.parent().unwrap_or(out);
+    let dir = file.parent().unwrap_or(file);
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    inference::files::write_bytes(&file, &bytes)?;
-    inference::key::write_record(&file, &key)?;
+    inference::files::write_bytes(file, &bytes)?;
+    inference::key::write_record(file, key)?;
     eprintln!(
-        "traced the room shell map ({size}² × 6, {SHELL_SPP} spp) in {:.1} s: {}",
+        "traced {what} ({size}² × 6, {SHELL_SPP} spp) in {:.1} s: {}",
         start.elapsed().as_secs_f64(),
         file.display()
     );

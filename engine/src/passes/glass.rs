@@ -1,31 +1,44 @@
 //! The glass pass: the lens's per-frame tessellation (CPU vertex ray
 //! paths, `inference::glass`) drawn over the room, each pixel
-//! `T·F_T·G_T + R·F_R·G_R` read from the shell cube map, or mixed from
-//! two per-sample shell maps of a cube-map array.
+//! `T·F_T·G_T + R·F_R·G_R` read from the shell cube map, mixed from two
+//! per-sample shell maps of a cube-map array, or composited from layered
+//! shells (one array element per layer, nearest first).
 
 use super::target::Target;
 use crate::backend::{Binding, Buffer, Device, GpuResult, Pipeline, PipelineDesc, Sampler};
 use crate::graph::{Access, Pass};
-use crate::shader_interface::{GLASS_ATTRIBUTES, GLASS_BINDING, GlassPush, spirv};
+use crate::shader_interface::{
+    GLASS_ATTRIBUTES, GLASS_BINDING, GLASS_LAYERS_ATTRIBUTES, GLASS_LAYERS_BINDING, GlassPush,
+    spirv,
+};
 use ash::vk;
 use glam::{Mat4, Vec4};
 
 /// The glass pipeline (back faces culled: the CPU emits front faces only)
-/// with `fragment` (`glass.frag` or `glass_blend.frag`).
+/// with `fragment` (`glass.frag` or `glass_blend.frag` over the one-shell
+/// stream; with `layered`, `glass_layers.*` over the layered stream).
 pub fn glass_pipeline(
     device: &Device,
     (name, fragment): (&str, &[u8]),
-    color_format: vk::Format,
-    depth_format: vk::Format,
+    layered: bool,
+    (color_format, depth_format): (vk::Format, vk::Format),
 ) -> GpuResult<Pipeline> {
+    let (vertex_spirv, binding, attributes): (_, _, &[_]) = match layered {
+        true => (
+            spirv::GLASS_LAYERS_VERT,
+            GLASS_LAYERS_BINDING,
+            &GLASS_LAYERS_ATTRIBUTES,
+        ),
+        false => (spirv::GLASS_VERT, GLASS_BINDING, &GLASS_ATTRIBUTES),
+    };
     Pipeline::new(
         device,
         &PipelineDesc {
             name,
-            vertex_spirv: spirv::GLASS_VERT,
+            vertex_spirv,
             fragment_spirv: fragment,
-            vertex_bindings: &[GLASS_BINDING],
-            vertex_attributes: &GLASS_ATTRIBUTES,
+            vertex_bindings: &[binding],
+            vertex_attributes: attributes,
             color_formats: &[color_format],
             depth_format,
             cull_mode: vk::CullModeFlags::BACK,
@@ -49,6 +62,8 @@ pub struct GlassGeometry {
     set: vk::DescriptorSet,
     /// The blending pipeline and its set over the per-sample maps.
     blend: Option<(Pipeline, vk::DescriptorSet)>,
+    /// The layered pipeline and its set over the layer maps.
+    layers: Option<(Pipeline, vk::DescriptorSet)>,
     vertices: Option<Buffer>,
     indices: Option<Buffer>,
     pub index_count: u32,
@@ -61,7 +76,7 @@ impl GlassGeometry {
         shell: &crate::backend::Image,
         formats: (vk::Format, vk::Format),
     ) -> GpuResult<Self> {
-        let pipeline = glass_pipeline(device, ("glass", spirv::GLASS_FRAG), formats.0, formats.1)?;
+        let pipeline = glass_pipeline(device, ("glass", spirv::GLASS_FRAG), false, formats)?;
         let sampler = Sampler::trilinear(device, vk::SamplerAddressMode::CLAMP_TO_EDGE)?;
         let set = pipeline.descriptor_set(&[Binding::Image(shell.view, sampler.raw)])?;
         Ok(Self {
@@ -71,6 +86,7 @@ impl GlassGeometry {
             sampler,
             set,
             blend: None,
+            layers: None,
             vertices: None,
             indices: None,
             index_count: 0,
@@ -79,11 +95,19 @@ impl GlassGeometry {
 
     /// Makes the blending pipeline, reading the cube-map array `samples`.
     pub fn set_samples(&mut self, samples: &crate::backend::Image) -> GpuResult<()> {
-        let (color, depth) = self.formats;
         let names = ("glass blend", spirv::GLASS_BLEND_FRAG);
-        let pipeline = glass_pipeline(&self.device, names, color, depth)?;
+        let pipeline = glass_pipeline(&self.device, names, false, self.formats)?;
         let set = pipeline.descriptor_set(&[Binding::Image(samples.view, self.sampler.raw)])?;
         self.blend = Some((pipeline, set));
+        Ok(())
+    }
+
+    /// Makes the layered pipeline, reading the cube-map array `layers`.
+    pub fn set_layers(&mut self, layers: &crate::backend::Image) -> GpuResult<()> {
+        let names = ("glass layers", spirv::GLASS_LAYERS_FRAG);
+        let pipeline = glass_pipeline(&self.device, names, true, self.formats)?;
+        let set = pipeline.descriptor_set(&[Binding::Image(layers.view, self.sampler.raw)])?;
+        self.layers = Some((pipeline, set));
         Ok(())
     }
 
@@ -108,21 +132,31 @@ impl GlassGeometry {
         Ok(())
     }
 
-    /// The pass reading `shell`, or with `samples` (the array given to
-    /// [`GlassGeometry::set_samples`] and the blend: layers, weight) those.
+    /// The pass reading `source`'s maps (the arrays given to
+    /// [`GlassGeometry::set_samples`] or [`GlassGeometry::set_layers`]).
     pub fn pass<'a>(
         &'a self,
-        shell: &'a crate::backend::Image,
-        samples: Option<(&'a crate::backend::Image, Vec4)>,
+        source: ShellSource<'a>,
         target: Target<'a>,
         view_proj: Mat4,
     ) -> GlassPass<'a> {
         GlassPass {
             geometry: self,
-            shell,
-            samples: samples.filter(|_| self.blend.is_some()),
+            source,
             target,
             view_proj,
+        }
+    }
+
+    /// The pipeline, its set and the push constants' `blend` for `source`
+    /// (the one map when its pipeline is missing).
+    fn pipeline_for(&self, source: &ShellSource) -> (&Pipeline, vk::DescriptorSet, Vec4) {
+        match (source, &self.blend, &self.layers) {
+            (ShellSource::Samples(_, blend), Some((p, set)), _) => (p, *set, *blend),
+            (ShellSource::Layers(_, n), _, Some((p, set))) => {
+                (p, *set, Vec4::new(*n as f32, 0.0, 0.0, 0.0))
+            }
+            _ => (&self.pipeline, self.set, Vec4::ZERO),
         }
     }
 }
@@ -152,11 +186,29 @@ fn fill(
     Ok(())
 }
 
+/// Which maps a glass pass reads.
+#[derive(Clone, Copy)]
+pub enum ShellSource<'a> {
+    /// The one shell map.
+    One(&'a crate::backend::Image),
+    /// Per-sample maps and the blend (layers, weight of the second).
+    Samples(&'a crate::backend::Image, Vec4),
+    /// Layer maps, nearest first, and how many layers.
+    Layers(&'a crate::backend::Image, u32),
+}
+
+impl ShellSource<'_> {
+    fn image(&self) -> &crate::backend::Image {
+        match self {
+            ShellSource::One(i) | ShellSource::Samples(i, _) | ShellSource::Layers(i, _) => i,
+        }
+    }
+}
+
 /// Draws the lens over what the room pass left in the target.
 pub struct GlassPass<'a> {
     geometry: &'a GlassGeometry,
-    shell: &'a crate::backend::Image,
-    samples: Option<(&'a crate::backend::Image, Vec4)>,
+    source: ShellSource<'a>,
     target: Target<'a>,
     view_proj: Mat4,
 }
@@ -166,10 +218,7 @@ impl Pass for GlassPass<'_> {
         "glass"
     }
     fn accesses(&self) -> Vec<Access<'_>> {
-        match self.samples {
-            Some((samples, _)) => self.target.accesses(&[samples]),
-            None => self.target.accesses(&[self.shell]),
-        }
+        self.target.accesses(&[self.source.image()])
     }
     fn record(&self, cmd: vk::CommandBuffer) -> GpuResult<()> {
         let g = self.geometry;
@@ -180,10 +229,7 @@ impl Pass for GlassPass<'_> {
             if g.index_count == 0 {
                 return Ok(());
             }
-            let (pipeline, set, blend) = match (self.samples, &g.blend) {
-                (Some((_, blend)), Some((pipeline, set))) => (pipeline, *set, blend),
-                _ => (&g.pipeline, g.set, Vec4::ZERO),
-            };
+            let (pipeline, set, blend) = g.pipeline_for(&self.source);
             let push = GlassPush {
                 view_proj: self.view_proj,
                 blend,

@@ -1,5 +1,5 @@
-//! The glass object's shell maps on the device: the one traced map, or
-//! the per-sample maps in one cube-map array.
+//! The glass object's shell maps on the device: the one traced map, the
+//! per-sample maps or the layer maps, each set in one cube-map array.
 
 use super::Renderer;
 use crate::backend::{GpuError, GpuResult, Image};
@@ -26,7 +26,32 @@ impl Renderer {
         &mut self,
         shells: &crate::glass::samples::SampleShells,
     ) -> GpuResult<()> {
+        let image = self.glass_cube_array("glass per-sample shell maps", &shells.maps)?;
         let Some(g) = self.glass.as_mut() else {
+            return Err(GpuError::Invalid("no glass object".into()));
+        };
+        g.set_samples(image, shells.azimuths.clone())
+    }
+
+    /// Uploads the layer maps of `set` (nearest first) into one cube-map
+    /// array and has hybrid frames composite them.
+    pub fn load_glass_layers(
+        &mut self,
+        maps: &[Vec<u8>],
+        set: &inference::glass::ShellSet,
+    ) -> GpuResult<()> {
+        let image = self.glass_cube_array("glass shell layers", maps)?;
+        let Some(g) = self.glass.as_mut() else {
+            return Err(GpuError::Invalid("no glass object".into()));
+        };
+        g.set_layers(image, set)
+    }
+
+    /// A cube-map array of `maps` (each a full MIP chain of the shell
+    /// map's size and format, f16 RGBA in upload order), uploaded and
+    /// ready for sampling.
+    fn glass_cube_array(&mut self, name: &str, maps: &[Vec<u8>]) -> GpuResult<Image> {
+        let Some(g) = self.glass.as_ref() else {
             return Err(GpuError::Invalid("no glass object".into()));
         };
         let single = g.shell_map().desc;
@@ -36,7 +61,7 @@ impl Renderer {
             ..crate::backend::ImageDesc::new_cube_array(
                 single.format,
                 single.width,
-                shells.maps.len() as u32,
+                maps.len() as u32,
             )
         };
         // One map's bytes per level, as the single shell map uploads them.
@@ -49,11 +74,10 @@ impl Renderer {
         let per_level: Vec<usize> = (regions.iter().zip(ends))
             .map(|(r, end)| (end - r.buffer_offset) as usize)
             .collect();
-        let bytes =
-            crate::glass::samples::array_bytes(&shells.maps, &per_level).ok_or_else(|| {
-                GpuError::Invalid("per-sample shell maps of another size than the shell map".into())
-            })?;
-        let image = Image::new(&self.device, "glass per-sample shell maps", desc)?;
+        let bytes = crate::glass::samples::array_bytes(maps, &per_level).ok_or_else(|| {
+            GpuError::Invalid(format!("{name} of another size than the shell map"))
+        })?;
+        let image = Image::new(&self.device, name, desc)?;
         crate::backend::upload::upload_image(
             &self.device,
             self.executor.commands(),
@@ -63,6 +87,6 @@ impl Renderer {
         self.executor
             .states
             .assume(&image, crate::graph::Usage::Sampled);
-        g.set_samples(image, shells.azimuths.clone())
+        Ok(image)
     }
 }

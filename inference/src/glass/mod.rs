@@ -9,7 +9,8 @@
 //! - [`tessellate`]: adaptive tessellation to τ subpixels, no T-junctions.
 //! - [`shells`], [`cluster`], [`records`]: shell shapes and their lookups,
 //!   placed by LBG over the exit rays' continued hits of every viewpoint.
-//! - [`shell_map`]: the room shell's map, traced.
+//! - [`placement`]: the shells of a scene's lens, over its viewpoints.
+//! - [`shell_map`]: the shells' maps, traced (inner layers with coverage).
 //! - [`vertices`]: the per-vertex stream the GPU draws.
 //! - [`targets`]: the per-term, per-shell images the shell maps are
 //!   inferred against, with their confidence.
@@ -18,6 +19,7 @@ pub mod baseline;
 pub mod cluster;
 pub mod lens;
 pub mod path;
+pub mod placement;
 pub mod records;
 pub mod shell_map;
 pub mod shells;

@@ -80,3 +80,84 @@ fn baseline_refracts_once_and_greedy_paths_leave_through_the_back() {
         tess.paths.len()
     );
 }
+
+#[test]
+fn a_teapot_near_the_glass_gets_its_own_layer_in_front_of_the_room() {
+    let scene = Scene::load("glass_near").expect("shipped glass_near scene");
+    let lens = Lens::new(&scene, "teapot").expect("glass teapot");
+    let near = scene
+        .objects
+        .iter()
+        .position(|o| o.name == "near")
+        .expect("near object") as u32;
+    let set = super::placement::place_for_scene(&scene, &lens, 2);
+    assert_eq!(set.shells.len(), 2, "{set:#?}");
+    assert_eq!(set.shells[0].objects, vec![near]);
+    assert!(!matches!(set.shells[0].shape, ShellShape::Box { .. }));
+    assert!(set.shells[0].distance < 1.5, "{}", set.shells[0].distance);
+    assert!(matches!(set.shells[1].shape, ShellShape::Box { .. }));
+    assert_eq!(set.shells[1].objects, room_objects(&scene));
+    // One shell asked for: the room's box holds everything.
+    assert_eq!(
+        super::placement::place_for_scene(&scene, &lens, 1)
+            .shells
+            .len(),
+        1
+    );
+
+    // The layers' maps: the near teapot covers part of the inner one, and
+    // the outer one sees the room through it.
+    use super::shell_map::{LayerObjects, trace_layer_map};
+    let tracer = crate::trace::Tracer::new(&scene).expect("tracer");
+    let settings = crate::trace::TraceSettings {
+        width: 16,
+        height: 96,
+        spp: 1,
+        ..Default::default()
+    };
+    let origin = set.origin();
+    let inner = trace_layer_map(
+        &tracer,
+        &LayerObjects {
+            hidden: &[lens.object],
+            own: Some(&set.shells[0].objects),
+        },
+        origin,
+        16,
+        &settings,
+    );
+    let outer = trace_layer_map(
+        &tracer,
+        &LayerObjects {
+            hidden: &[lens.object, near],
+            own: None,
+        },
+        origin,
+        16,
+        &settings,
+    );
+    let covered = inner.iter().filter(|t| t[3] == 1.0).count();
+    assert!(
+        covered > 0 && covered < inner.len() / 10,
+        "{covered} texels"
+    );
+    assert!(inner.iter().all(|t| t[3] == 0.0 || t[3] == 1.0));
+    assert!(
+        inner
+            .iter()
+            .filter(|t| t[3] == 0.0)
+            .all(|t| t[..3] == [0.0; 3])
+    );
+    assert!(
+        outer
+            .iter()
+            .all(|t| t[3] == 1.0 && t.iter().all(|c| c.is_finite()))
+    );
+    // Where the inner layer is opaque, the outer one shows what is behind.
+    let behind = inner
+        .iter()
+        .zip(&outer)
+        .filter(|(i, o)| i[3] == 1.0 && (i[2] - o[2]).abs() > 1e-3)
+        .count();
+    assert!(behind > covered / 2, "{behind} of {covered}");
+}

@@ -9,6 +9,10 @@ pub const SHIPPED: &[(&str, &str)] = &[
         include_str!("../../../assets/scenes/teapot_rings.toml"),
     ),
     ("glass", include_str!("../../../assets/scenes/glass.toml")),
+    (
+        "glass_near",
+        include_str!("../../../assets/scenes/glass_near.toml"),
+    ),
     ("brass", include_str!("../../../assets/scenes/brass.toml")),
 ];
 
