@@ -1,8 +1,10 @@
 //! Layered shells against the one room shell at one view of a glass
 //! scene: both hybrid frames (τ = 3) scored against a traced reference
 //! over the glass's pixels (linear PSNR and FLIP, as `engine eval`) and
-//! over the pixels where the layers change the frame; optionally a
-//! picture of the glass, cropped: one shell | layered shells | tracer.
+//! over the pixels where the layers change the frame; the layered frame
+//! against the same with every lens triangle reading every layer (what
+//! drawing only the triangles an inner layer reaches changes); optionally
+//! a picture of the glass, cropped: one shell | layered shells | tracer.
 //!
 //! ```sh
 //! cargo run --release -p engine --example glass_layers -- \
@@ -62,6 +64,29 @@ fn main() -> Result<()> {
         let ctx = compile_context(&place, &session.scene, &session.out);
         let mut source = setup_mode(&ctx, &mut session.renderer, Mode::Hybrid, &pem, 16)?;
         frames.push(source.frame(&mut session.renderer, &session.scene, eye)?.1);
+        if let Some(g) = session.renderer.glass.as_ref().filter(|_| !traced_shell) {
+            let s = g.last;
+            println!(
+                "{} of {} lens triangles read every layer",
+                s.layered_triangles, s.triangles
+            );
+        }
+        if !traced_shell {
+            if let Some(g) = session.renderer.glass.as_mut() {
+                g.read_every_layer_everywhere();
+            }
+            let every = source.frame(&mut session.renderer, &session.scene, eye)?.1;
+            let differ = (every.iter().zip(&frames[1]))
+                .filter(|(a, b)| a[..3] != b[..3])
+                .count();
+            let largest = (every.iter().zip(&frames[1]))
+                .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
+                .fold(0.0f32, f32::max);
+            let db = masked_psnr(&every, &frames[1], &glass)?.unwrap_or(f64::NAN);
+            println!(
+                "only the triangles an inner layer reaches read it: {differ} pixels differ from every triangle reading every layer, by at most {largest:.2e} ({db:.1} dB over the glass)"
+            );
+        }
     }
     let changed: Vec<bool> = (frames[0].iter().zip(&frames[1]).zip(&glass))
         .map(|((a, b), &g)| g && (0..3).any(|c| (a[c] - b[c]).abs() > CHANGED))

@@ -188,8 +188,8 @@ pub struct RelightPush {
 pub struct GlassPush {
     pub view_proj: Mat4,
     /// `glass_blend.frag`: the two samples' array layers and the second's
-    /// weight (x, y, z); `glass_layers.frag`: the layers (x); unused by
-    /// `glass.frag`.
+    /// weight (x, y, z); `glass_layers.frag`: the layers (x);
+    /// `glass_layer.frag`: the layer read (y); unused by `glass.frag`.
     pub blend: Vec4,
 }
 
@@ -218,6 +218,16 @@ pub const GLASS_LAYERS_BINDING: vk::VertexInputBindingDescription =
         stride: 27 * 4,
         input_rate: vk::VertexInputRate::VERTEX,
     };
+/// `shaders/glass.vert` over the layered stream: position, weights and
+/// the two terms' lookups into the outermost shell (the last of the
+/// stream's [`inference::glass::MAX_SHELLS`], padded with it).
+pub const GLASS_OUTER_ATTRIBUTES: [vk::VertexInputAttributeDescription; 5] = [
+    attribute(0, 0, vk::Format::R32G32B32_SFLOAT, 0),
+    attribute(1, 0, vk::Format::R32G32B32_SFLOAT, 12),
+    attribute(2, 0, vk::Format::R32G32B32_SFLOAT, 24),
+    attribute(3, 0, vk::Format::R32G32B32_SFLOAT, 60),
+    attribute(4, 0, vk::Format::R32G32B32_SFLOAT, 96),
+];
 pub const GLASS_LAYERS_ATTRIBUTES: [vk::VertexInputAttributeDescription; 9] = [
     attribute(0, 0, vk::Format::R32G32B32_SFLOAT, 0),
     attribute(1, 0, vk::Format::R32G32B32_SFLOAT, 12),
@@ -298,6 +308,7 @@ pub mod spirv {
     pub const GLASS_BLEND_FRAG: &[u8] = shader!("glass_blend.frag");
     pub const GLASS_LAYERS_VERT: &[u8] = shader!("glass_layers.vert");
     pub const GLASS_LAYERS_FRAG: &[u8] = shader!("glass_layers.frag");
+    pub const GLASS_LAYER_FRAG: &[u8] = shader!("glass_layer.frag");
     pub const REM_WARP_FRAG: &[u8] = shader!("rem_warp.frag");
     pub const REM_VERT: &[u8] = shader!("rem.vert");
     pub const REM_FRAG: &[u8] = shader!("rem.frag");

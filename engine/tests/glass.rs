@@ -225,13 +225,13 @@ fn per_sample_shells_blend_by_the_eyes_azimuth() {
     );
 }
 
-#[test]
-fn layered_shells_composite_each_inner_layer_over_the_outer() {
-    let dir = tempfile::tempdir().expect("temp dir");
+/// The glass scene with `size`² shell maps and two shells: a sphere
+/// around the lens, then the room's box.
+fn layered_scene(dir: &Path, size: u32) -> (Scene, inference::glass::ShellSet) {
     let scene = glass_scene(
-        dir.path(),
+        dir,
         "glass",
-        &[("resolution = 256", "resolution = 16")],
+        &[("resolution = 256", &format!("resolution = {size}"))],
     );
     let g = scene
         .objects
@@ -247,6 +247,13 @@ fn layered_shells_composite_each_inner_layer_over_the_outer() {
         distance: 0.8,
     };
     set.shells.insert(0, inner);
+    (scene, set)
+}
+
+#[test]
+fn layered_shells_composite_each_inner_layer_over_the_outer() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (scene, set) = layered_scene(dir.path(), 16);
     let device = validated_device();
     let render = |inner: [f32; 4], outer: [f32; 3]| {
         let mut renderer = Renderer::new(&device, &scene, W, H).expect("renderer");
@@ -289,4 +296,73 @@ fn layered_shells_composite_each_inner_layer_over_the_outer() {
         }
     }
     assert!(glass > (W * H / 20) as usize, "glass covers {glass} pixels");
+}
+
+/// A shell map of `size`² per face: `rgba` in the middle eighth of face 0
+/// (+x) at level 0, transparent elsewhere, box-filtered down its levels.
+fn spot_map(size: u32, rgba: [f32; 4]) -> Vec<u8> {
+    let n = size as usize;
+    let spot = n / 2 - n / 16..n / 2 + n / 16;
+    let level0: Vec<[f32; 4]> = (0..6 * n * n)
+        .map(|i| {
+            let (face, x, y) = (i / (n * n), i % n, (i % (n * n)) / n);
+            match face == 0 && spot.contains(&x) && spot.contains(&y) {
+                true => rgba,
+                false => [0.0; 4],
+            }
+        })
+        .collect();
+    inference::glass::shell_map::mip_chain(level0, size)
+        .into_iter()
+        .flatten()
+        .flat_map(|t| t.map(half::f16::from_f32))
+        .flat_map(half::f16::to_le_bytes)
+        .collect()
+}
+
+#[test]
+fn only_triangles_an_inner_layer_reaches_read_it_and_the_frame_stays() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (scene, set) = layered_scene(dir.path(), 64);
+    let device = validated_device();
+    let mut renderer = Renderer::new(&device, &scene, W, H).expect("renderer");
+    let maps = vec![
+        spot_map(64, [1.0, 0.0, 0.0, 1.0]),
+        constant_map(64, [0.0, 0.0, 1.0]),
+    ];
+    renderer.load_glass_layers(&maps, &set).expect("layers");
+    // Seen from −x, refraction lookups pass through the spot, most others
+    // not.
+    let eye = scene.orbit.eye(-90.0, 5.0);
+    let draw = |renderer: &mut Renderer| {
+        renderer
+            .frame(FrameMode::Hybrid, eye, scene.orbit.view(eye))
+            .expect("frame");
+        let stats = renderer.glass.as_ref().expect("glass").last;
+        (renderer.pixels().expect("pixels"), stats)
+    };
+    let (split, stats) = draw(&mut renderer);
+    assert!(
+        stats.layered_triangles > 0 && stats.layered_triangles < stats.triangles,
+        "{stats:?}"
+    );
+    renderer
+        .glass
+        .as_mut()
+        .expect("glass")
+        .read_every_layer_everywhere();
+    let (every, all) = draw(&mut renderer);
+    assert_eq!(all.layered_triangles, all.triangles);
+    let red = every.iter().filter(|p| p[0] > 0.05).count();
+    assert!(red > 0, "the inner layer shows nowhere");
+    let differ: Vec<f32> = (split.iter().zip(&every))
+        .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).abs()).fold(0.0, f32::max))
+        .filter(|&d| d > 0.0)
+        .collect();
+    let largest = differ.iter().copied().fold(0.0, f32::max);
+    assert!(
+        differ.len() * 50 < red && largest < 0.05,
+        "{} pixels differ (largest {largest}), {red} show the inner layer",
+        differ.len()
+    );
 }

@@ -13,6 +13,7 @@
 //! front surface, the traced map read at infinity.
 
 pub mod ahead;
+pub mod coverage;
 pub mod layers;
 pub mod samples;
 pub mod shell;
@@ -44,6 +45,9 @@ pub enum GlassKind {
 pub struct GlassFrameStats {
     pub vertices: usize,
     pub triangles: usize,
+    /// Of those, the triangles that read every shell layer (layered
+    /// frames; the rest read the outermost alone).
+    pub layered_triangles: usize,
     /// Rays cast through the lens.
     pub rays: u64,
     /// Vertex ray paths (tessellation; with frames in flight, the wait
@@ -69,8 +73,12 @@ pub struct GlassPlayer {
     /// Layered shells: their maps (a cube-map array, nearest first) and
     /// the shells, padded to [`MAX_SHELLS`] with the outermost.
     layers: Option<(Image, ShellSet, u32)>,
-    /// Whether this frame reads the layers (hybrid frames with layers).
-    layered_frame: bool,
+    /// The directions each inner layer covers ([`coverage`]).
+    cones: Vec<coverage::Cone>,
+    /// Whether this frame reads the layers (hybrid frames with layers),
+    /// and how many of its indices lead with triangles that need them.
+    layered_frame: Option<u32>,
+    split: Vec<u32>,
     orbit: inference::scene::Orbit,
     stream: Vec<f32>,
     /// The next frame's paths, being traced (see [`GlassPlayer::prepare`]).
@@ -107,7 +115,9 @@ impl GlassPlayer {
             samples: None,
             blend: None,
             layers: None,
-            layered_frame: false,
+            cones: Vec::new(),
+            layered_frame: None,
+            split: Vec::new(),
             orbit: scene.orbit.clone(),
             lens: Arc::new(lens),
             cube,
@@ -161,7 +171,7 @@ impl GlassPlayer {
             .unwrap_or_else(|| ahead::trace(&self.lens, &request));
         // The one worker was just taken: never two at once.
         self.ahead = next.and_then(|next| Ahead::start(self.lens.clone(), next));
-        self.layered_frame = request.kind == GlassKind::Hybrid && self.layers.is_some();
+        let layered = request.kind == GlassKind::Hybrid && self.layers.is_some();
         let shells = match (request.kind, &self.layers) {
             (GlassKind::Hybrid, Some((_, padded, _))) => padded,
             (GlassKind::Hybrid, None) => &self.room,
@@ -177,11 +187,29 @@ impl GlassPlayer {
         };
         let traced = Instant::now();
         vertex_stream(&tess, shells, &mut self.stream);
+        // Layered: the triangles an inner layer can reach first.
+        let indices = match layered {
+            true => {
+                let n = coverage::split_triangles(
+                    &self.stream,
+                    &tess.indices,
+                    &self.cones,
+                    &mut self.split,
+                );
+                self.layered_frame = Some(n as u32);
+                &self.split
+            }
+            false => {
+                self.layered_frame = None;
+                &tess.indices
+            }
+        };
         let streamed = Instant::now();
-        self.geometry.upload(&self.stream, &tess.indices)?;
+        self.geometry.upload(&self.stream, indices)?;
         self.last = GlassFrameStats {
             vertices: tess.positions.len(),
             triangles: tess.indices.len() / 3,
+            layered_triangles: self.layered_frame.map_or(0, |n| n as usize / 3),
             rays: tess.stats.rays,
             paths_ms: (traced - start).as_secs_f64() * 1e3,
             stream_ms: (streamed - traced).as_secs_f64() * 1e3,
@@ -194,17 +222,23 @@ impl GlassPlayer {
 
     /// The pass drawing what [`GlassPlayer::prepare`] uploaded.
     pub fn pass<'a>(&'a self, target: Target<'a>, view_proj: Mat4) -> GlassPass<'a> {
-        let source = match (&self.samples, self.blend, &self.layers) {
-            (_, _, Some((image, _, n))) if self.layered_frame => ShellSource::Layers(image, *n),
-            (Some((image, _)), Some(blend), _) => ShellSource::Samples(image, blend),
+        let source = match (&self.samples, self.blend, &self.layers, self.layered_frame) {
+            (_, _, Some((image, _, n)), Some(first)) => ShellSource::Layers(image, *n, first),
+            (Some((image, _)), Some(blend), ..) => ShellSource::Samples(image, blend),
             _ => ShellSource::One(&self.cube.color),
         };
         self.geometry.pass(source, target, view_proj)
     }
 
     /// Plays hybrid frames from layered shells: `image` holds `set`'s maps
-    /// (nearest first, uploaded and ready for sampling).
-    pub fn set_layers(&mut self, image: Image, set: &ShellSet) -> GpuResult<()> {
+    /// (nearest first, uploaded and ready for sampling), `cones` what each
+    /// inner one covers (None: unknown, every direction).
+    pub fn set_layers(
+        &mut self,
+        image: Image,
+        set: &ShellSet,
+        cones: &[Option<coverage::Cone>],
+    ) -> GpuResult<()> {
         let n = set.shells.len();
         if !(1..=MAX_SHELLS).contains(&n) {
             return Err(GpuError::Invalid(format!(
@@ -217,7 +251,18 @@ impl GlassPlayer {
             padded.shells.push(set.shells[n - 1].clone());
         }
         self.layers = Some((image, padded, n as u32));
+        // An inner layer that covers nothing never needs its triangles.
+        self.cones = cones.iter().take(n - 1).flatten().copied().collect();
         Ok(())
+    }
+
+    /// Has every lens triangle read every layer, as if each inner layer
+    /// covered every direction: the reference the split is measured
+    /// against (`examples/glass_layers.rs`).
+    pub fn read_every_layer_everywhere(&mut self) {
+        if self.layers.is_some() {
+            self.cones = vec![coverage::Cone::ALL];
+        }
     }
 
     /// How many shell layers hybrid frames read (1: the room's box alone).
@@ -238,7 +283,8 @@ impl GlassPlayer {
         self.samples = None;
         self.blend = None;
         self.layers = None;
-        self.layered_frame = false;
+        self.cones.clear();
+        self.layered_frame = None;
     }
 
     /// How many per-sample maps hybrid frames blend (0: the one map).

@@ -8,28 +8,45 @@ use super::target::Target;
 use crate::backend::{Binding, Buffer, Device, GpuResult, Pipeline, PipelineDesc, Sampler};
 use crate::graph::{Access, Pass};
 use crate::shader_interface::{
-    GLASS_ATTRIBUTES, GLASS_BINDING, GLASS_LAYERS_ATTRIBUTES, GLASS_LAYERS_BINDING, GlassPush,
-    spirv,
+    GLASS_ATTRIBUTES, GLASS_BINDING, GLASS_LAYERS_ATTRIBUTES, GLASS_LAYERS_BINDING,
+    GLASS_OUTER_ATTRIBUTES, GlassPush, spirv,
 };
 use ash::vk;
 use glam::{Mat4, Vec4};
 
+/// What a glass pipeline reads of which vertex stream.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stream {
+    /// The one-shell stream, `glass.vert`.
+    OneShell,
+    /// The layered stream, every shell's lookups (`glass_layers.vert`).
+    Layered,
+    /// The layered stream, the outermost shell's lookups (`glass.vert`).
+    Outermost,
+}
+
 /// The glass pipeline (back faces culled: the CPU emits front faces only)
-/// with `fragment` (`glass.frag` or `glass_blend.frag` over the one-shell
-/// stream; with `layered`, `glass_layers.*` over the layered stream).
+/// with `fragment` over `stream`: `glass.frag` or `glass_blend.frag` over
+/// the one-shell stream, `glass_layers.frag` over every layer,
+/// `glass_layer.frag` over the outermost.
 pub fn glass_pipeline(
     device: &Device,
     (name, fragment): (&str, &[u8]),
-    layered: bool,
+    stream: Stream,
     (color_format, depth_format): (vk::Format, vk::Format),
 ) -> GpuResult<Pipeline> {
-    let (vertex_spirv, binding, attributes): (_, _, &[_]) = match layered {
-        true => (
+    let (vertex_spirv, binding, attributes): (_, _, &[_]) = match stream {
+        Stream::Layered => (
             spirv::GLASS_LAYERS_VERT,
             GLASS_LAYERS_BINDING,
             &GLASS_LAYERS_ATTRIBUTES,
         ),
-        false => (spirv::GLASS_VERT, GLASS_BINDING, &GLASS_ATTRIBUTES),
+        Stream::Outermost => (
+            spirv::GLASS_VERT,
+            GLASS_LAYERS_BINDING,
+            &GLASS_OUTER_ATTRIBUTES,
+        ),
+        Stream::OneShell => (spirv::GLASS_VERT, GLASS_BINDING, &GLASS_ATTRIBUTES),
     };
     Pipeline::new(
         device,
@@ -62,8 +79,9 @@ pub struct GlassGeometry {
     set: vk::DescriptorSet,
     /// The blending pipeline and its set over the per-sample maps.
     blend: Option<(Pipeline, vk::DescriptorSet)>,
-    /// The layered pipeline and its set over the layer maps.
-    layers: Option<(Pipeline, vk::DescriptorSet)>,
+    /// Over the layer maps: the pipeline reading every layer, the one
+    /// reading the outermost, and their sets.
+    layers: Option<[(Pipeline, vk::DescriptorSet); 2]>,
     vertices: Option<Buffer>,
     indices: Option<Buffer>,
     pub index_count: u32,
@@ -76,7 +94,8 @@ impl GlassGeometry {
         shell: &crate::backend::Image,
         formats: (vk::Format, vk::Format),
     ) -> GpuResult<Self> {
-        let pipeline = glass_pipeline(device, ("glass", spirv::GLASS_FRAG), false, formats)?;
+        let names = ("glass", spirv::GLASS_FRAG);
+        let pipeline = glass_pipeline(device, names, Stream::OneShell, formats)?;
         let sampler = Sampler::trilinear(device, vk::SamplerAddressMode::CLAMP_TO_EDGE)?;
         let set = pipeline.descriptor_set(&[Binding::Image(shell.view, sampler.raw)])?;
         Ok(Self {
@@ -96,18 +115,26 @@ impl GlassGeometry {
     /// Makes the blending pipeline, reading the cube-map array `samples`.
     pub fn set_samples(&mut self, samples: &crate::backend::Image) -> GpuResult<()> {
         let names = ("glass blend", spirv::GLASS_BLEND_FRAG);
-        let pipeline = glass_pipeline(&self.device, names, false, self.formats)?;
+        let pipeline = glass_pipeline(&self.device, names, Stream::OneShell, self.formats)?;
         let set = pipeline.descriptor_set(&[Binding::Image(samples.view, self.sampler.raw)])?;
         self.blend = Some((pipeline, set));
         Ok(())
     }
 
-    /// Makes the layered pipeline, reading the cube-map array `layers`.
+    /// Makes the layered pipelines, reading the cube-map array `layers`.
     pub fn set_layers(&mut self, layers: &crate::backend::Image) -> GpuResult<()> {
-        let names = ("glass layers", spirv::GLASS_LAYERS_FRAG);
-        let pipeline = glass_pipeline(&self.device, names, true, self.formats)?;
-        let set = pipeline.descriptor_set(&[Binding::Image(layers.view, self.sampler.raw)])?;
-        self.layers = Some((pipeline, set));
+        let make = |names, stream| -> GpuResult<(Pipeline, vk::DescriptorSet)> {
+            let pipeline = glass_pipeline(&self.device, names, stream, self.formats)?;
+            let set = pipeline.descriptor_set(&[Binding::Image(layers.view, self.sampler.raw)])?;
+            Ok((pipeline, set))
+        };
+        self.layers = Some([
+            make(("glass layers", spirv::GLASS_LAYERS_FRAG), Stream::Layered)?,
+            make(
+                ("glass outer layer", spirv::GLASS_LAYER_FRAG),
+                Stream::Outermost,
+            )?,
+        ]);
         Ok(())
     }
 
@@ -148,15 +175,26 @@ impl GlassGeometry {
         }
     }
 
-    /// The pipeline, its set and the push constants' `blend` for `source`
-    /// (the one map when its pipeline is missing).
-    fn pipeline_for(&self, source: &ShellSource) -> (&Pipeline, vk::DescriptorSet, Vec4) {
+    /// Each draw of `source`: pipeline, set, push `blend`, first index and
+    /// index count — one over every triangle, or for layers the leading
+    /// triangles reading every layer, then the rest reading the outermost
+    /// (the one map when the source's pipelines are missing).
+    fn draws(&self, source: &ShellSource) -> Vec<(&Pipeline, vk::DescriptorSet, Vec4, u32, u32)> {
+        let total = self.index_count;
         match (source, &self.blend, &self.layers) {
-            (ShellSource::Samples(_, blend), Some((p, set)), _) => (p, *set, *blend),
-            (ShellSource::Layers(_, n), _, Some((p, set))) => {
-                (p, *set, Vec4::new(*n as f32, 0.0, 0.0, 0.0))
+            (ShellSource::Samples(_, blend), Some((p, set)), _) => {
+                vec![(p, *set, *blend, 0, total)]
             }
-            _ => (&self.pipeline, self.set, Vec4::ZERO),
+            (ShellSource::Layers(_, n, lead), _, Some([every, outer])) => {
+                let lead = (*lead).min(total);
+                let blend = Vec4::new(*n as f32, n.saturating_sub(1) as f32, 0.0, 0.0);
+                [(every, 0, lead), (outer, lead, total - lead)]
+                    .into_iter()
+                    .filter(|d| d.2 > 0)
+                    .map(|((p, set), first, count)| (p, *set, blend, first, count))
+                    .collect()
+            }
+            _ => vec![(&self.pipeline, self.set, Vec4::ZERO, 0, total)],
         }
     }
 }
@@ -193,14 +231,16 @@ pub enum ShellSource<'a> {
     One(&'a crate::backend::Image),
     /// Per-sample maps and the blend (layers, weight of the second).
     Samples(&'a crate::backend::Image, Vec4),
-    /// Layer maps, nearest first, and how many layers.
-    Layers(&'a crate::backend::Image, u32),
+    /// Layer maps, nearest first, how many layers, and how many indices
+    /// lead with triangles that read every layer (the rest read the
+    /// outermost alone).
+    Layers(&'a crate::backend::Image, u32, u32),
 }
 
 impl ShellSource<'_> {
     fn image(&self) -> &crate::backend::Image {
         match self {
-            ShellSource::One(i) | ShellSource::Samples(i, _) | ShellSource::Layers(i, _) => i,
+            ShellSource::One(i) | ShellSource::Samples(i, _) | ShellSource::Layers(i, ..) => i,
         }
     }
 }
@@ -229,19 +269,22 @@ impl Pass for GlassPass<'_> {
             if g.index_count == 0 {
                 return Ok(());
             }
-            let (pipeline, set, blend) = g.pipeline_for(&self.source);
-            let push = GlassPush {
-                view_proj: self.view_proj,
-                blend,
-            };
-            pipeline.bind(cmd, Some(set), &push)?;
-            // SAFETY: the glass pipeline is bound inside dynamic rendering;
-            // the buffers hold index_count indices into the uploaded vertices.
-            unsafe {
-                let d = &g.device.device;
-                d.cmd_bind_vertex_buffers(cmd, 0, &[vertices.raw], &[0]);
-                d.cmd_bind_index_buffer(cmd, indices.raw, 0, vk::IndexType::UINT32);
-                d.cmd_draw_indexed(cmd, g.index_count, 1, 0, 0, 0);
+            for (pipeline, set, blend, first, count) in g.draws(&self.source) {
+                let push = GlassPush {
+                    view_proj: self.view_proj,
+                    blend,
+                };
+                pipeline.bind(cmd, Some(set), &push)?;
+                // SAFETY: the glass pipeline is bound inside dynamic
+                // rendering; `draws` keeps first + count within the
+                // index_count indices into the uploaded vertices, whose
+                // stream is the one the pipeline reads (layered or not).
+                unsafe {
+                    let d = &g.device.device;
+                    d.cmd_bind_vertex_buffers(cmd, 0, &[vertices.raw], &[0]);
+                    d.cmd_bind_index_buffer(cmd, indices.raw, 0, vk::IndexType::UINT32);
+                    d.cmd_draw_indexed(cmd, count, 1, first, 0, 0);
+                }
             }
             Ok(())
         })

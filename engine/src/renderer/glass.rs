@@ -44,7 +44,11 @@ impl Renderer {
         let Some(g) = self.glass.as_mut() else {
             return Err(GpuError::Invalid("no glass object".into()));
         };
-        g.set_layers(image, set)
+        let size = g.shell_map().desc.width;
+        let cones: Vec<_> = (maps.iter())
+            .map(|m| crate::glass::coverage::covered_cone(m, size))
+            .collect();
+        g.set_layers(image, set, &cones)
     }
 
     /// A cube-map array of `maps` (each a full MIP chain of the shell
