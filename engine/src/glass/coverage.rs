@@ -18,8 +18,8 @@ use rayon::prelude::*;
 /// is widened by.
 pub const MARGIN_LEVEL: u32 = 3;
 
-/// A cone of directions: unit axis and the sine and cosine of its half
-/// angle (a half angle of π covers every direction).
+/// A cone of directions: unit axis and half angle (π covers every
+/// direction).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Cone {
     pub axis: Vec3,
@@ -33,16 +33,18 @@ impl Cone {
         half_angle: std::f32::consts::PI,
     };
 
-    /// Whether a cone around `dir` (any length) of half angle `spread`
-    /// meets this one.
-    pub fn meets(&self, dir: Vec3, spread: f32) -> bool {
-        if self.half_angle + spread >= std::f32::consts::PI {
+    /// Whether the cone around unit `dir` whose half angle has cosine
+    /// `cos_spread` meets this one: the angle between the axes is at most
+    /// the sum of the half angles (compared by cosines, no `acos`).
+    pub fn meets(&self, dir: Vec3, cos_spread: f32) -> bool {
+        let cs = cos_spread.clamp(-1.0, 1.0);
+        let (sh, ch) = self.half_angle.sin_cos();
+        // The sum reaches π (every direction) when spread ≥ π − half.
+        if cs <= -ch {
             return true;
         }
-        let Some(d) = dir.try_normalize() else {
-            return true;
-        };
-        d.dot(self.axis).clamp(-1.0, 1.0).acos() <= self.half_angle + spread
+        let ss = (1.0 - cs * cs).sqrt();
+        dir.dot(self.axis) >= ch * cs - sh * ss
     }
 }
 
@@ -105,30 +107,26 @@ pub fn split_triangles(
     let needs_layers = |tri: &[u32]| -> bool {
         (0..2).any(|term| {
             cones.iter().enumerate().any(|(shell, cone)| {
-                let looks: Option<Vec<Vec3>> = tri
-                    .iter()
-                    .map(|&v| lookup(v, term, shell)?.try_normalize())
-                    .collect();
-                let Some(looks) = looks else {
+                let mut looks = [Vec3::ZERO; 3];
+                for (l, &v) in looks.iter_mut().zip(tri) {
+                    match lookup(v, term, shell).and_then(Vec3::try_normalize) {
+                        Some(d) => *l = d,
+                        None => return true,
+                    }
+                }
+                let Some(mid) = (looks[0] + looks[1] + looks[2]).try_normalize() else {
                     return true;
                 };
-                let mid = looks.iter().sum::<Vec3>();
-                let Some(mid) = mid.try_normalize() else {
-                    return true;
-                };
-                let spread = looks
-                    .iter()
-                    .map(|d| d.dot(mid).clamp(-1.0, 1.0).acos())
-                    .fold(0.0f32, f32::max);
-                cone.meets(mid, spread)
+                let cos_spread = looks.iter().map(|d| d.dot(mid)).fold(1.0f32, f32::min);
+                cone.meets(mid, cos_spread)
             })
         })
     };
-    let flags: Vec<bool> = indices.par_chunks(3).map(needs_layers).collect();
+    let flags: Vec<bool> = indices.par_chunks_exact(3).map(needs_layers).collect();
     out.clear();
     out.reserve(indices.len());
     for pass in [true, false] {
-        for (tri, &f) in indices.chunks(3).zip(&flags) {
+        for (tri, &f) in indices.chunks_exact(3).zip(&flags) {
             if f == pass {
                 out.extend_from_slice(tri);
             }
@@ -200,9 +198,11 @@ mod tests {
         let cone = covered_cone(bytes, size).expect("covered");
         assert!(cone.axis.x > 0.95, "{cone:?}");
         for (x, y) in [(3, 3), (6, 4)] {
-            assert!(cone.meets(texel_dir(0, x, y, n), 0.0));
+            assert!(cone.meets(texel_dir(0, x, y, n), 1.0));
         }
-        assert!(!cone.meets(-Vec3::X, 0.0));
+        assert!(!cone.meets(-Vec3::X, 1.0));
+        // A wide enough cone around −x reaches it.
+        assert!(cone.meets(-Vec3::X, -1.0));
         assert!(cone.half_angle < 2.0, "{cone:?}");
         assert_eq!(covered_cone(&vec![0u8; 6 * n * n * 8], size), None);
     }

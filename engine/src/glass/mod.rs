@@ -25,7 +25,7 @@ use crate::passes::target::Target;
 use ahead::{Ahead, PathRequest};
 use ash::vk;
 use glam::{Mat4, Vec3, Vec4};
-use inference::glass::vertices::vertex_stream;
+use inference::glass::vertices::vertex_stream_padded;
 use inference::glass::{Lens, MAX_SHELLS, ShellSet, ShellShape};
 use inference::scene::Scene;
 use std::sync::Arc;
@@ -70,8 +70,8 @@ pub struct GlassPlayer {
     samples: Option<(Image, Vec<f32>)>,
     /// This frame's blend of them (layers, weight), hybrid frames only.
     blend: Option<Vec4>,
-    /// Layered shells: their maps (a cube-map array, nearest first) and
-    /// the shells, padded to [`MAX_SHELLS`] with the outermost.
+    /// Layered shells: their maps (a cube-map array, nearest first), the
+    /// shells and how many (the stream pads them to [`MAX_SHELLS`]).
     layers: Option<(Image, ShellSet, u32)>,
     /// The directions each inner layer covers ([`coverage`]).
     cones: Vec<coverage::Cone>,
@@ -173,7 +173,7 @@ impl GlassPlayer {
         self.ahead = next.and_then(|next| Ahead::start(self.lens.clone(), next));
         let layered = request.kind == GlassKind::Hybrid && self.layers.is_some();
         let shells = match (request.kind, &self.layers) {
-            (GlassKind::Hybrid, Some((_, padded, _))) => padded,
+            (GlassKind::Hybrid, Some((_, set, _))) => set,
             (GlassKind::Hybrid, None) => &self.room,
             (GlassKind::StaticEm, _) => &self.infinity,
         };
@@ -186,7 +186,11 @@ impl GlassPlayer {
             _ => None,
         };
         let traced = Instant::now();
-        vertex_stream(&tess, shells, &mut self.stream);
+        let slots = match layered {
+            true => MAX_SHELLS,
+            false => shells.shells.len(),
+        };
+        vertex_stream_padded(&tess, shells, slots, &mut self.stream);
         // Layered: the triangles an inner layer can reach first.
         let indices = match layered {
             true => {
@@ -246,11 +250,7 @@ impl GlassPlayer {
             )));
         }
         self.geometry.set_layers(&image)?;
-        let mut padded = set.clone();
-        while padded.shells.len() < MAX_SHELLS {
-            padded.shells.push(set.shells[n - 1].clone());
-        }
-        self.layers = Some((image, padded, n as u32));
+        self.layers = Some((image, set.clone(), n as u32));
         // An inner layer that covers nothing never needs its triangles.
         self.cones = cones.iter().take(n - 1).flatten().copied().collect();
         Ok(())

@@ -27,8 +27,21 @@ pub enum Term {
 /// Fills `out` with the stream of `tess` against `shells` (resized to
 /// `positions × stride` floats).
 pub fn vertex_stream(tess: &Tessellation, shells: &ShellSet, out: &mut Vec<f32>) {
-    let n = shells.shells.len();
-    let stride = stride(n);
+    vertex_stream_padded(tess, shells, shells.shells.len(), out);
+}
+
+/// [`vertex_stream`] laid out for `slots` shells (at least as many as
+/// `shells` has, at most [`MAX_SHELLS`]): the slots past the last shell
+/// repeat its lookups, so one layout serves every shell count.
+pub fn vertex_stream_padded(
+    tess: &Tessellation,
+    shells: &ShellSet,
+    slots: usize,
+    out: &mut Vec<f32>,
+) {
+    let n = shells.shells.len().min(MAX_SHELLS);
+    let slots = slots.clamp(n, MAX_SHELLS);
+    let stride = stride(slots);
     out.resize(tess.positions.len() * stride, 0.0);
     out.par_chunks_mut(stride)
         .zip(tess.positions.par_iter().zip(&tess.paths))
@@ -38,11 +51,10 @@ pub fn vertex_stream(tess: &Tessellation, shells: &ShellSet, out: &mut Vec<f32>)
             v[6..9].copy_from_slice(&paths.r.weight.to_array());
             let mut looks = [Vec3::ZERO; MAX_SHELLS];
             for (k, path) in [&paths.t, &paths.r].into_iter().enumerate() {
-                let l = &mut looks[..n.min(MAX_SHELLS)];
-                shells.lookups(path.origin, path.dir, l);
-                for (i, look) in l.iter().enumerate() {
-                    let at = 9 + 3 * (k * n + i);
-                    v[at..at + 3].copy_from_slice(&look.to_array());
+                shells.lookups(path.origin, path.dir, &mut looks[..n]);
+                for i in 0..slots {
+                    let at = 9 + 3 * (k * slots + i);
+                    v[at..at + 3].copy_from_slice(&looks[i.min(n.saturating_sub(1))].to_array());
                 }
             }
         });
