@@ -236,6 +236,18 @@ fn a_near_object_plays_as_a_layer_traced_once() {
     let stderr = String::from_utf8_lossy(&one.stderr);
     assert!(one.status.success(), "stderr:\n{stderr}");
     assert!(!stderr.contains("shell layers"), "{stderr}");
+    // Per-sample maps asked for too: the layers play, and say why.
+    let text = std::fs::read_to_string(&scene).expect("scene") + "shell_every = 50\n";
+    let per_sample = dir.path().join("per_sample_near.toml");
+    std::fs::write(&per_sample, text).expect("write scene");
+    let o = run(per_sample.to_str().expect("utf-8"), &out, &[]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "stderr:\n{stderr}");
+    assert!(
+        stderr.contains("per-sample maps are solved for one shell"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("solved 2 per-sample"), "{stderr}");
     eval_states_the_layers(&scene, &out, dir.path());
 }
 
