@@ -241,58 +241,77 @@ fn layered_scene(dir: &Path, size: u32) -> (Scene, inference::glass::ShellSet) {
     let origin = g.mesh.area_weighted_centroid();
     let mut set =
         inference::glass::room_shell(&scene, origin, inference::glass::room_box_shape(&scene));
-    let inner = inference::glass::Shell {
-        shape: inference::glass::ShellShape::Sphere { radius: 0.8 },
-        objects: Vec::new(),
-        distance: 0.8,
-    };
-    set.shells.insert(0, inner);
+    set.shells.insert(0, sphere_shell(0.8));
     (scene, set)
+}
+
+/// A sphere shell of `radius` around the lens holding no object.
+fn sphere_shell(radius: f32) -> inference::glass::Shell {
+    inference::glass::Shell {
+        shape: inference::glass::ShellShape::Sphere { radius },
+        objects: Vec::new(),
+        distance: radius,
+    }
 }
 
 #[test]
 fn layered_shells_composite_each_inner_layer_over_the_outer() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let (scene, set) = layered_scene(dir.path(), 16);
+    let (scene, two) = layered_scene(dir.path(), 16);
+    let mut three = two.clone();
+    three.shells.insert(0, sphere_shell(0.6));
     let device = validated_device();
-    let render = |inner: [f32; 4], outer: [f32; 3]| {
+    // One frame with constant layers (premultiplied; the last opaque).
+    let render = |set: &inference::glass::ShellSet, layers: &[[f32; 4]]| {
         let mut renderer = Renderer::new(&device, &scene, W, H).expect("renderer");
-        let maps = vec![constant_rgba(16, inner), constant_map(16, outer)];
-        renderer.load_glass_layers(&maps, &set).expect("layers");
-        assert_eq!(renderer.glass.as_ref().map(|g| g.layer_count()), Some(2));
+        let maps: Vec<Vec<u8>> = layers.iter().map(|&l| constant_rgba(16, l)).collect();
+        renderer.load_glass_layers(&maps, set).expect("layers");
+        let n = renderer.glass.as_ref().map(|g| g.layer_count());
+        assert_eq!(n, Some(layers.len() as u32));
         let eye = scene.orbit.eye(15.0, 5.0);
         renderer
             .frame(FrameMode::Hybrid, eye, scene.orbit.view(eye))
             .expect("frame");
         renderer.pixels().expect("pixels")
     };
-    let (red, blue) = ([1.0, 0.0, 0.0], [0.0, 0.0, 1.0]);
+    let (red, green, blue) = (
+        [1.0, 0.0, 0.0, 1.0],
+        [0.0, 1.0, 0.0, 1.0],
+        [0.0, 0.0, 1.0, 1.0],
+    );
     let clear = [0.0; 4];
-    let (all_red, all_blue) = (render(clear, red), render(clear, blue));
-    // An opaque inner layer hides the outer one entirely.
-    let opaque = render([1.0, 0.0, 0.0, 1.0], blue);
-    // A quarter-covered one (premultiplied) lets three quarters through.
-    let quarter = render([0.25, 0.0, 0.0, 0.25], blue);
+    let (all_red, all_blue) = (render(&two, &[clear, red]), render(&two, &[clear, blue]));
+    let all_green = render(&three, &[clear, clear, green]);
+    // An opaque inner layer hides the outer one entirely; a quarter-covered
+    // one lets three quarters through; of three, half of each in turn.
+    let opaque = render(&two, &[red, blue]);
+    let quarter = render(&two, &[[0.25, 0.0, 0.0, 0.25], blue]);
+    let halves = render(&three, &[[0.5, 0.0, 0.0, 0.5], [0.0, 0.5, 0.0, 0.5], blue]);
     let mut glass = 0;
-    for (((o, q), r), b) in opaque.iter().zip(&quarter).zip(&all_red).zip(&all_blue) {
+    for (i, ((r, g), b)) in all_red.iter().zip(&all_green).zip(&all_blue).enumerate() {
         if r[0] > 0.05 && b[2] > 0.05 {
             glass += 1;
         }
         for c in 0..3 {
-            assert!(
-                (o[c] - r[c]).abs() <= 4e-3 * r[c].max(1.0),
-                "opaque inner layer, channel {c}: {} against {}",
-                o[c],
-                r[c]
-            );
-            let expected = 0.25 * r[c] + 0.75 * b[c];
-            assert!(
-                (q[c] - expected).abs() <= 4e-3 * expected.max(1.0),
-                "quarter inner layer, channel {c}: {} against 0.25 · {} + 0.75 · {}",
-                q[c],
-                r[c],
-                b[c]
-            );
+            let expect = [
+                ("opaque inner layer", opaque[i][c], r[c]),
+                (
+                    "quarter inner layer",
+                    quarter[i][c],
+                    0.25 * r[c] + 0.75 * b[c],
+                ),
+                (
+                    "three half layers",
+                    halves[i][c],
+                    0.5 * r[c] + 0.25 * g[c] + 0.25 * b[c],
+                ),
+            ];
+            for (what, got, expected) in expect {
+                assert!(
+                    (got - expected).abs() <= 4e-3 * expected.max(1.0),
+                    "{what}, pixel {i}, channel {c}: {got} against {expected}"
+                );
+            }
         }
     }
     assert!(glass > (W * H / 20) as usize, "glass covers {glass} pixels");
