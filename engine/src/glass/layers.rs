@@ -111,9 +111,12 @@ pub fn layer_maps(
             let key = layer_key(scene, lens, set, i, size);
             let what = format!("shell layer {} of {n}", i + 1);
             cached_map(&layer_path(out, i), &key, size, &what, || {
-                let tracer = match tracer.take() {
-                    Some(t) => tracer.insert(t),
-                    None => tracer.insert(Tracer::new(scene)?),
+                // One tracer (and photon map) for every layer traced.
+                if tracer.is_none() {
+                    tracer = Some(Tracer::new(scene)?);
+                }
+                let Some(tracer) = tracer.as_ref() else {
+                    anyhow::bail!("internal: no tracer for {what}");
                 };
                 let (hidden, own) = layer_objects(set, lens, i);
                 let layer = LayerObjects {
