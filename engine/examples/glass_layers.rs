@@ -8,17 +8,18 @@
 //!
 //! ```sh
 //! cargo run --release -p engine --example glass_layers -- \
-//!     SCENE DATA_DIR AZIMUTH ELEVATION REF.exr [OUT.png]
+//!     SCENE DATA_DIR AZIMUTH ELEVATION REF_DIR [OUT.png]
 //! ```
-//! DATA_DIR holds the compiled shells (the main job's `--out`); REF.exr is
-//! a traced view at the same azimuth, elevation and size (one of `engine
-//! eval`'s `reference/` files), with the lens's `<object>.mask` layer.
+//! DATA_DIR holds the compiled shells (the main job's `--out`); REF_DIR
+//! the traced references at 640×480, 16 spp (`engine eval`'s
+//! `reference/` folder: the view is read from there, or traced into it).
 
 use anyhow::{Context, Result, bail};
 use engine::eval::metrics::{masked_flip, masked_psnr};
+use engine::eval::reference::{References, View};
 use engine::options::{Mode, PemOptions, RunPlace};
 use engine::play::{Session, compile_context, setup_mode};
-use inference::trace::output::read_exr;
+use inference::trace::TraceSettings;
 use std::path::{Path, PathBuf};
 
 type Frame = Vec<[f32; 4]>;
@@ -29,10 +30,10 @@ const CHANGED: f32 = 0.01;
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let [scene, data, az, el, reference, rest @ ..] = args.as_slice() else {
-        bail!("usage: glass_layers SCENE DATA_DIR AZIMUTH ELEVATION REF.exr [OUT.png]");
+    let [scene, data, az, el, ref_dir, rest @ ..] = args.as_slice() else {
+        bail!("usage: glass_layers SCENE DATA_DIR AZIMUTH ELEVATION REF_DIR [OUT.png]");
     };
-    let (az, el): (f32, f32) = (
+    let view = View::new(
         az.parse().context("AZIMUTH: expected degrees")?,
         el.parse().context("ELEVATION: expected degrees")?,
     );
@@ -52,10 +53,18 @@ fn main() -> Result<()> {
         .find(|o| o.glass.is_some())
         .map(|o| o.name.clone())
         .context("the scene has no glass object")?;
-    let (traced, glass) = read_reference(Path::new(reference), &lens, width * height)?;
-    let eye = session.scene.orbit.eye(az, el);
-    let mut frames = Vec::new();
-    for traced_shell in [true, false] {
+    let settings = TraceSettings {
+        width,
+        height,
+        spp: 16,
+        ..TraceSettings::default()
+    };
+    let reference =
+        References::new(&session.scene, Path::new(ref_dir), settings)?.get(view, &lens)?;
+    let (traced, glass) = (&reference.beauty, &reference.mask);
+    let eye = reference.eye;
+    // One shell, then the layers (the split, then every triangle layered).
+    let hybrid = |traced_shell: bool, session: &mut Session| -> Result<Vec<Frame>> {
         let pem = PemOptions {
             tau: Some(3.0),
             traced_shell,
@@ -63,81 +72,56 @@ fn main() -> Result<()> {
         };
         let ctx = compile_context(&place, &session.scene, &session.out);
         let mut source = setup_mode(&ctx, &mut session.renderer, Mode::Hybrid, &pem, 16)?;
-        frames.push(source.frame(&mut session.renderer, &session.scene, eye)?.1);
-        if let Some(g) = session.renderer.glass.as_ref().filter(|_| !traced_shell) {
-            let s = g.last;
+        let mut frames = vec![source.frame(&mut session.renderer, &session.scene, eye)?.1];
+        if let Some(g) = session.renderer.glass.as_mut().filter(|_| !traced_shell) {
             println!(
                 "{} of {} lens triangles read every layer",
-                s.layered_triangles, s.triangles
+                g.last.layered_triangles, g.last.triangles
             );
+            g.read_every_layer_everywhere();
+            frames.push(source.frame(&mut session.renderer, &session.scene, eye)?.1);
         }
-        if !traced_shell {
-            if let Some(g) = session.renderer.glass.as_mut() {
-                g.read_every_layer_everywhere();
-            }
-            let every = source.frame(&mut session.renderer, &session.scene, eye)?.1;
-            let differ = (every.iter().zip(&frames[1]))
-                .filter(|(a, b)| a[..3] != b[..3])
-                .count();
-            let largest = (every.iter().zip(&frames[1]))
-                .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
-                .fold(0.0f32, f32::max);
-            let db = masked_psnr(&every, &frames[1], &glass)?.unwrap_or(f64::NAN);
-            println!(
-                "only the triangles an inner layer reaches read it: {differ} pixels differ from every triangle reading every layer, by at most {largest:.2e} ({db:.1} dB over the glass)"
-            );
-        }
-    }
-    let changed: Vec<bool> = (frames[0].iter().zip(&frames[1]).zip(&glass))
+        Ok(frames)
+    };
+    let one = hybrid(true, &mut session)?.remove(0);
+    let [layered, every]: [Frame; 2] = hybrid(false, &mut session)?
+        .try_into()
+        .map_err(|_| anyhow::anyhow!("the scene plays no shell layers"))?;
+    let differ = (every.iter().zip(&layered))
+        .filter(|(a, b)| a[..3] != b[..3])
+        .count();
+    let largest = (every.iter().zip(&layered))
+        .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
+        .fold(0.0f32, f32::max);
+    let db = masked_psnr(&every, &layered, glass)?.unwrap_or(f64::NAN);
+    println!(
+        "only the triangles an inner layer reaches read it: {differ} pixels differ from every triangle reading every layer, by at most {largest:.2e} ({db:.1} dB over the glass)"
+    );
+    let changed: Vec<bool> = (one.iter().zip(&layered).zip(glass))
         .map(|((a, b), &g)| g && (0..3).any(|c| (a[c] - b[c]).abs() > CHANGED))
         .collect();
     let count = |m: &[bool]| m.iter().filter(|&&x| x).count();
     println!(
         "glass: {} pixels, of which the layers change {}",
-        count(&glass),
+        count(glass),
         count(&changed)
     );
-    for (name, frame) in ["one shell", "layered shells"].iter().zip(&frames) {
+    for (name, frame) in [("one shell", &one), ("layered shells", &layered)] {
         let score = |mask: &[bool]| -> Result<(f64, f64)> {
-            let db = masked_psnr(&traced, frame, mask)?.unwrap_or(f64::NAN);
-            let flip = masked_flip(&traced, frame, width, height, mask)?.unwrap_or(f64::NAN);
+            let db = masked_psnr(traced, frame, mask)?.unwrap_or(f64::NAN);
+            let flip = masked_flip(traced, frame, width, height, mask)?.unwrap_or(f64::NAN);
             Ok((db, flip))
         };
-        let (g_db, g_flip) = score(&glass)?;
+        let (g_db, g_flip) = score(glass)?;
         let (c_db, c_flip) = score(&changed)?;
         println!(
             "{name:>15}: glass {g_db:.2} dB, FLIP {g_flip:.4}; where the layers change it {c_db:.2} dB, FLIP {c_flip:.4}"
         );
     }
     if let Some(out) = rest.first() {
-        let panels = [&frames[0], &frames[1], &traced];
-        write_crops(Path::new(out), &panels, &glass, width)?;
+        write_crops(Path::new(out), &[&one, &layered, traced], glass, width)?;
     }
     Ok(())
-}
-
-/// The reference's beauty and the lens's coverage (≥ ½) of `pixels` pixels.
-fn read_reference(path: &Path, lens: &str, pixels: u32) -> Result<(Frame, Vec<bool>)> {
-    let layers = read_exr(path)?;
-    let channel = |layer: &str, c: &str| {
-        layers
-            .iter()
-            .find(|(n, _)| n == layer)
-            .and_then(|(_, chs)| chs.iter().find(|(n, _)| n == c))
-            .map(|(_, v)| v.clone())
-            .with_context(|| format!("{}: no {layer}.{c}", path.display()))
-    };
-    let (r, g, b) = (
-        channel("beauty", "R")?,
-        channel("beauty", "G")?,
-        channel("beauty", "B")?,
-    );
-    let mask = channel(&format!("{lens}.mask"), "Y")?;
-    if r.len() != pixels as usize || mask.len() != r.len() {
-        bail!("{}: expected {pixels} pixels", path.display());
-    }
-    let frame = (0..r.len()).map(|i| [r[i], g[i], b[i], 1.0]).collect();
-    Ok((frame, mask.iter().map(|&m| m >= 0.5).collect()))
 }
 
 /// `panels` cropped to the bounds of `mask`, side by side, into `path`.
