@@ -18,20 +18,48 @@ fn engine(args: &[&str]) -> Output {
 /// glass.toml with a 16² shell map, a coarse teapot and per-sample shell
 /// maps at orbit lines 0, 50 and 99 (one view each), in `dir`.
 fn small_glass(dir: &Path) -> String {
-    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/scenes/glass.toml");
-    let mut text = std::fs::read_to_string(source).expect("glass.toml");
-    for (from, to) in [
+    small_scene(
+        dir,
+        "glass",
+        &[
+            ("shell_every = 10", "shell_every = 50"),
+            ("views = 3", "views = 1"),
+        ],
+    )
+}
+
+/// The shipped scene `name` with a 16² shell map, a coarse glass teapot
+/// and `edits`, written into `dir`; its path.
+fn small_scene(dir: &Path, name: &str, edits: &[(&str, &str)]) -> String {
+    let source =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../assets/scenes/{name}.toml"));
+    let mut text = std::fs::read_to_string(source).expect("shipped scene");
+    let small = [
         ("resolution = 256", "resolution = 16"),
         ("segments = 25 }", "segments = 6 }"),
-        ("shell_every = 10", "shell_every = 50"),
-        ("views = 3", "views = 1"),
-    ] {
-        assert!(text.contains(from), "glass.toml lacks {from:?}");
+    ];
+    for (from, to) in small.iter().chain(edits) {
+        assert!(text.contains(from), "{name}.toml lacks {from:?}");
         text = text.replacen(from, to, 1);
     }
-    let path = dir.join("small_glass.toml");
+    let path = dir.join(format!("small_{name}.toml"));
     std::fs::write(&path, text).expect("write scene");
     path.to_str().expect("utf-8 path").to_owned()
+}
+
+/// `run` that must succeed with the validation layer silent; its stderr.
+fn run_clean(scene: &str, out: &Path, extra: &[&str]) -> String {
+    let o = run(scene, out, extra);
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    );
+    assert!(o.status.success(), "stderr:\n{stderr}");
+    assert!(
+        stdout.lines().any(|l| l == "validation messages: 0"),
+        "{stdout}"
+    );
+    stderr
 }
 
 fn run(scene: &str, out: &Path, extra: &[&str]) -> Output {
@@ -49,16 +77,7 @@ fn glass_compiles_its_shell_once_and_plays_hybrid() {
     let dir = tempfile::tempdir().expect("tempdir");
     let scene = small_glass(dir.path());
     let out = dir.path().join("out");
-    let first = run(&scene, &out, &[]);
-    let (stdout, stderr) = (
-        String::from_utf8_lossy(&first.stdout),
-        String::from_utf8_lossy(&first.stderr),
-    );
-    assert!(first.status.success(), "stderr:\n{stderr}");
-    assert!(
-        stdout.lines().any(|l| l == "validation messages: 0"),
-        "{stdout}"
-    );
+    let stderr = run_clean(&scene, &out, &[]);
     assert!(stderr.contains("traced the room shell map"), "{stderr}");
     assert!(
         stderr.contains("solved 3 per-sample shell maps"),
@@ -173,37 +192,12 @@ fn hybrid_without_glass_fails_cleanly() {
     assert!(line.contains("[objects.glass]"), "{stderr}");
 }
 
-/// glass_near.toml with a 16² shell map and a coarse glass teapot, in `dir`.
-fn small_glass_near(dir: &Path) -> String {
-    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/scenes/glass_near.toml");
-    let mut text = std::fs::read_to_string(source).expect("glass_near.toml");
-    for (from, to) in [
-        ("resolution = 256", "resolution = 16"),
-        ("segments = 25 }", "segments = 6 }"),
-    ] {
-        assert!(text.contains(from), "glass_near.toml lacks {from:?}");
-        text = text.replacen(from, to, 1);
-    }
-    let path = dir.join("small_glass_near.toml");
-    std::fs::write(&path, text).expect("write scene");
-    path.to_str().expect("utf-8 path").to_owned()
-}
-
 #[test]
 fn a_near_object_plays_as_a_layer_traced_once() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let scene = small_glass_near(dir.path());
+    let scene = small_scene(dir.path(), "glass_near", &[]);
     let out = dir.path().join("out");
-    let first = run(&scene, &out, &[]);
-    let (stdout, stderr) = (
-        String::from_utf8_lossy(&first.stdout),
-        String::from_utf8_lossy(&first.stderr),
-    );
-    assert!(first.status.success(), "stderr:\n{stderr}");
-    assert!(
-        stdout.lines().any(|l| l == "validation messages: 0"),
-        "{stdout}"
-    );
+    let stderr = run_clean(&scene, &out, &[]);
     for i in 1..=2 {
         assert!(
             stderr.contains(&format!("traced shell layer {i} of 2")),
