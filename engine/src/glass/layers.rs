@@ -138,11 +138,11 @@ pub fn load(renderer: &mut crate::renderer::Renderer, scene: &Scene, out: &Path)
     let Some(g) = renderer.glass.as_ref() else {
         return Ok(1);
     };
-    let Some(object) = scene.objects.get(g.lens_object() as usize) else {
+    let lens = g.lens();
+    let Some(object) = scene.objects.get(lens.object as usize) else {
         return Ok(1);
     };
     let settings = object.glass.clone().unwrap_or_default();
-    let lens = inference::glass::Lens::new(scene, &object.name)?;
     let (set, placed_s) = placed_shells(scene, out, &lens, settings.shells)?;
     let n = set.shells.len();
     if n < 2 {

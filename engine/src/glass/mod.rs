@@ -70,9 +70,9 @@ pub struct GlassPlayer {
     samples: Option<(Image, Vec<f32>)>,
     /// This frame's blend of them (layers, weight), hybrid frames only.
     blend: Option<Vec4>,
-    /// Layered shells: their maps (a cube-map array, nearest first), the
-    /// shells and how many (the stream pads them to [`MAX_SHELLS`]).
-    layers: Option<(Image, ShellSet, u32)>,
+    /// Layered shells: their maps (a cube-map array, nearest first) and
+    /// the shells (the stream pads them to [`MAX_SHELLS`]).
+    layers: Option<(Image, ShellSet)>,
     /// The directions each inner layer covers ([`coverage`]).
     cones: Vec<coverage::Cone>,
     /// Whether this frame reads the layers (hybrid frames with layers),
@@ -134,6 +134,11 @@ impl GlassPlayer {
         self.lens.object
     }
 
+    /// The lens (its mesh and BVH, built once with the player).
+    pub fn lens(&self) -> Arc<Lens> {
+        self.lens.clone()
+    }
+
     /// The lens's world-space bounds (the pass's render area).
     pub fn bounds(&self) -> (Vec3, Vec3) {
         self.bounds
@@ -173,7 +178,7 @@ impl GlassPlayer {
         self.ahead = next.and_then(|next| Ahead::start(self.lens.clone(), next));
         let layered = request.kind == GlassKind::Hybrid && self.layers.is_some();
         let shells = match (request.kind, &self.layers) {
-            (GlassKind::Hybrid, Some((_, set, _))) => set,
+            (GlassKind::Hybrid, Some((_, set))) => set,
             (GlassKind::Hybrid, None) => &self.room,
             (GlassKind::StaticEm, _) => &self.infinity,
         };
@@ -227,7 +232,9 @@ impl GlassPlayer {
     /// The pass drawing what [`GlassPlayer::prepare`] uploaded.
     pub fn pass<'a>(&'a self, target: Target<'a>, view_proj: Mat4) -> GlassPass<'a> {
         let source = match (&self.samples, self.blend, &self.layers, self.layered_frame) {
-            (_, _, Some((image, _, n)), Some(first)) => ShellSource::Layers(image, *n, first),
+            (_, _, Some((image, set)), Some(first)) => {
+                ShellSource::Layers(image, set.shells.len() as u32, first)
+            }
             (Some((image, _)), Some(blend), ..) => ShellSource::Samples(image, blend),
             _ => ShellSource::One(&self.cube.color),
         };
@@ -250,7 +257,7 @@ impl GlassPlayer {
             )));
         }
         self.geometry.set_layers(&image)?;
-        self.layers = Some((image, set.clone(), n as u32));
+        self.layers = Some((image, set.clone()));
         // An inner layer that covers nothing never needs its triangles.
         self.cones = cones.iter().take(n - 1).flatten().copied().collect();
         Ok(())
@@ -267,7 +274,9 @@ impl GlassPlayer {
 
     /// How many shell layers hybrid frames read (1: the room's box alone).
     pub fn layer_count(&self) -> u32 {
-        self.layers.as_ref().map_or(1, |l| l.2)
+        self.layers
+            .as_ref()
+            .map_or(1, |(_, set)| set.shells.len() as u32)
     }
 
     /// Plays hybrid frames from `image` (the per-sample maps at
