@@ -29,10 +29,9 @@ layout(location = 0) out vec4 out_color;
 const float PI = 3.14159265358979;
 
 void main() {
-    vec3 albedo = pc.albedo.rgb;
-    if (pc.albedo.a > 0.5) {
-        albedo *= texture(albedo_texture, in_uv).rgb;
-    }
+    // Untextured materials bind a white texel: no branch (llvmpipe would
+    // run both sides).
+    vec3 albedo = pc.albedo.rgb * texture(albedo_texture, in_uv).rgb;
     vec3 n = normalize(in_normal);
     vec3 to_light = light.position.xyz - in_position * light.position.w;
     float d2 = max(dot(to_light, to_light), 1e-6);

@@ -19,10 +19,9 @@ layout(set = 0, binding = 1) uniform sampler2D light_map;
 layout(location = 0) out vec4 out_color;
 
 void main() {
-    vec3 albedo = pc.albedo.rgb;
-    if (pc.albedo.a > 0.5) {
-        albedo *= texture(albedo_texture, in_uv).rgb;
-    }
+    // Untextured materials bind a white texel: no branch (llvmpipe would
+    // run both sides).
+    vec3 albedo = pc.albedo.rgb * texture(albedo_texture, in_uv).rgb;
     vec3 light = texture(light_map, in_light_uv).rgb;
     out_color = vec4(pc.emission.rgb + albedo * light, 1.0);
 }

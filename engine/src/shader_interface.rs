@@ -103,7 +103,7 @@ const fn attribute(
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct RoomPush {
     pub view_proj: Mat4,
-    /// rgb albedo; a = 1 when the texture modulates it.
+    /// rgb albedo, times the bound texture (a white texel when untextured).
     pub albedo: Vec4,
     pub emission: Vec4,
 }
