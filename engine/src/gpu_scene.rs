@@ -3,7 +3,7 @@
 //! per baked texture, and the trilinear sampler the room uses.
 
 use crate::backend::upload::upload_image;
-use crate::backend::{Buffer, Device, GpuResult, Image, ImageDesc, Sampler};
+use crate::backend::{Buffer, Device, Filtering, GpuResult, Image, ImageDesc, Sampler};
 use crate::graph::{Executor, Usage};
 use crate::shader_interface::Vertex;
 use ash::vk;
@@ -51,6 +51,10 @@ pub struct GpuScene {
     /// 1×1 white, bound where a material has no texture.
     pub white: Image,
     pub sampler: Sampler,
+    /// Light maps: repeat, the nearest MIP level only — one bilinear fetch
+    /// instead of trilinear's two, what keeps the inferred room as cheap as
+    /// the analytic one (the light maps are solved for it).
+    pub light_sampler: Sampler,
 }
 
 impl GpuScene {
@@ -79,6 +83,11 @@ impl GpuScene {
             textures,
             white,
             sampler: Sampler::trilinear(device, vk::SamplerAddressMode::REPEAT)?,
+            light_sampler: Sampler::new(
+                device,
+                vk::SamplerAddressMode::REPEAT,
+                Filtering::MipNearest,
+            )?,
         })
     }
 

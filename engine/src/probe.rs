@@ -4,7 +4,7 @@
 
 use crate::backend::upload::upload_image;
 use crate::backend::{
-    Binding, Buffer, Device, GpuError, GpuResult, Image, ImageDesc, Pipeline, Sampler,
+    Binding, Buffer, Device, Filtering, GpuError, GpuResult, Image, ImageDesc, Pipeline, Sampler,
 };
 use crate::gpu_scene::GpuMesh;
 use crate::graph::{Executor, Pass, Usage};
@@ -41,6 +41,8 @@ struct Uploaded {
 
 struct ProbeTexture {
     layout: TextureLayout,
+    /// Read from the nearest MIP level only (the set's sampler).
+    one_level: bool,
     image: Image,
     set: vk::DescriptorSet,
 }
@@ -52,6 +54,8 @@ pub struct VulkanProbe {
     mirror: Pipeline,
     lut: Image,
     repeat: Sampler,
+    /// The light maps' sampler: repeat, nearest MIP level.
+    repeat_one_level: Sampler,
     clamp: Sampler,
     targets: Option<Targets>,
     uploaded: Option<Uploaded>,
@@ -74,6 +78,11 @@ impl VulkanProbe {
             executor,
             // The playback samplers: repeat for 2D textures, clamp for cubes.
             repeat: Sampler::trilinear(device, vk::SamplerAddressMode::REPEAT)?,
+            repeat_one_level: Sampler::new(
+                device,
+                vk::SamplerAddressMode::REPEAT,
+                Filtering::MipNearest,
+            )?,
             clamp: Sampler::trilinear(device, vk::SamplerAddressMode::CLAMP_TO_EDGE)?,
             targets: None,
             uploaded: None,
@@ -133,9 +142,9 @@ impl VulkanProbe {
             return Ok(());
         }
         let n = geometry.positions.len();
-        let uvs = match &geometry.lookup {
-            Lookup::Uv(uvs) => uvs.clone(),
-            Lookup::Cube { .. } => vec![glam::Vec2::ZERO; n],
+        let uvs = match geometry.lookup.uvs() {
+            Some(uvs) => uvs.to_vec(),
+            None => vec![glam::Vec2::ZERO; n],
         };
         let mesh = Mesh {
             positions: geometry.positions.clone(),
@@ -154,7 +163,7 @@ impl VulkanProbe {
                     &data,
                 )?)
             }
-            Lookup::Uv(_) => None,
+            Lookup::Uv(_) | Lookup::UvNearestLevel(_) => None,
         };
         self.uploaded = Some(Uploaded {
             key: geometry.key,
@@ -167,10 +176,16 @@ impl VulkanProbe {
     fn upload_texture(
         &mut self,
         layout: &TextureLayout,
-        cube: bool,
+        lookup: &Lookup,
         texels: &[[f32; 4]],
     ) -> GpuResult<()> {
-        if self.texture.as_ref().is_none_or(|t| t.layout != *layout) {
+        let cube = matches!(lookup, Lookup::Cube { .. });
+        let one_level = matches!(lookup, Lookup::UvNearestLevel(_));
+        if self
+            .texture
+            .as_ref()
+            .is_none_or(|t| t.layout != *layout || t.one_level != one_level)
+        {
             if let Some(old) = self.texture.take() {
                 self.executor.states.forget(&old.image);
             }
@@ -196,7 +211,12 @@ impl VulkanProbe {
                 ];
                 (&self.mirror, &mut self.sets[0], b)
             } else {
-                let b = vec![Binding::Image(image.view, self.repeat.raw)];
+                let sampler = if one_level {
+                    &self.repeat_one_level
+                } else {
+                    &self.repeat
+                };
+                let b = vec![Binding::Image(image.view, sampler.raw)];
                 (&self.bare, &mut self.sets[1], b)
             };
             let set = match *slot {
@@ -209,6 +229,7 @@ impl VulkanProbe {
             };
             self.texture = Some(ProbeTexture {
                 layout: layout.clone(),
+                one_level,
                 image,
                 set,
             });
@@ -236,7 +257,7 @@ impl VulkanProbe {
         let cube = probe_is_cube(geometry, layout, texels)?;
         self.ensure_targets(geometry.width, geometry.height)?;
         self.ensure_mesh(geometry)?;
-        self.upload_texture(layout, cube, texels)?;
+        self.upload_texture(layout, &geometry.lookup, texels)?;
         let (Some(targets), Some(uploaded), Some(texture)) =
             (&self.targets, &self.uploaded, &self.texture)
         else {
@@ -245,7 +266,7 @@ impl VulkanProbe {
         let view_proj: Mat4 = geometry.view_proj;
         let lod_bias = match geometry.lookup {
             Lookup::Cube { lod_bias, .. } => lod_bias,
-            Lookup::Uv(_) => 0.0,
+            Lookup::Uv(_) | Lookup::UvNearestLevel(_) => 0.0,
         };
         let push_bare = move |p: &Pipeline, cmd| {
             p.bind(

@@ -163,6 +163,47 @@ fn texture_matrix_matches_renders() {
     assert_no_validation_messages();
 }
 
+/// The light maps' lookup (the room pass reads the nearest MIP level): its
+/// matrix predicts renders as exactly as trilinear's, and every pixel reads
+/// one level where trilinear blends two for some.
+#[test]
+fn nearest_level_matrix_reads_one_level_per_pixel() {
+    let device = validated_device();
+    let trilinear = floor_view();
+    let Some(uvs) = trilinear.lookup.uvs() else {
+        panic!("the floor view has 2D lookups");
+    };
+    let one_level = ProbeGeometry {
+        key: trilinear.key + 1,
+        lookup: Lookup::UvNearestLevel(uvs.to_vec()),
+        ..trilinear.clone()
+    };
+    let shape = TextureShape::Tex2D {
+        width: 16,
+        height: 16,
+    };
+    let layout = TextureLayout::full_chain(shape);
+    let mut probe = VulkanProbe::new(&device).expect("probe renderer");
+    // Rows whose weights lie on more than one level.
+    let mut two_level_rows = |geometry: &ProbeGeometry| {
+        let m = build_matrix(&mut probe, geometry, &layout, shape, &mut |_, _| {}).expect("A");
+        let report = verify_matrix(&mut probe, geometry, &layout, &m, 11).expect("verify");
+        assert!(report.psnr_db >= 140.0, "{report:?}");
+        assert!(m.pixels.len() > 500, "{} rows", m.pixels.len());
+        (0..m.pixels.len())
+            .filter(|&r| {
+                let cols = &m.a.col_idx[m.a.row_ptr[r]..m.a.row_ptr[r + 1]];
+                let level = |c: &u32| layout.coords(*c as usize).1;
+                cols.iter().any(|c| level(c) != level(&cols[0]))
+            })
+            .count()
+    };
+    let blended = two_level_rows(&trilinear);
+    assert!(blended > 100, "trilinear blends levels in {blended} rows");
+    assert_eq!(two_level_rows(&one_level), 0);
+    assert_no_validation_messages();
+}
+
 /// The compact schedule (texels 2 apart, every second level) and the
 /// thesis's (6 apart, every third) measure the same matrix, bit for bit,
 /// in 25 renders instead of 325, with the shipped level-of-detail bias and

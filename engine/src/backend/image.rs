@@ -296,6 +296,8 @@ pub enum Filtering {
     Bilinear,
     /// Nearest texel of the finest level.
     Nearest,
+    /// Linear within the nearest MIP level (one bilinear fetch per read).
+    MipNearest,
 }
 
 impl Filtering {
@@ -310,6 +312,7 @@ impl Filtering {
             Filtering::Trilinear => "trilinear",
             Filtering::Bilinear => "bilinear",
             Filtering::Nearest => "nearest",
+            Filtering::MipNearest => "mip-nearest",
         }
     }
 }
@@ -325,14 +328,20 @@ impl Sampler {
         filtering: Filtering,
     ) -> GpuResult<Self> {
         let (filter, max_lod) = match filtering {
-            Filtering::Trilinear => (vk::Filter::LINEAR, vk::LOD_CLAMP_NONE),
+            Filtering::Trilinear | Filtering::MipNearest => {
+                (vk::Filter::LINEAR, vk::LOD_CLAMP_NONE)
+            }
             Filtering::Bilinear => (vk::Filter::LINEAR, 0.0),
             Filtering::Nearest => (vk::Filter::NEAREST, 0.0),
+        };
+        let mipmap_mode = match filtering {
+            Filtering::MipNearest => vk::SamplerMipmapMode::NEAREST,
+            _ => vk::SamplerMipmapMode::LINEAR,
         };
         let info = vk::SamplerCreateInfo::default()
             .mag_filter(filter)
             .min_filter(filter)
-            .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+            .mipmap_mode(mipmap_mode)
             .address_mode_u(address)
             .address_mode_v(address)
             .address_mode_w(address)

@@ -48,8 +48,8 @@ pub enum RoomStyle {
     Inferred,
 }
 
-/// What a room draw of `o` pushes under `style`: albedo (a = textured),
-/// emission and the texture; None for objects other passes draw.
+/// What a room draw of `o` pushes under `style`: albedo, emission and the
+/// texture (white when none); None for objects other passes draw.
 fn material_of(
     style: RoomStyle,
     scene: &Scene,
@@ -59,8 +59,7 @@ fn material_of(
     match (style, scene.materials.get(o.material)) {
         (RoomStyle::Bare, _) => Some((Vec4::ONE, Vec4::ZERO, first_texture)),
         (_, Some(Material::Diffuse { albedo, texture })) => {
-            let textured = if texture.is_some() { 1.0 } else { 0.0 };
-            Some((albedo.extend(textured), Vec4::ZERO, *texture))
+            Some((albedo.extend(1.0), Vec4::ZERO, *texture))
         }
         (_, Some(Material::Emissive { radiance })) => {
             Some((Vec4::ZERO, radiance.extend(0.0), None))
@@ -167,7 +166,7 @@ impl RoomRenderer {
                 .map_or(&gpu.white, |(_, image)| image);
             let set = pipeline.descriptor_set(&[
                 Binding::Image(gpu.texture(texture).view, gpu.sampler.raw),
-                Binding::Image(light_map.view, gpu.sampler.raw),
+                Binding::Image(light_map.view, gpu.light_sampler.raw),
             ])?;
             let light_uv = match uvs_of.remove(&object) {
                 Some(uvs) => uvs,

@@ -19,10 +19,23 @@ use glam::{Mat4, Vec2, Vec3};
 pub enum Lookup {
     /// 2D texture coordinates (repeat wrap), as a diffuse texture or PTM.
     Uv(Vec<Vec2>),
+    /// 2D texture coordinates read from the nearest MIP level only (one
+    /// bilinear fetch instead of trilinear's two), as the room's light maps.
+    UvNearestLevel(Vec<Vec2>),
     /// Cube-map lookup vectors from CPU texgen (need not be unit length),
     /// read with `lod_bias` added to the level of detail (the reflector's
     /// [`crate::scene::EmSettings::lod_bias`]).
     Cube { dirs: Vec<Vec3>, lod_bias: f32 },
+}
+
+impl Lookup {
+    /// The texture coordinates of a 2D lookup (`None` for a cube).
+    pub fn uvs(&self) -> Option<&[Vec2]> {
+        match self {
+            Lookup::Uv(uvs) | Lookup::UvNearestLevel(uvs) => Some(uvs),
+            Lookup::Cube { .. } => None,
+        }
+    }
 }
 
 /// One object seen from one view: what a probe render draws.

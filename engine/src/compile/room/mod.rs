@@ -26,8 +26,9 @@ use std::hash::Hasher;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// Bumped when the light maps change for the same inputs.
-const ROOM_MAPS_VERSION: u64 = 1;
+/// Bumped when the light maps change for the same inputs (2: solved for
+/// the room pass's nearest-MIP-level reads).
+const ROOM_MAPS_VERSION: u64 = 2;
 /// One surveyed ray per this many pixels in x and in y.
 const SURVEY_STRIDE: u32 = 4;
 

@@ -111,18 +111,20 @@ impl<'a> Solver<'a> {
             camera::projection(scene, width, height) * scene.orbit.view(view.eye(&scene.orbit));
         // One key per mesh and lookup (the probe keeps the uploaded mesh).
         let key = 2 * object as u64 + 1;
-        let geometry = |key: u64, uvs: &[Vec2]| ProbeGeometry {
+        let geometry = |key: u64, lookup: Lookup| ProbeGeometry {
             key,
             positions: o.mesh.positions.clone(),
             indices: o.mesh.indices.clone(),
-            lookup: Lookup::Uv(uvs.to_vec()),
+            lookup,
             view_proj,
             width,
             height,
         };
-        let sampled =
-            self.probe
-                .render(&geometry(key, &o.mesh.uvs), &albedo_layout, &albedo_texels)?;
+        let sampled = self.probe.render(
+            &geometry(key, Lookup::Uv(o.mesh.uvs.clone())),
+            &albedo_layout,
+            &albedo_texels,
+        )?;
         let factor = sampled
             .iter()
             .map(|s| [s[0] * albedo.x, s[1] * albedo.y, s[2] * albedo.z, 1.0])
@@ -140,7 +142,8 @@ impl<'a> Solver<'a> {
             .collect();
         Ok(ViewData {
             name,
-            geometry: geometry(key + 1, light_uvs),
+            // The room pass reads light maps from the nearest MIP level.
+            geometry: geometry(key + 1, Lookup::UvNearestLevel(light_uvs.to_vec())),
             target,
             factor,
             usable,
