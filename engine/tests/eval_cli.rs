@@ -47,7 +47,8 @@ fn run_eval(scene: &Path, data: &Path) -> String {
     log
 }
 
-/// Views above the plane at each default elevation, each scored.
+/// Views above the plane at each default elevation, each scored over the
+/// reflector and over the whole frame (the first as `*_above`).
 fn assert_views_above(rows: &[serde_json::Value]) {
     for r in rows {
         let above = r["above"].as_array().expect("above");
@@ -65,6 +66,19 @@ fn assert_views_above(rows: &[serde_json::Value]) {
         assert_eq!(
             num(r, "psnr_above_db"),
             above[0]["psnr_db"].as_f64().unwrap_or(f64::NAN)
+        );
+        let frame: Vec<f64> = above
+            .iter()
+            .filter_map(|a| a["psnr_frame_db"].as_f64())
+            .collect();
+        assert_eq!(frame.len(), 3, "{r}");
+        assert!(frame.iter().all(|f| f.is_finite() && *f > 10.0), "{r}");
+        assert_eq!(num(r, "psnr_frame_above_db"), frame[0], "{r}");
+        assert!(
+            above.iter().all(|a| a["flip_frame"]
+                .as_f64()
+                .is_some_and(|f| (0.0..=1.0).contains(&f))),
+            "{r}"
         );
     }
 }

@@ -445,6 +445,8 @@ fn table_row(row: &Row, results: &[ViewResult], views: u32) -> EvalRow {
             elevation_deg: e,
             psnr_db: at(e, |r| r.psnr_db),
             flip: at(e, |r| r.flip),
+            psnr_frame_db: Some(at(e, |r| r.frame.psnr_db)),
+            flip_frame: Some(at(e, |r| r.frame.flip)),
         })
         .collect();
     let first = |f: fn(&AboveScore) -> f64| above.first().map_or(f64::NAN, f);

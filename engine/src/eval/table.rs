@@ -88,12 +88,17 @@ pub struct EvalRow {
     pub above: Vec<AboveScore>,
 }
 
-/// One elevation's views above the plane: mean PSNR and FLIP.
+/// One elevation's views above the plane: mean PSNR and FLIP over the
+/// reflector, and over the whole frame as the PNG shows it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct AboveScore {
     pub elevation_deg: f32,
     pub psnr_db: f64,
     pub flip: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub psnr_frame_db: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flip_frame: Option<f64>,
 }
 
 /// Views behind each kind of score.
@@ -198,10 +203,10 @@ impl EvalTable {
         let elevations: Vec<f32> = first.above.iter().map(|a| a.elevation_deg).collect();
         let mut out = String::from("\n| label |");
         for e in &elevations {
-            let _ = write!(out, " PSNR +{e}° (dB) | FLIP +{e}° |");
+            let _ = write!(out, " PSNR +{e}° (dB) | FLIP +{e}° | frame +{e}° (dB) |");
         }
         out += "\n|---|";
-        out += &"--:|--:|".repeat(elevations.len());
+        out += &"--:|--:|--:|".repeat(elevations.len());
         out += "\n";
         for row in &self.rows {
             let label = row
@@ -213,9 +218,11 @@ impl EvalTable {
             for e in &elevations {
                 match row.above.iter().find(|a| a.elevation_deg == *e) {
                     Some(a) => {
-                        let _ = write!(out, " {} | {:.4} |", psnr_cell(a.psnr_db), a.flip);
+                        let frame = a.psnr_frame_db.map_or("—".to_owned(), psnr_cell);
+                        let _ =
+                            write!(out, " {} | {:.4} | {frame} |", psnr_cell(a.psnr_db), a.flip);
                     }
-                    None => out += " — | — |",
+                    None => out += " — | — | — |",
                 }
             }
             out += "\n";
