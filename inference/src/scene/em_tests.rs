@@ -97,6 +97,18 @@ fn the_local_bound_is_off_unless_asked_and_checked() {
 }
 
 #[test]
+fn display_weights_are_off_unless_asked_and_typed() {
+    let on = |s: &Scene| s.object("teapot").expect("teapot").display_weight();
+    let s = Scene::load("teapot").expect("the built-in teapot scene loads");
+    assert!(!on(&s), "the shipped teapot fits linear radiance");
+    let line = setting_line("neighbour_weight =");
+    let with = |v: &str| load_edited(&line, &format!("{line}display_weight = {v}\n"));
+    assert!(on(&with("true").expect("loads")));
+    let e = with("1.0").err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(e.contains("display_weight"), "{e}");
+}
+
+#[test]
 fn the_neighbour_offset_is_off_unless_asked_and_checked() {
     let deg = |s: &Scene| s.object("teapot").expect("teapot").neighbour_deg();
     let s = Scene::load("teapot").expect("the built-in teapot scene loads");

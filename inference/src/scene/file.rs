@@ -199,6 +199,8 @@ pub struct EmFile {
     pub neighbour_weight: f32,
     #[serde(default)]
     pub local_bound: f32,
+    #[serde(default)]
+    pub display_weight: bool,
     pub neighbour_deg: Option<f32>,
     #[serde(default)]
     pub neighbour_above_deg: Vec<f32>,

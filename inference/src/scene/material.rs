@@ -44,6 +44,11 @@ pub struct EmSettings {
     /// outside it, which plays as speckle (README, "Where the whole
     /// frame's remaining error is").
     pub local_bound: f32,
+    /// Weight each pixel's rows by the slope of the display transform at
+    /// the traced pixel (sRGB, clamped to [0, 1]): the solve then fits
+    /// the errors a person sees in the PNG, not linear radiance, where a
+    /// dark rim next to a bright highlight weighs almost nothing.
+    pub display_weight: bool,
     /// With stacking on, the stacked views lie this many degrees either
     /// side of each sample on its ring, traced for the purpose, instead of
     /// at the neighbouring samples. A placed orbit's neighbours lie 1–25°
@@ -101,6 +106,7 @@ impl Default for EmSettings {
             lod_bias: 0.0,
             neighbour_weight: 0.0,
             local_bound: 0.0,
+            display_weight: false,
             neighbour_deg: None,
             neighbour_above_deg: Vec::new(),
             neighbour_above_spacing_deg: None,

@@ -89,6 +89,12 @@ impl Object {
         self.em.as_ref().map_or(0.0, |em| em.local_bound)
     }
 
+    /// Whether the object's solves weight rows as the display shows their
+    /// errors (`[objects.em] display_weight`; off without EMs).
+    pub fn display_weight(&self) -> bool {
+        self.em.as_ref().is_some_and(|em| em.display_weight)
+    }
+
     /// The weight of neighbouring samples' views in the object's EM solves
     /// (`[objects.em] neighbour_weight`; 0 without EMs).
     pub fn neighbour_weight(&self) -> f32 {

@@ -211,6 +211,11 @@ pub fn map_key(trace: &Key, job: &Job, options: &SolveOptions, size: (u32, u32))
         h.str("bounds");
         h.f32(options.eps_bound);
     }
+    // Added with display weights: maps fitted in linear radiance keep
+    // their keys.
+    if job.object.display_weight() {
+        h.str("display weights");
+    }
     // Added with the LOD bias: maps read without one keep their keys.
     if job.geometry.is_some() && job.object.lod_bias() != 0.0 {
         h.f32(job.object.lod_bias());

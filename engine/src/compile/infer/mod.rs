@@ -11,6 +11,7 @@
 mod baselines;
 mod budget;
 mod diffuse;
+mod display_weights;
 mod jobs;
 mod pictures;
 mod report;
@@ -388,6 +389,19 @@ mod tests {
         assert_eq!(changed, 1, "{free:?} vs {bounded:?}");
         let other = stacking_keys("samples = 3", 1, "local_bound = 1.0");
         assert_ne!(bounded, other, "the weight is keyed");
+    }
+
+    #[test]
+    fn display_weights_key_every_map_they_weight() {
+        let linear = stacking_keys("samples = 3", 1, "");
+        let display = stacking_keys("samples = 3", 1, "display_weight = true");
+        assert!(!linear.is_empty());
+        assert!(
+            linear.iter().zip(&display).all(|(l, d)| l != d),
+            "{linear:?} vs {display:?}"
+        );
+        let off = stacking_keys("samples = 3", 1, "display_weight = false");
+        assert_eq!(linear, off, "off keeps the keys maps had before");
     }
 
     #[test]

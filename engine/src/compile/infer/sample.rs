@@ -209,13 +209,14 @@ impl<'a> SampleRun<'a> {
         };
         let neighbours = self.neighbour_views(job, &key, around)?;
         let stacked = stacked_views(job, &neighbours, target);
+        let own_weights = view_weights(job, &own.layers, pixel_count)?;
         let views = Views {
             own: View {
                 id: view_id(job, eye_tag(eye)),
                 geometry: &geometry,
                 target,
                 weight: 1.0,
-                pixel_weights: None,
+                pixel_weights: own_weights.as_deref(),
             },
             neighbours: &stacked,
             cache: &mut self.matrices,
@@ -293,6 +294,11 @@ impl<'a> SampleRun<'a> {
                         &a.trace.layers,
                         width as usize * height as usize,
                     )?,
+                    pixel_weights: view_weights(
+                        job,
+                        &a.trace.layers,
+                        width as usize * height as usize,
+                    )?,
                 })
             })
             .collect()
@@ -364,6 +370,8 @@ struct NeighbourView {
     weight: f32,
     geometry: ProbeGeometry,
     pixels: Vec<[f32; 4]>,
+    /// Per pixel, with `[objects.em] display_weight`.
+    pixel_weights: Option<Vec<f32>>,
 }
 
 /// The neighbours' views of `job` as the solve stacks them: each with the
@@ -383,9 +391,23 @@ fn stacked_views<'a>(
                 ..target
             },
             weight: n.weight,
-            pixel_weights: None,
+            pixel_weights: n.pixel_weights.as_deref(),
         })
         .collect()
+}
+
+/// The display weights of a view's rows (`[objects.em] display_weight`):
+/// from the object's traced appearance there; None when off.
+fn view_weights(
+    job: &Job,
+    layers: &[output::ExrLayer],
+    pixel_count: usize,
+) -> Result<Option<Vec<f32>>> {
+    if !job.object.display_weight() {
+        return Ok(None);
+    }
+    let composite = composite_pixels(layers, &job.object.name, pixel_count)?;
+    Ok(Some(super::display_weights::display_weights(&composite)))
 }
 
 /// The cache id of `job`'s rendering matrix at view `tag`: within one run

@@ -174,6 +174,7 @@ impl Loader<'_> {
             lod_bias: em.lod_bias,
             neighbour_weight: em.neighbour_weight,
             local_bound: em.local_bound,
+            display_weight: em.display_weight,
             neighbour_deg: em.neighbour_deg,
             neighbour_above_deg: em.neighbour_above_deg.clone(),
             neighbour_above_spacing_deg: em.neighbour_above_spacing_deg,
