@@ -16,7 +16,7 @@
 
 use crate::options::{PemOptions, RunPlace};
 use crate::pem::player::{Compositing, PemKind, PemSettings};
-use crate::perf::{PerfLog, PerfReport};
+use crate::perf::{PassReport, PerfLog, PerfReport};
 use crate::play::{Session, compile_context};
 use crate::renderer::{FrameMode, Renderer};
 use crate::util::stats::median;
@@ -95,6 +95,34 @@ pub struct BenchReport {
     /// The same at the last row's views (it moves along the samples).
     pub moving_covered_pixels: u64,
     pub rows: Vec<BenchRow>,
+    /// The inferred room pass against the analytic one, from the default
+    /// rows with each room (the whole-frame issue's cost goal).
+    pub room_pass: Option<RoomPass>,
+}
+
+/// One run's room passes, median GPU times.
+#[derive(Serialize, Debug, PartialEq)]
+pub struct RoomPass {
+    pub inferred_ms: f64,
+    pub analytic_ms: f64,
+    /// Inferred over analytic.
+    pub ratio: f64,
+}
+
+/// The `room` pass of the rows named `default` and `default, analytic
+/// room`, when both ran it.
+pub fn room_pass(rows: &[(&str, &[PassReport])]) -> Option<RoomPass> {
+    let room = |name: &str| {
+        let (_, passes) = rows.iter().find(|(n, _)| *n == name)?;
+        let p = passes.iter().find(|p| p.name == "room")?;
+        Some(p.gpu_ms_median)
+    };
+    let (inferred_ms, analytic_ms) = (room("default")?, room("default, analytic room")?);
+    (analytic_ms > 0.0).then(|| RoomPass {
+        inferred_ms,
+        analytic_ms,
+        ratio: inferred_ms / analytic_ms,
+    })
 }
 
 impl BenchReport {
@@ -125,6 +153,12 @@ impl BenchReport {
                 r.ratio_to_static_em,
                 r.compositing_invocations_per_pixel
                     .map_or("-".into(), |v| format!("{v:.2}"))
+            );
+        }
+        if let Some(r) = &self.room_pass {
+            out += &format!(
+                "room pass: inferred {:.2} ms, analytic {:.2} ms ({:.3}x the analytic)\n",
+                r.inferred_ms, r.analytic_ms, r.ratio
             );
         }
         out
@@ -174,12 +208,19 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
         .zip(&variants)
         .map(|(log, (name, _))| log.report(&device.name, &scene.name, name, [width, height], &[]))
         .collect();
+    let rows = rows(reports, covered, moving_covered);
+    let passes: Vec<(&str, &[PassReport])> = rows
+        .iter()
+        .map(|r| (r.name.as_str(), &r.report.passes[..]))
+        .collect();
+    let room_pass = room_pass(&passes);
     let report = BenchReport {
         views,
         frames_per_view: per_view,
         covered_pixels: covered as u64,
         moving_covered_pixels: moving_covered as u64,
-        rows: rows(reports, covered, moving_covered),
+        rows,
+        room_pass,
     };
     crate::util::files::write_json(&out.join("bench.json"), &report)?;
     Ok(report)
@@ -373,4 +414,50 @@ fn rows(reports: Vec<PerfReport>, covered: f64, moving_covered: f64) -> Vec<Benc
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pass(name: &str, ms: f64) -> PassReport {
+        PassReport {
+            name: name.into(),
+            gpu_ms_median: ms,
+            gpu_ms_max: ms,
+            fragment_invocations: 0,
+        }
+    }
+
+    #[test]
+    fn the_room_pass_compares_the_two_default_rows() {
+        let inferred = [pass("pem_gbuffer", 7.0), pass("room", 9.0)];
+        let analytic = [pass("room", 10.0), pass("pem_composite", 9.0)];
+        let other = [pass("room", 1.0)];
+        let rows: Vec<(&str, &[PassReport])> = vec![
+            ("static-em", &other),
+            ("default, analytic room", &analytic),
+            ("default", &inferred),
+        ];
+        assert_eq!(
+            room_pass(&rows),
+            Some(RoomPass {
+                inferred_ms: 9.0,
+                analytic_ms: 10.0,
+                ratio: 0.9
+            })
+        );
+        // A missing row or pass, or a zero analytic time: nothing to compare.
+        assert_eq!(room_pass(&rows[..2]), None);
+        let no_room = [pass("bare", 3.0)];
+        assert_eq!(
+            room_pass(&[("default", &inferred), ("default, analytic room", &no_room)]),
+            None
+        );
+        let zero = [pass("room", 0.0)];
+        assert_eq!(
+            room_pass(&[("default", &inferred), ("default, analytic room", &zero)]),
+            None
+        );
+    }
 }

@@ -131,6 +131,15 @@ fn assert_bench_rows(scene: &Path, out: &Path) {
         rows.iter()
             .all(|r| r["frame_ms_median"].as_f64().is_some_and(|v| v > 0.0))
     );
+    // The two room passes, compared in the report and printed.
+    let room = &bench["room_pass"];
+    let (i, a, r) = (
+        room["inferred_ms"].as_f64().unwrap_or(-1.0),
+        room["analytic_ms"].as_f64().unwrap_or(-1.0),
+        room["ratio"].as_f64().unwrap_or(-1.0),
+    );
+    assert!(i > 0.0 && a > 0.0 && (r - i / a).abs() < 1e-9, "{room}");
+    assert!(text(&o).contains("room pass: inferred"), "{}", text(&o));
 }
 
 /// Every mode and knob plays cleanly (sphere PEMs are inferred on first
