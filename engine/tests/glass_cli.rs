@@ -108,9 +108,7 @@ fn glass_compiles_its_shell_once_and_plays_hybrid() {
     assert_eq!(names, ["room", "glass", "readback"]);
 
     // Cached: nothing traced again; the baseline plays from the same map.
-    let second = run(&scene, &out, &["--mode", "static-em", "--tau", "10"]);
-    let stderr = String::from_utf8_lossy(&second.stderr);
-    assert!(second.status.success(), "stderr:\n{stderr}");
+    let stderr = run_clean(&scene, &out, &["--mode", "static-em", "--tau", "10"]);
     assert!(!stderr.contains("traced the room shell map"), "{stderr}");
     assert!(!stderr.contains("per-sample"), "{stderr}");
 
@@ -118,9 +116,7 @@ fn glass_compiles_its_shell_once_and_plays_hybrid() {
     // map, played as solved (`--maps exr`), is solved again (that one
     // only); the traced shell alone plays without them.
     std::fs::write(out.join("glass/room_shells.ptxc"), b"not a container").expect("damage");
-    let third = run(&scene, &out, &[]);
-    let stderr = String::from_utf8_lossy(&third.stderr);
-    assert!(third.status.success(), "stderr:\n{stderr}");
+    let stderr = run_clean(&scene, &out, &[]);
     assert!(
         stderr.contains("compressed 3 per-sample shell maps"),
         "{stderr}"
@@ -128,9 +124,7 @@ fn glass_compiles_its_shell_once_and_plays_hybrid() {
     assert!(!stderr.contains("solved"), "{stderr}");
     let damaged = out.join("glass/room_shell_line0050.bin");
     std::fs::write(&damaged, b"not a map").expect("damage a map");
-    let raw = run(&scene, &out, &["--maps", "exr"]);
-    let stderr = String::from_utf8_lossy(&raw.stderr);
-    assert!(raw.status.success(), "stderr:\n{stderr}");
+    let stderr = run_clean(&scene, &out, &["--maps", "exr"]);
     assert!(
         stderr.contains("solved 1 per-sample shell maps"),
         "{stderr}"
@@ -214,16 +208,12 @@ fn a_near_object_plays_as_a_layer_traced_once() {
 
     // Cached: nothing placed or traced again. A damaged layer is traced again (that
     // one only); the one room shell plays without the layers.
-    let second = run(&scene, &out, &[]);
-    let stderr = String::from_utf8_lossy(&second.stderr);
-    assert!(second.status.success(), "stderr:\n{stderr}");
+    let stderr = run_clean(&scene, &out, &[]);
     assert!(!stderr.contains("traced shell layer"), "{stderr}");
     assert!(!stderr.contains("traced the room"), "{stderr}");
     assert!(!stderr.contains("placed in"), "{stderr}");
     std::fs::write(out.join("glass/layer_1.bin"), b"not a map").expect("damage");
-    let third = run(&scene, &out, &[]);
-    let stderr = String::from_utf8_lossy(&third.stderr);
-    assert!(third.status.success(), "stderr:\n{stderr}");
+    let stderr = run_clean(&scene, &out, &[]);
     assert!(stderr.contains("traced shell layer 2 of 2"), "{stderr}");
     assert!(!stderr.contains("traced shell layer 1 of 2"), "{stderr}");
     let one = run(&scene, &out, &["--traced-shell"]);
@@ -234,9 +224,7 @@ fn a_near_object_plays_as_a_layer_traced_once() {
     let text = std::fs::read_to_string(&scene).expect("scene") + "shell_every = 50\n";
     let per_sample = dir.path().join("per_sample_near.toml");
     std::fs::write(&per_sample, text).expect("write scene");
-    let o = run(per_sample.to_str().expect("utf-8"), &out, &[]);
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "stderr:\n{stderr}");
+    let stderr = run_clean(per_sample.to_str().expect("utf-8"), &out, &[]);
     assert!(
         stderr.contains("per-sample maps are solved for one shell"),
         "{stderr}"
