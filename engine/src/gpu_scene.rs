@@ -1,6 +1,7 @@
 //! The scene's meshes and textures on the device: one vertex and index
 //! buffer per object, one RGBA16F image with a CPU box-filtered MIP chain
-//! per baked texture, and the trilinear sampler the room uses.
+//! per baked texture, the trilinear sampler the room uses and the
+//! nearest-MIP-level one its light maps use.
 
 use crate::backend::upload::upload_image;
 use crate::backend::{Buffer, Device, Filtering, GpuResult, Image, ImageDesc, Sampler};

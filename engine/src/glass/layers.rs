@@ -112,11 +112,9 @@ pub fn layer_maps(
             let what = format!("shell layer {} of {n}", i + 1);
             cached_map(&layer_path(out, i), &key, size, &what, || {
                 // One tracer (and photon map) for every layer traced.
-                if tracer.is_none() {
-                    tracer = Some(Tracer::new(scene)?);
-                }
-                let Some(tracer) = tracer.as_ref() else {
-                    anyhow::bail!("internal: no tracer for {what}");
+                let tracer = match &mut tracer {
+                    Some(t) => t,
+                    slot @ None => slot.insert(Tracer::new(scene)?),
                 };
                 let (hidden, own) = layer_objects(set, lens, i);
                 let layer = LayerObjects {

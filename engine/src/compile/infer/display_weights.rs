@@ -5,6 +5,11 @@
 //! squares fit display-referred errors. Linear rows let a dark rim beside a
 //! bright highlight weigh 30× less than the eye sees it.
 
+use super::Job;
+use super::targets::composite_pixels;
+use anyhow::Result;
+use inference::trace::output;
+
 /// Below this the slope is capped: darker pixels are mostly the traces'
 /// noise, and the cap keeps any pixel within ~15× of a white one.
 const FLOOR: f32 = 0.01;
@@ -25,20 +30,36 @@ pub fn display_weights(composite: &[[f32; 4]]) -> Vec<f32> {
         y.powf(1.0 / 2.4 - 1.0)
     };
     let weights: Vec<f32> = composite.iter().map(|p| slope(luminance(p))).collect();
-    let shown: Vec<f32> = composite
+    // Every slope is finite and > 0, so the mean is whenever a pixel shows.
+    let (sum, shown) = composite
         .iter()
         .zip(&weights)
         .filter(|(p, _)| luminance(p) > 0.0)
-        .map(|(_, &w)| w)
-        .collect();
-    let mean = shown.iter().map(|&w| f64::from(w)).sum::<f64>() / shown.len().max(1) as f64;
-    if shown.is_empty() || mean.is_nan() || mean <= 0.0 {
+        .fold((0.0f64, 0usize), |(s, n), (_, &w)| {
+            (s + f64::from(w), n + 1)
+        });
+    if shown == 0 {
         return vec![1.0; composite.len()];
     }
+    let mean = sum / shown as f64;
     weights
         .iter()
         .map(|&w| (f64::from(w) / mean) as f32)
         .collect()
+}
+
+/// The display weights of a view's rows for `job` (None when its object
+/// does not ask for them), from the object's traced appearance there.
+pub fn view_weights(
+    job: &Job,
+    layers: &[output::ExrLayer],
+    pixel_count: usize,
+) -> Result<Option<Vec<f32>>> {
+    if !job.object.display_weight() {
+        return Ok(None);
+    }
+    let composite = composite_pixels(layers, &job.object.name, pixel_count)?;
+    Ok(Some(display_weights(&composite)))
 }
 
 #[cfg(test)]

@@ -2,6 +2,7 @@
 //! written with its key record, the sample's report merged after each.
 
 use super::baselines::{StaticEm, static_em_psnr, static_ems};
+use super::display_weights::view_weights;
 use super::jobs::{Stack, StackedView, stacked_views_of};
 use super::pictures::{write_comparison, write_map_picture};
 use super::report::{LayerReport, SampleReport, finite_or_max};
@@ -278,6 +279,7 @@ impl<'a> SampleRun<'a> {
             return Ok(Vec::new());
         }
         let (width, height) = self.req.size;
+        let pixel_count = width as usize * height as usize;
         around
             .iter()
             .map(|a| {
@@ -289,16 +291,8 @@ impl<'a> SampleRun<'a> {
                         job.neighbour_weight()
                     },
                     geometry: self.probe_geometry(a.tag, a.trace.eye, job, key),
-                    pixels: job_target_pixels(
-                        job,
-                        &a.trace.layers,
-                        width as usize * height as usize,
-                    )?,
-                    pixel_weights: view_weights(
-                        job,
-                        &a.trace.layers,
-                        width as usize * height as usize,
-                    )?,
+                    pixels: job_target_pixels(job, &a.trace.layers, pixel_count)?,
+                    pixel_weights: view_weights(job, &a.trace.layers, pixel_count)?,
                 })
             })
             .collect()
@@ -394,20 +388,6 @@ fn stacked_views<'a>(
             pixel_weights: n.pixel_weights.as_deref(),
         })
         .collect()
-}
-
-/// The display weights of a view's rows (`[objects.em] display_weight`):
-/// from the object's traced appearance there; None when off.
-fn view_weights(
-    job: &Job,
-    layers: &[output::ExrLayer],
-    pixel_count: usize,
-) -> Result<Option<Vec<f32>>> {
-    if !job.object.display_weight() {
-        return Ok(None);
-    }
-    let composite = composite_pixels(layers, &job.object.name, pixel_count)?;
-    Ok(Some(super::display_weights::display_weights(&composite)))
 }
 
 /// The cache id of `job`'s rendering matrix at view `tag`: within one run
