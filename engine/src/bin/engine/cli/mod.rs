@@ -9,11 +9,13 @@ use engine::options::{
 use engine::pem::settings::Compositing;
 use std::path::PathBuf;
 
+mod bench;
 mod codec;
 mod compile;
 mod export;
 mod place;
 mod relight;
+pub use bench::BenchArgs;
 pub use codec::{CodecReportArgs, EncodeArgs};
 pub use compile::CompileArgs;
 pub use export::ExportArgs;
@@ -40,7 +42,7 @@ pub enum Command {
     /// Measure the bare, static-EM and layered-PEM frames, the PEM built up
     /// pass by pass, at the same views between samples, interleaved in one
     /// run (--frames = frames per view); writes bench.json.
-    Bench(PlayArgs),
+    Bench(BenchArgs),
     /// Infer each reflector's layered environment maps for orbit samples by
     /// least squares against the traced layers (tracing them if missing),
     /// beside the forward-mapping baseline; writes maps and report.json.

@@ -1,12 +1,12 @@
 //! `engine bench`: every method's frame at the same views, interleaved.
 
-use crate::cli::PlayArgs;
+use crate::cli::BenchArgs;
 use anyhow::Result;
 use engine::bench::{BenchOptions, bench};
 
-pub fn run(args: &PlayArgs) -> Result<String> {
+pub fn run(args: &BenchArgs) -> Result<String> {
     let opts = BenchOptions {
-        frames_per_view: args.frames.unwrap_or(25),
+        frames_per_view: args.frames,
         warmup: args.warmup,
         pem: args.pem.options(),
     };

@@ -1,0 +1,56 @@
+//! `engine bench`'s command line.
+
+use super::{PemArgs, device, parse_size};
+use clap::Args;
+use engine::options::RunPlace;
+use std::path::PathBuf;
+
+/// `engine bench`: only what the bench reads (the variants it measures are
+/// its own, so the main job's mode, capture and light-path flags are not
+/// offered here to be silently ignored).
+#[derive(Args, Debug, Clone)]
+pub struct BenchArgs {
+    /// A built-in scene's name (teapot) or the path of a .toml scene file.
+    #[arg(long, default_value = "teapot")]
+    pub scene: String,
+    /// Timed frames per view and variant (8 views).
+    #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..))]
+    pub frames: u32,
+    /// Frame size as WIDTHxHEIGHT.
+    #[arg(long, default_value = "640x480", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Output folder for bench.json and the compiled maps [default:
+    /// out/<scene>]; the engine writes only into folders it made or that
+    /// were empty.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub pem: PemArgs,
+    /// Turn the Khronos validation layer on; the run ends with
+    /// `validation messages: N` and fails when N > 0.
+    #[arg(long)]
+    pub validate: bool,
+    /// Vulkan device to use (substring of its name) [default: lavapipe].
+    #[arg(long, env = "ENGINE_DEVICE")]
+    pub device: Option<String>,
+    /// Untimed frames first per view and variant (lavapipe compiles
+    /// shaders at the first draw).
+    #[arg(long, default_value_t = 3)]
+    pub warmup: u32,
+    /// Ignore the compiled scene shipped in assets/compiled/ and run the
+    /// full pipeline (trace, infer, room light maps, encode) under --out.
+    #[arg(long)]
+    pub recompile: bool,
+}
+
+impl BenchArgs {
+    pub fn place(&self) -> RunPlace {
+        RunPlace {
+            scene: self.scene.clone(),
+            out: self.out.clone(),
+            device: device(&self.device, self.validate),
+            size: self.size,
+            recompile: self.recompile,
+        }
+    }
+}
