@@ -57,37 +57,54 @@ pub fn hull_triangles(mesh: &Mesh) -> Vec<bool> {
     hull_triangles_with_tolerance(mesh, RELATIVE_TOLERANCE)
 }
 
+/// As [`hull_triangles`], but a triangle is on the hull only if no vertex
+/// of `others` lies in front of it either: the reflectors that share the
+/// mesh's local layer (lid and body, `Scene::local_group`), which a ray
+/// leaving the triangle could hit.
+pub fn hull_triangles_among(mesh: &Mesh, others: &[&Mesh]) -> Vec<bool> {
+    hull_triangles_of(mesh, others, RELATIVE_TOLERANCE)
+}
+
 /// As [`hull_triangles`] with `relative_tolerance` × the bounding-box
 /// diagonal in place of [`RELATIVE_TOLERANCE`] (negative or NaN counts as
 /// 0; the f32 rounding term is always added).
 pub fn hull_triangles_with_tolerance(mesh: &Mesh, relative_tolerance: f64) -> Vec<bool> {
-    let n_triangles = mesh.triangle_count();
-    let n_positions = mesh.positions.len();
-    let corners = |t: usize| -> Option<[usize; 3]> {
-        let i = mesh.indices.get(3 * t..3 * t + 3)?;
-        let c = [i[0] as usize, i[1] as usize, i[2] as usize];
-        c.iter().all(|&k| k < n_positions).then_some(c)
-    };
-    // Every finite vertex a triangle uses, once.
-    let mut used = vec![false; n_positions];
-    for t in 0..n_triangles {
-        if let Some(c) = corners(t) {
+    hull_triangles_of(mesh, &[], relative_tolerance)
+}
+
+/// The corners of triangle `t` when its indices are in range.
+fn corners(mesh: &Mesh, t: usize) -> Option<[usize; 3]> {
+    let i = mesh.indices.get(3 * t..3 * t + 3)?;
+    let c = [i[0] as usize, i[1] as usize, i[2] as usize];
+    c.iter().all(|&k| k < mesh.positions.len()).then_some(c)
+}
+
+/// Every finite vertex a triangle of `mesh` uses, once, in f64.
+fn used_points(mesh: &Mesh) -> Vec<[f64; 3]> {
+    let mut used = vec![false; mesh.positions.len()];
+    for t in 0..mesh.triangle_count() {
+        if let Some(c) = corners(mesh, t) {
             c.iter().for_each(|&k| used[k] = true);
         }
     }
-    let points: Vec<[f64; 3]> = mesh
-        .positions
+    mesh.positions
         .iter()
         .zip(&used)
         .filter(|(p, u)| **u && p.is_finite())
         .map(|(p, _)| p.as_dvec3().to_array())
-        .collect();
+        .collect()
+}
+
+fn hull_triangles_of(mesh: &Mesh, others: &[&Mesh], relative_tolerance: f64) -> Vec<bool> {
+    let n_triangles = mesh.triangle_count();
+    let mut points = used_points(mesh);
+    others.iter().for_each(|m| points.extend(used_points(m)));
     let tree = Tree::new(points);
     let tol = tree.tolerance(relative_tolerance);
     (0..n_triangles)
         .into_par_iter()
         .map_init(Vec::new, |stack, t| {
-            let Some(c) = corners(t) else {
+            let Some(c) = corners(mesh, t) else {
                 return false;
             };
             let [a, b, c] = c.map(|k| mesh.positions[k]);
@@ -307,6 +324,24 @@ mod tests {
             assert_eq!(flags.len(), m.triangle_count());
             assert!(flags.iter().all(|&f| f), "{lo} {hi} {s}: {flags:?}");
         }
+    }
+
+    #[test]
+    fn a_face_that_sees_a_touching_part_leaves_the_hull_among_it() {
+        // Box a = [0,1]³ and box b = [1,2]×[0,1]², touching along x = 1.
+        let a = grid_box(Vec3::ZERO, Vec3::ONE, 2);
+        let b = grid_box(Vec3::X, Vec3::new(2.0, 1.0, 1.0), 2);
+        let alone = hull_triangles(&a);
+        let among = hull_triangles_among(&a, &[&b]);
+        assert!(alone.iter().all(|&f| f));
+        for t in 0..a.triangle_count() {
+            let [p, q, r] = a.triangle(t);
+            let facing_b = [p, q, r].iter().all(|v| v.x == 1.0);
+            // Only a's +x face sees b; its other faces stay on the hull.
+            assert_eq!(among[t], !facing_b, "triangle {t}: {p} {q} {r}");
+        }
+        // Nothing else changes: among no others is the mesh's own hull.
+        assert_eq!(hull_triangles_among(&a, &[]), alone);
     }
 
     #[test]

@@ -68,8 +68,13 @@ impl PemReflector {
         }
         let (room_min, room_max) = scene.bounds();
         let origin = o.mesh.area_weighted_centroid();
-        // Convex-hull triangles cannot see the reflector: distant EM only.
-        let hull = inference::hull::hull_triangles(&o.mesh);
+        // Convex-hull triangles cannot see the reflector (nor the parts
+        // sharing its local layer): distant EM only.
+        let others: Vec<&inference::scene::Mesh> = (scene.local_group(object).into_iter())
+            .filter(|&i| i != object)
+            .filter_map(|i| scene.objects.get(i).map(|p| &p.mesh))
+            .collect();
+        let hull = inference::hull::hull_triangles_among(&o.mesh, &others);
         let (indices, hull_index_count) = hull_sorted_indices(&o.mesh.indices, &hull);
         let stream = |name: &str| {
             Buffer::new(

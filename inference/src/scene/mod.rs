@@ -9,6 +9,7 @@ pub mod gltf;
 pub mod grid;
 pub mod light;
 mod load;
+mod local_group;
 pub mod material;
 pub mod mesh;
 pub mod obj;

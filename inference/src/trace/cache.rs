@@ -25,6 +25,25 @@ fn hash(f: impl FnOnce(&mut Fnv)) -> u64 {
 /// The scene's content by part: camera, orbit, lights, materials, geometry
 /// and textures (names included; the scene's file name is not).
 pub fn scene_key(scene: &Scene) -> Key {
+    let key = content_key(scene);
+    // Reflectors that share a local layer (lid and body) change what the
+    // layers hold; scenes with none keep their keys.
+    let groups = scene.local_groups();
+    if groups.iter().all(|g| g.len() <= 1) {
+        return key;
+    }
+    key.with(
+        "local groups",
+        hash(|h| {
+            for g in &groups {
+                h.write_u64(g.len() as u64);
+                g.iter().for_each(|&i| h.write_u64(i as u64));
+            }
+        }),
+    )
+}
+
+fn content_key(scene: &Scene) -> Key {
     let c = &scene.camera;
     let o = &scene.orbit;
     Key::new()

@@ -53,6 +53,8 @@ pub mod transport;
 #[cfg(test)]
 mod caustic_tests;
 #[cfg(test)]
+mod group_tests;
+#[cfg(test)]
 mod light_tests;
 #[cfg(test)]
 mod material_tests;

@@ -58,11 +58,11 @@ impl Integrator<'_> {
         let (fresnel, r, transmission) = self.camera_bounce(&s, dir, material, rng, after, rays);
         let o = offset(s.p, s.ng);
         let (l_r, first) = self.radiance(o, r, None, rng, after, rays);
-        let self_hit = first.is_some_and(|h| h.prim.object == object);
-        // Where the reflected ray misses the object, "passing through it" changes nothing.
+        // A hit on the object or a reflector touching it (lid and body) is local.
+        let self_hit = first.is_some_and(|h| self.is_local(object, h.prim.object));
+        // Where the reflected ray misses them, "passing through them" changes nothing.
         let distant = if self_hit {
-            self.radiance(o, r, Some(object), distant_rng, after, rays)
-                .0
+            self.radiance_past_group(o, r, object, distant_rng, after, rays)
         } else {
             l_r
         };

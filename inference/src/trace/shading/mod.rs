@@ -82,6 +82,9 @@ pub struct Integrator<'a> {
     photons: Option<&'a PhotonMap>,
     /// Per object: true for the room's box (transparent to directional light).
     room: Vec<bool>,
+    /// Per object: the objects its reflected rays count as local
+    /// ([`Scene::local_group`]).
+    local: Vec<Vec<usize>>,
 }
 
 impl<'a> Integrator<'a> {
@@ -92,6 +95,7 @@ impl<'a> Integrator<'a> {
             transport,
             photons: None,
             room: analytic::room_mask(scene),
+            local: scene.local_groups(),
         }
     }
 
@@ -101,6 +105,16 @@ impl<'a> Integrator<'a> {
         'a: 'b,
     {
         Integrator { photons, ..self }
+    }
+
+    /// Whether a ray reflected by `object` that hits `other` hit the
+    /// reflector again (its local layer).
+    pub(super) fn is_local(&self, object: u32, other: u32) -> bool {
+        other == object
+            || self
+                .local
+                .get(object as usize)
+                .is_some_and(|g| g.contains(&(other as usize)))
     }
 
     pub(super) fn material(&self, object: u32) -> &Material {
@@ -160,6 +174,33 @@ impl<'a> Integrator<'a> {
         match self.bvh.closest(origin, dir, 0.0, f32::INFINITY, skip) {
             None => (self.transport.background, None),
             Some(hit) => (self.shade(hit, dir, rng, state, rays), Some(hit)),
+        }
+    }
+
+    /// Radiance along a ray reflected by `object` with every object of its
+    /// local group transparent for this segment (the distant layer's ray).
+    fn radiance_past_group(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        object: u32,
+        rng: &mut Rng,
+        state: PathState,
+        rays: &mut u64,
+    ) -> Vec3 {
+        let group = self.local.get(object as usize).map_or(&[][..], |g| &g[..]);
+        if group.len() <= 1 {
+            // One reflector: the same traversal as always (keys and pixels kept).
+            return self.radiance(origin, dir, Some(object), rng, state, rays).0;
+        }
+        *rays += 1;
+        let past = |o: u32| !group.contains(&(o as usize));
+        match self
+            .bvh
+            .closest_where(origin, dir, 0.0, f32::INFINITY, past)
+        {
+            None => self.transport.background,
+            Some(hit) => self.shade(hit, dir, rng, state, rays),
         }
     }
 
