@@ -334,11 +334,12 @@ mod tests {
         let alone = hull_triangles(&a);
         let among = hull_triangles_among(&a, &[&b]);
         assert!(alone.iter().all(|&f| f));
-        for t in 0..a.triangle_count() {
+        assert_eq!(among.len(), a.triangle_count());
+        for (t, &on) in among.iter().enumerate() {
             let [p, q, r] = a.triangle(t);
             let facing_b = [p, q, r].iter().all(|v| v.x == 1.0);
             // Only a's +x face sees b; its other faces stay on the hull.
-            assert_eq!(among[t], !facing_b, "triangle {t}: {p} {q} {r}");
+            assert_eq!(on, !facing_b, "triangle {t}: {p} {q} {r}");
         }
         // Nothing else changes: among no others is the mesh's own hull.
         assert_eq!(hull_triangles_among(&a, &[]), alone);

@@ -5,6 +5,10 @@
 pub const SHIPPED: &[(&str, &str)] = &[
     ("teapot", include_str!("../../../assets/scenes/teapot.toml")),
     (
+        "teapot_split",
+        include_str!("../../../assets/scenes/teapot_split.toml"),
+    ),
+    (
         "teapot_rings",
         include_str!("../../../assets/scenes/teapot_rings.toml"),
     ),
