@@ -321,4 +321,56 @@ fn lid_and_body_as_separate_reflectors_compile_and_play() {
         specs.len(),
         "every map in the container"
     );
+    lid_at_half_the_resolution_plays(&scene, &out);
+}
+
+/// The lid with maps of half the body's resolution (its own map class):
+/// only its maps compile again, deferred and multipass frames agree, and
+/// the frame stays the one the lid's 16² maps draw up to what 8² maps lose
+/// (a lid reading the body's maps, or its slots left empty, falls far
+/// below).
+fn lid_at_half_the_resolution_plays(scene: &Path, out: &Path) {
+    let frame = |compositing: &str| {
+        let o = play(
+            scene,
+            out,
+            &["--room", "analytic", "--compositing", compositing],
+        );
+        assert!(o.status.success(), "{compositing}: {}", text(&o));
+        assert!(text(&o).contains("validation messages: 0"), "{}", text(&o));
+        engine::capture::read_png(&out.join("frame_0001.png"))
+            .expect("frame")
+            .2
+    };
+    let same_size = frame("deferred");
+    let source = std::fs::read_to_string(scene).expect("scene");
+    let lid = source.find("name = \"lid\"").expect("the lid");
+    let at = lid
+        + source[lid..]
+            .find("resolution = 16")
+            .expect("the lid's resolution");
+    let half = format!("{}resolution = 8{}", &source[..at], &source[at + 15..]);
+    std::fs::write(scene, half).expect("write scene");
+    let deferred = frame("deferred");
+    let multipass = frame("multipass");
+    let container = codec::Container::open(&out.join("teapot.ptxc")).expect("container");
+    let mut widths: Vec<u32> = container
+        .textures()
+        .iter()
+        .map(|t| t.layout.width)
+        .collect();
+    widths.sort_unstable();
+    let n = widths.len() / 2;
+    assert_eq!(
+        widths,
+        [vec![8; n], vec![16; n]].concat(),
+        "lid 8², body 16²"
+    );
+    let paths = engine::compare::psnr(&deferred, &multipass);
+    let halved = engine::compare::psnr(&same_size, &deferred);
+    eprintln!(
+        "lid at 8²: deferred against multipass {paths:.1} dB, against the 16² lid {halved:.1} dB"
+    );
+    assert!(paths >= 60.0, "deferred against multipass {paths:.1} dB");
+    assert!(halved >= 45.0, "against the 16² lid {halved:.1} dB");
 }

@@ -123,6 +123,9 @@ pub struct GBufferDraw<'a> {
     pub local: bool,
     /// The reflector's LOD bias, added to the recorded levels of detail.
     pub lod_bias: f32,
+    /// Binds the distant and local map arrays of the reflector's EM
+    /// resolution (for the LOD queries).
+    pub set: vk::DescriptorSet,
 }
 
 /// Pass 1, the frame's first: the reflectors into the G-buffer, their
@@ -130,8 +133,6 @@ pub struct GBufferDraw<'a> {
 pub struct GBufferPass<'a> {
     pub device: &'a Device,
     pub pipeline: &'a Pipeline,
-    /// Binds the distant and local map arrays (for the LOD queries).
-    pub set: vk::DescriptorSet,
     pub gbuffer: &'a GBuffer,
     /// The frame's depth/stencil (cleared by this pass).
     pub depth: &'a Image,
@@ -181,7 +182,7 @@ impl Pass for GBufferPass<'_> {
                     slot: Vec4::new(0.0, f32::from(draw.local), draw.lod_bias, 0.0),
                     ..PemPush::default()
                 };
-                self.pipeline.bind(cmd, Some(self.set), &push)?;
+                self.pipeline.bind(cmd, Some(draw.set), &push)?;
                 // SAFETY: the G-buffer pipeline (position + two texgen
                 // streams) is bound inside dynamic rendering; the index range
                 // lies within `indices`, whose entries index the mesh and both
@@ -215,14 +216,15 @@ pub struct CompositeDraw {
     pub area: vk::Rect2D,
     pub bands: Vec<vk::Rect2D>,
     pub push: CompositePush,
+    /// Binds the G-buffer, the map arrays of the reflector's EM resolution
+    /// and the Fresnel LUT.
+    pub set: vk::DescriptorSet,
 }
 
 /// Pass 2: every marked pixel shaded once from the G-buffer.
 pub struct CompositePass<'a> {
     pub device: &'a Device,
     pub pipeline: &'a Pipeline,
-    /// Binds the G-buffer, the map arrays and the Fresnel LUT.
-    pub set: vk::DescriptorSet,
     /// The frame's colour and depth/stencil (read only).
     pub target: Target<'a>,
     pub draws: Vec<CompositeDraw>,
@@ -264,7 +266,7 @@ impl Pass for CompositePass<'_> {
         attachments.render(self.device, cmd, || {
             let d = &self.device.device;
             for draw in &self.draws {
-                self.pipeline.bind(cmd, Some(self.set), &draw.push)?;
+                self.pipeline.bind(cmd, Some(draw.set), &draw.push)?;
                 let scissors = match draw.bands.as_slice() {
                     [] => std::slice::from_ref(&draw.area),
                     bands => bands,

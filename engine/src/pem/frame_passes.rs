@@ -2,6 +2,7 @@
 //! G-buffer, then one compositing pass over their pixels) or the papers'
 //! multipass (one pass per blended sample, each blended over the last).
 
+use super::frame_sets::MapClass;
 use super::player::{PemKind, PemPlayer};
 use super::reflector::PemReflector;
 use super::samples::SampleBlend;
@@ -41,7 +42,8 @@ impl PemPlayer {
             // One stencil mark per reflector: its composite draw shades every
             // pixel it covers once, whichever part the pixel belongs to.
             let stencil = ri as u32 + 1;
-            gdraws.extend(gbuffer_draws(r, mesh, stencil, layered));
+            let class = self.class_of(r)?;
+            gdraws.extend(gbuffer_draws(r, mesh, stencil, layered, class.gbuffer_set));
             let Some(area) = composite_area(r, view_proj, extent) else {
                 continue;
             };
@@ -56,22 +58,21 @@ impl PemPlayer {
                     slot: vec4_of(&slot),
                     info: vec4_of(&[weights.len() as f32, f32::from(layered)]),
                 },
+                set: class.composite_set,
             });
         }
         let fill = GBufferPass {
             device: &self.device,
             pipeline: &self.sets.deferred.gbuffer,
-            set: self.sets.gbuffer_set,
             gbuffer,
             depth: target.depth,
             draws: gdraws,
-            sampled: self.sets.arrays.iter().collect(),
+            sampled: self.sets.arrays().collect(),
             view_proj,
         };
         let composite = CompositePass {
             device: &self.device,
             pipeline: &self.sets.deferred.composite,
-            set: self.sets.composite_set,
             target,
             draws: cdraws,
             sampled: self.sets.composite_sampled(gbuffer),
@@ -129,6 +130,14 @@ impl PemPlayer {
         Ok(passes)
     }
 
+    /// The map class (arrays and sets of its EM resolution) `r` plays from.
+    fn class_of(&self, r: &PemReflector) -> GpuResult<&MapClass> {
+        self.sets
+            .classes
+            .get(r.class)
+            .ok_or_else(|| GpuError::Invalid(format!("{}: no map class {}", r.name, r.class)))
+    }
+
     /// A reflector's multipass draws of one sample: hull triangles with the
     /// distant layer alone and the rest with both (layered), or one draw.
     fn draws_of<'a>(
@@ -154,7 +163,7 @@ impl PemPlayer {
             slot,
             lod_bias: r.lod_bias,
         };
-        let s = &self.sets;
+        let s = self.class_of(r)?;
         Ok(match self.settings.kind {
             PemKind::Layered if self.settings.local_layer => vec![
                 draw(Shading::SingleEm, s.single_set, 0, r.hull_index_count),
@@ -172,12 +181,14 @@ impl PemPlayer {
 }
 
 /// A reflector's two G-buffer draws: its hull triangles with the distant
-/// layer alone, then the rest with the local layer too when `layered`.
+/// layer alone, then the rest with the local layer too when `layered`;
+/// `set` binds the maps of its EM resolution.
 fn gbuffer_draws<'a>(
     r: &'a PemReflector,
     mesh: &'a GpuMesh,
     stencil: u32,
     layered: bool,
+    set: vk::DescriptorSet,
 ) -> [GBufferDraw<'a>; 2] {
     let local_stream = if layered {
         &r.texgen_local
@@ -193,6 +204,7 @@ fn gbuffer_draws<'a>(
         stencil,
         local,
         lod_bias: r.lod_bias,
+        set,
     };
     [
         draw(0, r.hull_index_count, false),

@@ -1,7 +1,8 @@
 //! What PEM frames bind: the pipelines (deferred and multipass), the map
 //! arrays every reflector's slots live in, the Fresnel LUT, samplers, and
-//! one descriptor set per pipeline — made once, since the arrays hold
-//! every resident sample and push constants pick the elements per draw.
+//! one descriptor set per pipeline and EM resolution — made once, since the
+//! arrays hold every resident sample and push constants pick the elements
+//! per draw.
 
 use super::settings::{PemKind, PemSettings};
 use crate::backend::{Binding, Device, Image, Sampler};
@@ -12,15 +13,15 @@ use crate::passes::pem_deferred::{DeferredPipelines, GBuffer};
 use anyhow::Result;
 use ash::vk;
 
-pub struct FrameSets {
-    pub forward: PemPipelines,
-    pub deferred: DeferredPipelines,
+/// The maps of every reflector that plays at one EM resolution: one array
+/// per layer (each such reflector's slots side by side) and the descriptor
+/// sets that bind them. Reflectors of other resolutions live in their own
+/// class, so a small part (the lid) needs no maps as large as the body's.
+pub struct MapClass {
+    pub resolution: u32,
     /// One per layer of `settings.layers()`: the distant (or sphere, or
     /// PTM) maps, then the local maps.
     pub arrays: Vec<Image>,
-    lut: Image,
-    /// Alive as long as the sets that bind them.
-    _samplers: [Sampler; 3],
     pub layered_set: vk::DescriptorSet,
     pub single_set: vk::DescriptorSet,
     pub ptm_set: vk::DescriptorSet,
@@ -28,12 +29,23 @@ pub struct FrameSets {
     pub composite_set: vk::DescriptorSet,
 }
 
+pub struct FrameSets {
+    pub forward: PemPipelines,
+    pub deferred: DeferredPipelines,
+    /// One per EM resolution the scene's reflectors play at.
+    pub classes: Vec<MapClass>,
+    lut: Image,
+    /// Alive as long as the sets that bind them.
+    _samplers: [Sampler; 3],
+}
+
 impl FrameSets {
+    /// `classes`: per EM resolution, its arrays (one per layer).
     pub fn new(
         device: &Device,
         executor: &mut Executor,
         settings: &PemSettings,
-        arrays: Vec<Image>,
+        classes: Vec<(u32, Vec<Image>)>,
         gbuffer: &GBuffer,
         (color, depth): (vk::Format, vk::Format),
     ) -> Result<Self> {
@@ -51,65 +63,45 @@ impl FrameSets {
             vk::SamplerAddressMode::CLAMP_TO_EDGE,
             crate::backend::Filtering::Nearest,
         )?;
-        let first = &arrays[0];
-        // Without a local layer its bindings see the first array (unused).
-        let second = arrays.get(1).unwrap_or(first);
-        let map = |i: &Image| Binding::Image(i.view, cube.raw);
-        let lut_b = Binding::Image(lut.view, cube.raw);
-        let is_ptm = settings.kind == PemKind::Ptm;
-        let sets = if is_ptm {
-            let ptm = forward
-                .get(Shading::Ptm, false)
-                .descriptor_set(&[Binding::Image(first.view, flat.raw)])?;
-            [
-                vk::DescriptorSet::null(),
-                vk::DescriptorSet::null(),
-                ptm,
-                vk::DescriptorSet::null(),
-                vk::DescriptorSet::null(),
-            ]
-        } else {
-            let g = |i: usize| Binding::Image(gbuffer.images[i].view, texel.raw);
-            [
-                forward.get(Shading::Layered, false).descriptor_set(&[
-                    map(first),
-                    map(second),
-                    lut_b,
-                ])?,
-                forward
-                    .get(Shading::SingleEm, false)
-                    .descriptor_set(&[map(first), lut_b])?,
-                vk::DescriptorSet::null(),
-                deferred
-                    .gbuffer
-                    .descriptor_set(&[map(first), map(second)])?,
-                deferred.composite.descriptor_set(&[
-                    g(0),
-                    g(1),
-                    g(2),
-                    map(first),
-                    map(second),
-                    lut_b,
-                ])?,
-            ]
-        };
+        let samplers = [cube, flat, texel];
+        let classes = classes
+            .into_iter()
+            .map(|(resolution, arrays)| {
+                let sets = class_sets(
+                    (&forward, &deferred),
+                    settings,
+                    &arrays,
+                    (&lut, gbuffer),
+                    &samplers,
+                )?;
+                Ok(MapClass {
+                    resolution,
+                    arrays,
+                    layered_set: sets[0],
+                    single_set: sets[1],
+                    ptm_set: sets[2],
+                    gbuffer_set: sets[3],
+                    composite_set: sets[4],
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
         Ok(Self {
             forward,
             deferred,
-            arrays,
+            classes,
             lut,
-            _samplers: [cube, flat, texel],
-            layered_set: sets[0],
-            single_set: sets[1],
-            ptm_set: sets[2],
-            gbuffer_set: sets[3],
-            composite_set: sets[4],
+            _samplers: samplers,
         })
+    }
+
+    /// Every map array of every class.
+    pub fn arrays(&self) -> impl Iterator<Item = &Image> {
+        self.classes.iter().flat_map(|c| c.arrays.iter())
     }
 
     /// What a multipass draw samples (for barriers).
     pub fn forward_sampled(&self) -> Vec<&Image> {
-        let mut v: Vec<&Image> = self.arrays.iter().collect();
+        let mut v: Vec<&Image> = self.arrays().collect();
         v.push(&self.lut);
         v
     }
@@ -124,8 +116,49 @@ impl FrameSets {
     /// Forgets every image's tracked state before they are destroyed.
     pub fn release(&self, executor: &mut Executor) {
         executor.states.forget(&self.lut);
-        for a in &self.arrays {
+        for a in self.arrays() {
             executor.states.forget(a);
         }
     }
+}
+
+/// One class's descriptor sets: layered, single EM, PTM (multipass), then
+/// G-buffer and compositing (deferred); null where the kind has none.
+fn class_sets(
+    (forward, deferred): (&PemPipelines, &DeferredPipelines),
+    settings: &PemSettings,
+    arrays: &[Image],
+    (lut, gbuffer): (&Image, &GBuffer),
+    [cube, flat, texel]: &[Sampler; 3],
+) -> Result<[vk::DescriptorSet; 5]> {
+    let Some(first) = arrays.first() else {
+        anyhow::bail!("internal: a map class without arrays");
+    };
+    // Without a local layer its bindings see the first array (unused).
+    let second = arrays.get(1).unwrap_or(first);
+    let map = |i: &Image| Binding::Image(i.view, cube.raw);
+    let lut_b = Binding::Image(lut.view, cube.raw);
+    let null = vk::DescriptorSet::null();
+    if settings.kind == PemKind::Ptm {
+        let ptm = forward
+            .get(Shading::Ptm, false)
+            .descriptor_set(&[Binding::Image(first.view, flat.raw)])?;
+        return Ok([null, null, ptm, null, null]);
+    }
+    let g = |i: usize| Binding::Image(gbuffer.images[i].view, texel.raw);
+    Ok([
+        forward
+            .get(Shading::Layered, false)
+            .descriptor_set(&[map(first), map(second), lut_b])?,
+        forward
+            .get(Shading::SingleEm, false)
+            .descriptor_set(&[map(first), lut_b])?,
+        null,
+        deferred
+            .gbuffer
+            .descriptor_set(&[map(first), map(second)])?,
+        deferred
+            .composite
+            .descriptor_set(&[g(0), g(1), g(2), map(first), map(second), lut_b])?,
+    ])
 }

@@ -29,6 +29,7 @@ use std::time::Instant;
 
 /// A map read into staging this frame, waiting for its upload pass.
 struct Pending {
+    class: usize,
     layer: usize,
     element: u32,
     buffer: Buffer,
@@ -96,32 +97,23 @@ impl PemPlayer {
                     }
                 );
             }
-            let base = (reflectors.len() * SLOTS) as u32;
-            reflectors.push(PemReflector::new(
-                device,
-                scene,
-                (index, o),
-                f0,
-                &settings,
-                base,
-            )?);
+            reflectors.push(PemReflector::new(device, scene, (index, o), f0, &settings)?);
         }
-        let resolution = common_resolution(&reflectors)?;
-        let arrays = layers
+        let resolutions = assign_classes(&mut reflectors)?;
+        let classes = resolutions
             .iter()
-            .map(|&l| {
-                map_array(
-                    device,
-                    l,
-                    resolution >> settings.drop_levels,
-                    reflectors.len(),
-                )
+            .map(|&(resolution, members)| {
+                let arrays = layers
+                    .iter()
+                    .map(|&l| map_array(device, l, resolution >> settings.drop_levels, members))
+                    .collect::<Result<Vec<_>>>()?;
+                Ok((resolution, arrays))
             })
             .collect::<Result<Vec<_>>>()?;
-        let sets = FrameSets::new(device, executor, &settings, arrays, gbuffer, formats)?;
+        let sets = FrameSets::new(device, executor, &settings, classes, gbuffer, formats)?;
         let leaf_bytes = layers
             .iter()
-            .map(|l| l.layout(resolution).len() * 8)
+            .flat_map(|l| resolutions.iter().map(|&(r, _)| l.layout(r).len() * 8))
             .max()
             .unwrap_or(0);
         Ok(Self {
@@ -266,6 +258,7 @@ impl PemPlayer {
             };
             cpu.decoded_maps += 1;
             self.pending.push(Pending {
+                class: r.class,
                 layer: layer_index,
                 element: r.base + slot as u32,
                 buffer,
@@ -322,11 +315,14 @@ impl PemPlayer {
         }
         let mut uploads = Vec::new();
         for p in &self.pending {
-            let image = &self.sets.arrays[p.layer];
+            let class =
+                self.sets.classes.get(p.class).ok_or_else(|| {
+                    GpuError::Invalid(format!("internal: no map class {}", p.class))
+                })?;
+            let image = &class.arrays[p.layer];
             // Skip the dropped finest levels: they lead the staging layout.
             let layer = self.settings.layers()[p.layer];
-            let resolution = self.reflectors.first().map_or(1, |r| r.resolution);
-            let offset = dropped_bytes(layer, resolution, self.settings.drop_levels)?;
+            let offset = dropped_bytes(layer, class.resolution, self.settings.drop_levels)?;
             uploads.push(Upload {
                 buffer: &p.buffer,
                 offset,
@@ -395,21 +391,27 @@ impl PemPlayer {
     }
 }
 
-/// The one EM resolution every reflector plays at (they share map arrays).
-fn common_resolution(reflectors: &[PemReflector]) -> Result<u32> {
-    let Some(first) = reflectors.first() else {
+/// Groups the reflectors by EM resolution (in the order they first
+/// appear): each reflector's class and its slots' first array element in
+/// that class. Returns each class's resolution and member count.
+fn assign_classes(reflectors: &mut [PemReflector]) -> Result<Vec<(u32, usize)>> {
+    if reflectors.is_empty() {
         bail!("no reflector with [objects.em] settings to play");
-    };
-    if let Some(other) = reflectors.iter().find(|r| r.resolution != first.resolution) {
-        bail!(
-            "{} has {}² maps and {} {}²: every reflector of a scene plays at one EM resolution",
-            first.name,
-            first.resolution,
-            other.name,
-            other.resolution
-        );
     }
-    Ok(first.resolution)
+    let mut classes: Vec<(u32, usize)> = Vec::new();
+    for r in reflectors.iter_mut() {
+        let class = match classes.iter().position(|&(res, _)| res == r.resolution) {
+            Some(c) => c,
+            None => {
+                classes.push((r.resolution, 0));
+                classes.len() - 1
+            }
+        };
+        r.class = class;
+        r.base = (classes[class].1 * SLOTS) as u32;
+        classes[class].1 += 1;
+    }
+    Ok(classes)
 }
 
 /// The array a `layer`'s maps play from: one element per slot of every

@@ -43,7 +43,9 @@ pub struct PemReflector {
     pub texgen_distant: Buffer,
     pub texgen_local: Buffer,
     pub table: SlotTable,
-    /// The array element of this reflector's slot 0.
+    /// Its map class (EM resolution) in the frame's sets.
+    pub class: usize,
+    /// The array element of this reflector's slot 0 in its class's arrays.
     pub base: u32,
     /// The next frame's texgen and bands, computed while this one rendered.
     ahead: Option<TexgenFrame>,
@@ -56,7 +58,6 @@ impl PemReflector {
         (object, o): (usize, &Object),
         f0: Vec3,
         settings: &PemSettings,
-        base: u32,
     ) -> Result<Self> {
         let resolution = o.em.as_ref().map_or(1, |em| em.resolution.max(1));
         if settings.drop_levels >= 32 - resolution.leading_zeros() {
@@ -116,7 +117,9 @@ impl PemReflector {
             texgen_distant: stream("texgen distant")?,
             texgen_local: stream("texgen local")?,
             table: SlotTable::new(SLOTS),
-            base,
+            // Set when the player groups the reflectors by resolution.
+            class: 0,
+            base: 0,
             ahead: None,
         })
     }
