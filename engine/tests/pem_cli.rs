@@ -330,19 +330,16 @@ fn lid_and_body_as_separate_reflectors_compile_and_play() {
 /// (a lid reading the body's maps, or its slots left empty, falls far
 /// below).
 fn lid_at_half_the_resolution_plays(scene: &Path, out: &Path) {
-    let frame = |compositing: &str| {
-        let o = play(
-            scene,
-            out,
-            &["--room", "analytic", "--compositing", compositing],
-        );
-        assert!(o.status.success(), "{compositing}: {}", text(&o));
+    let frame = |extra: &[&str]| {
+        let mut args = vec!["--room", "analytic"];
+        args.extend_from_slice(extra);
+        let o = play(scene, out, &args);
+        assert!(o.status.success(), "{extra:?}: {}", text(&o));
         assert!(text(&o).contains("validation messages: 0"), "{}", text(&o));
-        engine::capture::read_png(&out.join("frame_0001.png"))
-            .expect("frame")
-            .2
+        let png = engine::capture::read_png(&out.join("frame_0001.png")).expect("frame");
+        (text(&o), png.2)
     };
-    let same_size = frame("deferred");
+    let same_size = frame(&[]).1;
     let source = std::fs::read_to_string(scene).expect("scene");
     let lid = source.find("name = \"lid\"").expect("the lid");
     let at = lid
@@ -351,8 +348,16 @@ fn lid_at_half_the_resolution_plays(scene: &Path, out: &Path) {
             .expect("the lid's resolution");
     let half = format!("{}resolution = 8{}", &source[..at], &source[at + 15..]);
     std::fs::write(scene, half).expect("write scene");
-    let deferred = frame("deferred");
-    let multipass = frame("multipass");
+    let (log, deferred) = frame(&[]);
+    for (map, counts) in [
+        ("body.specular_local", "3/0"),
+        ("lid.specular_local", "0/3"),
+    ] {
+        assert!(log.contains(&format!("{map} {counts}")), "{map}: {log}");
+    }
+    let multipass = frame(&["--compositing", "multipass"]).1;
+    // The PTM baseline plays from its own 2D map arrays per class.
+    frame(&["--mode", "ptm"]);
     let container = codec::Container::open(&out.join("teapot.ptxc")).expect("container");
     let mut widths: Vec<u32> = container
         .textures()
