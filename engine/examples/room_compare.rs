@@ -226,8 +226,16 @@ fn print_split(
 fn print_share(name: &str, traced: &Frame, pixels: &Frame, mask: &[bool]) -> Result<()> {
     if let Some((db, share)) = display_psnr_masked(traced, pixels, mask)? {
         let n = mask.iter().filter(|&&m| m).count();
+        // Linear radiance error summed over the pixels: what `engine
+        // eval`'s reflector PSNR (peak = the reference's maximum) weighs.
+        let linear: f64 = (0..traced.len())
+            .filter(|&p| mask[p])
+            .flat_map(|p| (0..3).map(move |c| (traced[p][c] - pixels[p][c]) as f64))
+            .map(|e| e * e)
+            .sum();
         println!(
-            "  {name:<10} {db:6.2} dB ({:5.1}% of the squared error, {n} pixels)",
+            "  {name:<10} {db:6.2} dB ({:5.1}% of the squared error, {n} pixels), \
+             linear squared error {linear:.1}",
             100.0 * share
         );
     }

@@ -14,4 +14,4 @@ pub mod run;
 pub mod table;
 pub mod views;
 
-pub use run::{EvalOptions, eval, reflector_name};
+pub use run::{EvalOptions, eval, reflector_names};

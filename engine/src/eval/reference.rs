@@ -183,6 +183,28 @@ impl<'a> References<'a> {
         })
     }
 
+    /// The reference of `view` through all of `objects` at once (a
+    /// teapot's lid and body): their coverages and composites summed, so
+    /// the mask holds every pixel a viewer sees as one of them.
+    pub fn get_all(&self, view: View, objects: &[String]) -> Result<ReferenceImage> {
+        let (first, rest) = objects
+            .split_first()
+            .context("no reflector to score (bug: an empty list)")?;
+        let mut all = self.get(view, first)?;
+        for object in rest {
+            let part = self.get(view, object)?;
+            for (a, b) in all.coverage.iter_mut().zip(&part.coverage) {
+                *a += b;
+            }
+            for (a, b) in all.composite.iter_mut().zip(&part.composite) {
+                *a = std::array::from_fn(|c| a[c] + b[c]);
+            }
+            all.object = format!("{}+{object}", all.object);
+        }
+        all.mask = all.coverage.iter().map(|&c| c >= MASK_COVERAGE).collect();
+        Ok(all)
+    }
+
     fn tracer(&self) -> Result<&Tracer<'a>> {
         if self.tracer.get().is_none() {
             let tracer = Tracer::new(self.scene)?;
@@ -286,6 +308,37 @@ mod tests {
         // A fresh References over the same folder (a new run) reads it too.
         let again = References::new(&scene, &dir.path().join("refs"), tiny())?;
         assert!(!again.get(view, "teapot")?.traced);
+        Ok(())
+    }
+
+    /// The default teapot's lid and body score as one reflector: the
+    /// pixels of either, as many as the whole teapot covers.
+    #[test]
+    fn lid_and_body_score_together_as_the_whole_teapot() -> Result<()> {
+        let dir = tempfile::tempdir()?;
+        let view = View::new(12.5, 20.0);
+        let split = Scene::load("teapot_split")?;
+        let refs = References::new(&split, &dir.path().join("split"), tiny())?;
+        let parts = ["body".to_owned(), "lid".to_owned()];
+        let both = refs.get_all(view, &parts)?;
+        let count = |m: &[bool]| m.iter().filter(|&&b| b).count();
+        let whole = teapot(dir.path())?;
+        let whole = References::new(&whole, &dir.path().join("whole"), tiny())?;
+        let whole = count(&whole.get(view, "teapot")?.mask);
+        for part in &parts {
+            let mask = refs.get(view, part)?.mask;
+            assert!(count(&mask) > 0, "{part} covers no pixel");
+            assert!(
+                mask.iter().zip(&both.mask).all(|(&p, &b)| !p || b),
+                "{part}"
+            );
+        }
+        let (n, body) = (count(&both.mask), count(&refs.get(view, "body")?.mask));
+        assert!(
+            n > body && n.abs_diff(whole) <= 1 + whole / 50,
+            "{n} vs {whole}"
+        );
+        assert_eq!(both.object, "body+lid");
         Ok(())
     }
 

@@ -14,7 +14,7 @@ use crate::options::{Mode, RunPlace};
 use crate::play::{FrameSource, Session, compile_context, setup_mode};
 use crate::relight::GridSettings;
 use crate::util::stats::{mean, median, percentile};
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use inference::trace::TraceSettings;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -69,11 +69,12 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
         true => Some(relight_rows(&scene, place, opts, &out)?),
         false => None,
     };
-    let reflector = reflector_name(&scene)?;
+    let reflectors = reflector_names(&scene)?;
+    let reflector = reflectors.join("+");
     let views = views(&scene, opts.views, &opts.elevations);
     let references = match rows.is_empty() {
         true => Vec::new(),
-        false => references(&scene, &views, place.size, opts.spp, &out, &reflector)?,
+        false => references(&scene, &views, place.size, opts.spp, &out, &reflectors)?,
     };
     let run = RowRun {
         views: &views,
@@ -175,17 +176,20 @@ fn progress_bar(len: u64) -> indicatif::ProgressBar {
     )
 }
 
-/// The object the rows score: the first with an EM or glass table.
-pub fn reflector_name(scene: &inference::scene::Scene) -> Result<String> {
-    let object = scene
+/// The objects the rows score together: every one with an EM or glass
+/// table (a teapot's lid and body are one reflector to a viewer).
+pub fn reflector_names(scene: &inference::scene::Scene) -> Result<Vec<String>> {
+    let names: Vec<String> = scene
         .objects
         .iter()
-        .find(|o| o.em.is_some() || o.glass.is_some())
-        .with_context(|| {
-            let source = scene.source.display();
-            format!("{source}: no reflector with [objects.em] or glass with [objects.glass]")
-        })?;
-    Ok(object.name.clone())
+        .filter(|o| o.em.is_some() || o.glass.is_some())
+        .map(|o| o.name.clone())
+        .collect();
+    if names.is_empty() {
+        let source = scene.source.display();
+        bail!("{source}: no reflector with [objects.em] or glass with [objects.glass]");
+    }
+    Ok(names)
 }
 
 /// The traced gold standard of every view (traced once, cached under
@@ -196,7 +200,7 @@ fn references(
     (width, height): (u32, u32),
     spp: u32,
     out: &std::path::Path,
-    reflector: &str,
+    reflectors: &[String],
 ) -> Result<Vec<ReferenceImage>> {
     let settings = TraceSettings {
         width,
@@ -208,7 +212,7 @@ fn references(
     let tracing = References::new(scene, &out.join("reference"), settings)?;
     views
         .iter()
-        .map(|v| tracing.get(RefView::new(v.azimuth_deg, v.elevation_deg), reflector))
+        .map(|v| tracing.get_all(RefView::new(v.azimuth_deg, v.elevation_deg), reflectors))
         .collect()
 }
 

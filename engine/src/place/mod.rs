@@ -140,7 +140,7 @@ pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
     let mut planned = Planned::new(&scene, opts)?;
     let out = opts.out.clone().unwrap_or_else(|| data.join("place"));
     crate::util::files::claim_dir(&out)?;
-    let reflector = crate::eval::reflector_name(&scene)?;
+    let reflectors = crate::eval::reflector_names(&scene)?;
     let ctx = compile_context(place, &scene, &data);
     let mut source = setup_mode(
         &ctx,
@@ -169,7 +169,7 @@ pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
         renderer: &mut renderer,
         source: &mut source,
         references: &references,
-        reflector: &reflector,
+        reflectors: &reflectors,
         views: 0,
         progress: spinner(),
     };
@@ -314,7 +314,8 @@ struct Probe<'a, 's> {
     renderer: &'a mut Renderer,
     source: &'a mut FrameSource<'s>,
     references: &'a References<'a>,
-    reflector: &'a str,
+    /// The objects scored together ([`crate::eval::reflector_names`]).
+    reflectors: &'a [String],
     /// Views scored so far.
     views: usize,
     progress: indicatif::ProgressBar,
@@ -351,7 +352,7 @@ impl Probe<'_, '_> {
 
     /// Reflector PSNR of the frame at `view` with the blend as set.
     fn score_view(&mut self, view: View) -> Result<f64> {
-        let reference = self.references.get(view, self.reflector)?;
+        let reference = self.references.get_all(view, self.reflectors)?;
         let eye = view.eye(self.scene);
         // The first frame brings the samples' maps in; the second is scored.
         self.source.frame(self.renderer, self.scene, eye)?;
@@ -364,7 +365,7 @@ impl Probe<'_, '_> {
                 "view at azimuth {}°, elevation {}°: {} covers no pixel at {width}x{height}",
                 view.azimuth_deg,
                 view.elevation_deg,
-                self.reflector
+                self.reflectors.join("+")
             ),
         }
     }
