@@ -145,7 +145,21 @@ impl<'a> References<'a> {
     /// or glass object of the scene), tracing it first unless the cache
     /// holds it with the same inputs.
     pub fn get(&self, view: View, object: &str) -> Result<ReferenceImage> {
-        self.check_reflector(object)?;
+        self.get_all(view, &[object])
+    }
+
+    /// The reference of `view` through all of `objects` at once (a
+    /// teapot's lid and body), read from one traced image: their coverages
+    /// and composites summed, so the mask holds every pixel a viewer sees
+    /// as one of them; `object` names them joined by `+`.
+    pub fn get_all<S: AsRef<str>>(&self, view: View, objects: &[S]) -> Result<ReferenceImage> {
+        let objects: Vec<&str> = objects.iter().map(AsRef::as_ref).collect();
+        if objects.is_empty() {
+            bail!("no reflector to score (bug: an empty list)");
+        }
+        for object in &objects {
+            self.check_reflector(object)?;
+        }
         let eye = view.eye(self.scene);
         let stem = self.stem(view);
         let key = cache::image_key(&self.scene_key, eye, &self.settings);
@@ -155,10 +169,18 @@ impl<'a> References<'a> {
         let exr = output::with_suffix(&stem, ".exr");
         let (width, height) = (self.settings.width, self.settings.height);
         let n = width as usize * height as usize;
+        let object = objects.join("+");
         let read = || -> Result<_> {
             let beauty = target_pixels(&layers, "beauty", false, n)?;
-            let coverage = channel(&layers, &format!("{object}.mask"), "Y", n)?;
-            let composite = composite_pixels(&layers, object, n)?;
+            let (mut coverage, mut composite) = (vec![0.0; n], vec![[0.0; 4]; n]);
+            for part in &objects {
+                let c = channel(&layers, &format!("{part}.mask"), "Y", n)?;
+                coverage.iter_mut().zip(c).for_each(|(a, b)| *a += b);
+                let rgba = composite_pixels(&layers, part, n)?;
+                for (a, b) in composite.iter_mut().zip(rgba) {
+                    *a = [a[0] + b[0], a[1] + b[1], a[2] + b[2], 1.0];
+                }
+            }
             Ok((beauty, coverage, composite))
         };
         let (beauty, coverage, composite) = read().with_context(|| {
@@ -172,7 +194,7 @@ impl<'a> References<'a> {
             eye,
             width,
             height,
-            object: object.to_owned(),
+            object,
             mask: coverage.iter().map(|&c| c >= MASK_COVERAGE).collect(),
             beauty,
             coverage,
@@ -181,28 +203,6 @@ impl<'a> References<'a> {
             exr,
             traced,
         })
-    }
-
-    /// The reference of `view` through all of `objects` at once (a
-    /// teapot's lid and body): their coverages and composites summed, so
-    /// the mask holds every pixel a viewer sees as one of them.
-    pub fn get_all(&self, view: View, objects: &[String]) -> Result<ReferenceImage> {
-        let (first, rest) = objects
-            .split_first()
-            .context("no reflector to score (bug: an empty list)")?;
-        let mut all = self.get(view, first)?;
-        for object in rest {
-            let part = self.get(view, object)?;
-            for (a, b) in all.coverage.iter_mut().zip(&part.coverage) {
-                *a += b;
-            }
-            for (a, b) in all.composite.iter_mut().zip(&part.composite) {
-                *a = std::array::from_fn(|c| a[c] + b[c]);
-            }
-            all.object = format!("{}+{object}", all.object);
-        }
-        all.mask = all.coverage.iter().map(|&c| c >= MASK_COVERAGE).collect();
-        Ok(all)
     }
 
     fn tracer(&self) -> Result<&Tracer<'a>> {

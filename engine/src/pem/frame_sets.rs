@@ -67,22 +67,13 @@ impl FrameSets {
         let classes = classes
             .into_iter()
             .map(|(resolution, arrays)| {
-                let sets = class_sets(
+                map_class(
                     (&forward, &deferred),
                     settings,
-                    &arrays,
+                    (resolution, arrays),
                     (&lut, gbuffer),
                     &samplers,
-                )?;
-                Ok(MapClass {
-                    resolution,
-                    arrays,
-                    layered_set: sets[0],
-                    single_set: sets[1],
-                    ptm_set: sets[2],
-                    gbuffer_set: sets[3],
-                    composite_set: sets[4],
-                })
+                )
             })
             .collect::<Result<Vec<_>>>()?;
         Ok(Self {
@@ -122,15 +113,15 @@ impl FrameSets {
     }
 }
 
-/// One class's descriptor sets: layered, single EM, PTM (multipass), then
-/// G-buffer and compositing (deferred); null where the kind has none.
-fn class_sets(
+/// One class: its arrays and descriptor sets (null where the kind has
+/// none: PTM plays multipass only, the other kinds have no PTM set).
+fn map_class(
     (forward, deferred): (&PemPipelines, &DeferredPipelines),
     settings: &PemSettings,
-    arrays: &[Image],
+    (resolution, arrays): (u32, Vec<Image>),
     (lut, gbuffer): (&Image, &GBuffer),
     [cube, flat, texel]: &[Sampler; 3],
-) -> Result<[vk::DescriptorSet; 5]> {
+) -> Result<MapClass> {
     let Some(first) = arrays.first() else {
         anyhow::bail!("internal: a map class without arrays");
     };
@@ -139,26 +130,44 @@ fn class_sets(
     let map = |i: &Image| Binding::Image(i.view, cube.raw);
     let lut_b = Binding::Image(lut.view, cube.raw);
     let null = vk::DescriptorSet::null();
-    if settings.kind == PemKind::Ptm {
-        let ptm = forward
-            .get(Shading::Ptm, false)
-            .descriptor_set(&[Binding::Image(first.view, flat.raw)])?;
-        return Ok([null, null, ptm, null, null]);
-    }
-    let g = |i: usize| Binding::Image(gbuffer.images[i].view, texel.raw);
-    Ok([
-        forward
-            .get(Shading::Layered, false)
-            .descriptor_set(&[map(first), map(second), lut_b])?,
-        forward
-            .get(Shading::SingleEm, false)
-            .descriptor_set(&[map(first), lut_b])?,
-        null,
-        deferred
-            .gbuffer
-            .descriptor_set(&[map(first), map(second)])?,
-        deferred
-            .composite
-            .descriptor_set(&[g(0), g(1), g(2), map(first), map(second), lut_b])?,
-    ])
+    let [layered_set, single_set, ptm_set, gbuffer_set, composite_set] =
+        if settings.kind == PemKind::Ptm {
+            let ptm = forward
+                .get(Shading::Ptm, false)
+                .descriptor_set(&[Binding::Image(first.view, flat.raw)])?;
+            [null, null, ptm, null, null]
+        } else {
+            let g = |i: usize| Binding::Image(gbuffer.images[i].view, texel.raw);
+            [
+                forward.get(Shading::Layered, false).descriptor_set(&[
+                    map(first),
+                    map(second),
+                    lut_b,
+                ])?,
+                forward
+                    .get(Shading::SingleEm, false)
+                    .descriptor_set(&[map(first), lut_b])?,
+                null,
+                deferred
+                    .gbuffer
+                    .descriptor_set(&[map(first), map(second)])?,
+                deferred.composite.descriptor_set(&[
+                    g(0),
+                    g(1),
+                    g(2),
+                    map(first),
+                    map(second),
+                    lut_b,
+                ])?,
+            ]
+        };
+    Ok(MapClass {
+        resolution,
+        arrays,
+        layered_set,
+        single_set,
+        ptm_set,
+        gbuffer_set,
+        composite_set,
+    })
 }
