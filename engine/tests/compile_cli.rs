@@ -111,7 +111,8 @@ fn bad_shards_fail_before_any_work() {
 /// The compiled scene shipped in `assets/compiled/` is played only while
 /// its keys match the inputs; this fails as soon as they no longer do (a
 /// scene, tracer, solve or codec change): regenerate it with
-/// `engine compile --scene teapot --ship assets/compiled/teapot`.
+/// `engine compile --scene teapot --ship assets/compiled/teapot` (and the
+/// same for `glass`).
 #[test]
 fn the_shipped_compiled_scene_matches_its_inputs() {
     let o = run_engine(&["compile", "--scene", "teapot", "--check-shipped"]);
@@ -119,6 +120,12 @@ fn the_shipped_compiled_scene_matches_its_inputs() {
     assert!(o.status.success(), "{log}");
     assert!(log.contains("teapot.ptxc: fresh"), "{log}");
     assert!(log.contains("floor.light.exr: fresh"), "{log}");
+    // The glass scene's per-sample shell maps (`engine compile --scene glass
+    // --ship assets/compiled/glass`).
+    let o = run_engine(&["compile", "--scene", "glass", "--check-shipped"]);
+    let log = text(&o);
+    assert!(o.status.success(), "{log}");
+    assert!(log.contains("room_shells.ptxc: fresh"), "{log}");
 }
 
 /// The tiny scene with `lines` after its `neighbour_weight` line, written

@@ -149,6 +149,118 @@ fn glass_compiles_its_shell_once_and_plays_hybrid() {
     );
 }
 
+/// `engine compile` on a glass scene solves its per-sample shell maps
+/// without playing and ships their container with its key; a second
+/// compile solves nothing; shards and a scene without per-sample maps
+/// fail cleanly.
+#[test]
+fn a_glass_scene_compiles_and_ships_its_shell_maps() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = small_glass(dir.path());
+    let (out, dest) = (dir.path().join("out"), dir.path().join("ship"));
+    let compile = |extra: &[&str]| {
+        let mut args = vec![
+            "compile",
+            "--scene",
+            &scene,
+            "--size",
+            "96x64",
+            "--validate",
+        ];
+        args.extend(["--out", out.to_str().expect("utf-8 path")]);
+        args.extend(extra);
+        engine(&args)
+    };
+    let o = compile(&["--ship", dest.to_str().expect("utf-8 path")]);
+    let log = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(o.status.success(), "{log}");
+    assert!(log.contains("solved 3 per-sample shell maps"), "{log}");
+    assert!(log.contains("shipped"), "{log}");
+    let shipped = dest.join("glass/room_shells.ptxc");
+    assert_eq!(
+        std::fs::read(&shipped).expect("shipped container"),
+        std::fs::read(out.join("glass/room_shells.ptxc")).expect("compiled container")
+    );
+    assert!(inference::key::is_ours(&shipped), "shipped with its key");
+
+    let again = compile(&[]);
+    let stderr = String::from_utf8_lossy(&again.stderr);
+    assert!(again.status.success(), "{stderr}");
+    assert!(!stderr.contains("solved"), "{stderr}");
+    let shard = compile(&["--shard", "1/2"]);
+    let stderr = String::from_utf8_lossy(&shard.stderr);
+    assert!(
+        !shard.status.success() && stderr.contains("one part"),
+        "{stderr}"
+    );
+
+    let plain = small_scene(
+        dir.path(),
+        "glass",
+        &[("shell_every = 10", "shell_every = 0")],
+    );
+    let o = engine(&[
+        "compile",
+        "--scene",
+        &plain,
+        "--out",
+        out.to_str().expect("utf-8"),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && !stderr.contains("panicked"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("nothing to compile"), "{stderr}");
+}
+
+/// The shipped glass scene's first run from an empty `--out` plays the
+/// per-sample shell maps shipped in `assets/compiled/glass` (keys match)
+/// instead of solving them for minutes; `--recompile` would solve them.
+#[test]
+fn the_shipped_glass_scene_plays_its_shipped_shell_maps() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out");
+    let out = out.to_str().expect("utf-8 path");
+    let o = engine(&[
+        "--scene",
+        "glass",
+        "--out",
+        out,
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+        "--tau",
+        "10",
+        "--no-capture",
+        "--validate",
+    ]);
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert!(o.status.success(), "{stderr}");
+    assert!(
+        stdout.lines().any(|l| l == "validation messages: 0"),
+        "{stdout}"
+    );
+    assert!(
+        stderr.contains("playing the shipped per-sample shell maps"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("blends 11 per-sample shell maps"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("solved"), "{stderr}");
+    assert!(!Path::new(out).join("glass/room_shells.ptxc").exists());
+}
+
 /// `engine eval` on the compiled `out`: the hybrid row plays the three
 /// per-sample maps (its samples and container bytes stated), the
 /// traced-shell row the one traced map (none stated, other frames).

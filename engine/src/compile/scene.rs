@@ -30,13 +30,6 @@ pub enum Part {
 /// `ship`, copies the compiled container and light maps there too.
 pub fn compile_scene(place: &RunPlace, part: Part, ship: Option<&Path>) -> Result<String> {
     let scene = Scene::load(&place.scene)?;
-    if Mode::default_for(&scene) == Mode::Hybrid {
-        bail!(
-            "{}: a glass scene compiles its shells when played (`engine --scene {}`)",
-            scene.source.display(),
-            place.scene
-        );
-    }
     let out = place.out_dir(&scene);
     claim_dir(&out)?;
     let ctx = CompileContext {
@@ -47,6 +40,9 @@ pub fn compile_scene(place: &RunPlace, part: Part, ship: Option<&Path>) -> Resul
         device: &place.device,
         shipped: None,
     };
+    if Mode::default_for(&scene) == Mode::Hybrid {
+        return compile_glass(&ctx, part, ship);
+    }
     let start = Instant::now();
     let mut text = String::new();
     if let Part::Shard(shard) = part {
@@ -92,6 +88,39 @@ pub fn compile_scene(place: &RunPlace, part: Part, ship: Option<&Path>) -> Resul
     )?;
     if let Some(dest) = ship {
         for file in shipped::ship(&ctx, dest)? {
+            writeln!(text, "shipped {}", file.display())?;
+        }
+    }
+    Ok(text)
+}
+
+/// `engine compile` of a glass scene: its per-sample shell maps' container
+/// (what the first hybrid frame would otherwise solve for minutes).
+fn compile_glass(ctx: &CompileContext, part: Part, ship: Option<&Path>) -> Result<String> {
+    if part != Part::Whole {
+        bail!(
+            "{}: a glass scene compiles in one part (no --shard or --merge)",
+            ctx.scene.source.display()
+        );
+    }
+    let start = Instant::now();
+    let Some((file, bytes)) = super::glass_shells::compile(ctx)? else {
+        bail!(
+            "{}: nothing to compile: its glass object has no `shell_every` (per-sample shell \
+             maps); its shell map is traced in seconds when played (`engine --scene {}`)",
+            ctx.scene.source.display(),
+            ctx.scene_arg
+        );
+    };
+    let mut text = format!(
+        "{}: per-sample shell maps compiled under {} in {:.1} s: {} ({bytes} bytes)\n",
+        ctx.scene.name,
+        ctx.out.display(),
+        start.elapsed().as_secs_f64(),
+        file.display()
+    );
+    if let Some(dest) = ship {
+        for file in shipped::ship(ctx, dest)? {
             writeln!(text, "shipped {}", file.display())?;
         }
     }

@@ -6,10 +6,11 @@
 //! fresh clone shows its first frame without the 40-minute compile; any
 //! difference in inputs makes them stale and the pipeline runs as before.
 //! `engine compile --scene teapot --ship assets/compiled/teapot`
-//! regenerates them; a test fails when their keys no longer match.
+//! regenerates them (`--scene glass … assets/compiled/glass`: the glass
+//! object's per-sample shell maps); a test fails when their keys no longer
+//! match.
 
 use super::CompileContext;
-use crate::maps::DataDirs;
 use anyhow::{Context, Result, bail};
 use inference::key::{Freshness, freshness, record_path};
 use inference::scene::Scene;
@@ -32,10 +33,11 @@ pub fn dir(scene: &Scene) -> Option<PathBuf> {
 }
 
 /// The shipped files under `dir` (container, room light maps and their
-/// layouts), as paths relative to `dir`, in a stable order.
+/// layouts, a glass object's per-sample shell maps), as paths relative to
+/// `dir`, in a stable order.
 pub fn files(dir: &Path) -> Result<Vec<PathBuf>> {
     let mut found = Vec::new();
-    for sub in [PathBuf::new(), PathBuf::from("room")] {
+    for sub in ["", "room", "glass"].map(PathBuf::from) {
         let Ok(entries) = std::fs::read_dir(dir.join(&sub)) else {
             continue;
         };
@@ -54,15 +56,19 @@ pub fn files(dir: &Path) -> Result<Vec<PathBuf>> {
     Ok(found)
 }
 
-/// Copies the compiled container and room light maps of `ctx` (fresh under
-/// its output folder) with their key records into `dest`, replacing only
-/// files the engine shipped before.
+/// Copies the compiled containers and room light maps of `ctx` (fresh
+/// under its output folder) with their key records into `dest`, replacing
+/// only files the engine shipped before.
 pub fn ship(ctx: &CompileContext, dest: &Path) -> Result<Vec<PathBuf>> {
-    let container = DataDirs::under(ctx.out, ctx.scene).container;
-    if !container.is_file() {
-        bail!("{}: no compiled container to ship", container.display());
+    let files = files(ctx.out)?;
+    if !files.iter().any(|f| is_container(f)) {
+        bail!("{}: no compiled container to ship", ctx.out.display());
     }
-    copy_with_records(ctx.out, dest, &files(ctx.out)?)
+    copy_with_records(ctx.out, dest, &files)
+}
+
+fn is_container(rel: &Path) -> bool {
+    rel.extension().is_some_and(|e| e == "ptxc")
 }
 
 /// Copies each of `files` (relative paths) from `from` into `dest` with its
@@ -115,29 +121,35 @@ pub fn container(ctx: &CompileContext, key: &inference::key::Key) -> Option<Path
 /// matches the key it would be compiled with today ("fresh", or what
 /// changed); fails when there is no container.
 pub fn check(ctx: &CompileContext) -> Result<Vec<(String, String)>> {
-    let dir = ctx.out;
-    let container = super::container_key_for(ctx)?;
-    let room = super::room::expected_key(ctx)?;
-    let files = files(dir)?;
-    if !files
-        .iter()
-        .any(|f| f.extension().is_some_and(|e| e == "ptxc"))
-    {
-        bail!("{}: no shipped container", dir.display());
+    let files = files(ctx.out)?;
+    if !files.iter().any(|f| is_container(f)) {
+        bail!("{}: no shipped container", ctx.out.display());
     }
+    // Each kind's key only when a file of that kind is shipped.
+    let any = |top: &str| files.iter().any(|f| f.starts_with(top));
+    let room = any("room")
+        .then(|| super::room::expected_key(ctx))
+        .transpose()?;
+    let glass = match any("glass") {
+        true => Some(
+            super::glass_shells::expected_key(ctx.scene, ctx.size)
+                .context("glass/ is shipped but the scene asks for no per-sample shell maps")?,
+        ),
+        false => None,
+    };
+    let top = files.iter().any(|f| f.components().count() == 1);
+    let container = top.then(|| super::container_key_for(ctx)).transpose()?;
     Ok(files
         .iter()
         .map(|rel| {
-            let key = if rel.starts_with("room") {
-                &room
-            } else {
-                &container
+            let key = match () {
+                _ if rel.starts_with("room") => room.as_ref(),
+                _ if rel.starts_with("glass") => glass.as_ref(),
+                _ => container.as_ref(),
             };
-            let path = dir.join(rel);
-            (
-                path.display().to_string(),
-                super::room::describe(&freshness(&path, key)),
-            )
+            let path = ctx.out.join(rel);
+            let fresh = key.map_or(Freshness::Missing, |key| freshness(&path, key));
+            (path.display().to_string(), super::room::describe(&fresh))
         })
         .collect())
 }

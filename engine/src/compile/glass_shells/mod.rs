@@ -48,6 +48,29 @@ pub struct GlassObject<'a> {
     pub traced_key: Key,
 }
 
+impl<'a> GlassObject<'a> {
+    /// The scene's glass object (the first, as playback's) when it asks
+    /// for per-sample maps (`shell_every`); its shell map's origin and size
+    /// are playback's (the mesh's centroid, `resolution`).
+    pub fn for_scene(scene: &'a Scene) -> Option<GlassObject<'a>> {
+        let (index, object) =
+            (scene.objects.iter().enumerate()).find(|(_, o)| o.glass.is_some())?;
+        let settings = object.glass.clone()?;
+        if settings.shell_lines(scene.orbit.samples).is_empty() {
+            return None;
+        }
+        let (index, origin) = (index as u32, object.mesh.area_weighted_centroid());
+        let traced_key = crate::glass::shell::shell_key(scene, index, origin, settings.resolution);
+        Some(GlassObject {
+            scene,
+            index,
+            settings,
+            origin,
+            traced_key,
+        })
+    }
+}
+
 /// Where line `line`'s map is cached under `out`.
 pub fn sample_path(out: &Path, line: u32) -> PathBuf {
     crate::glass::shell::shell_path(out).with_file_name(format!("room_shell_line{line:04}.bin"))
@@ -264,55 +287,94 @@ impl<'a> Solver<'a> {
     }
 }
 
-/// Compiles (where missing) and loads the per-sample shell maps of the
-/// scene's glass object into `renderer`, when the scene asks for them:
-/// through the codec, or with `raw` as solved.
+/// The key the per-sample maps' container of `scene` carries at frame
+/// `size`; None when the scene asks for no per-sample maps.
+pub fn expected_key(scene: &Scene, size: (u32, u32)) -> Option<Key> {
+    GlassObject::for_scene(scene).map(|g| packed_key(&g, size))
+}
+
+/// The fresh container of `ctx` (under `--out`, then the shipped one, read
+/// only) with its path and bytes; None when neither matches `key`.
+fn fresh_container(ctx: &super::CompileContext, key: &Key) -> Option<(PathBuf, Vec<u8>)> {
+    let mut dirs = vec![ctx.out.to_path_buf()];
+    dirs.extend(ctx.shipped.clone());
+    dirs.into_iter().find_map(|dir| {
+        let file = pack::container_path(&dir);
+        read_fresh(&file, key).map(|bytes| (file, bytes))
+    })
+}
+
+/// The per-sample maps of `g` solved where missing under `ctx.out` and
+/// compressed: decoded, with the container's bytes (`raw`: as solved).
+fn compile_shells(
+    ctx: &super::CompileContext,
+    g: &GlassObject,
+    key: &Key,
+    raw: bool,
+) -> Result<(SampleShells, u64)> {
+    let size = g.settings.resolution;
+    let traced =
+        crate::glass::shell::room_shell_bytes(ctx.scene, ctx.out, g.index, g.origin, size)?;
+    let shells = sample_shells(g, ctx.out, ctx.device, ctx.size, &traced)?;
+    match raw {
+        true => {
+            let bytes = shells.maps.iter().map(|m| m.len() as u64).sum();
+            Ok((shells, bytes))
+        }
+        false => pack_shells(shells, key, ctx.out, size),
+    }
+}
+
+/// `engine compile` of a glass scene: its per-sample maps' container under
+/// `ctx.out` (solved where missing); None when the scene asks for none.
+pub fn compile(ctx: &super::CompileContext) -> Result<Option<(PathBuf, u64)>> {
+    let Some(g) = GlassObject::for_scene(ctx.scene) else {
+        return Ok(None);
+    };
+    let key = packed_key(&g, ctx.size);
+    let file = pack::container_path(ctx.out);
+    if let Some(bytes) = read_fresh(&file, &key) {
+        return Ok(Some((file, bytes.len() as u64)));
+    }
+    let (_, bytes) = compile_shells(ctx, &g, &key, false)?;
+    Ok(Some((file, bytes)))
+}
+
+/// Loads the per-sample shell maps of the scene's glass object into
+/// `renderer`, when the scene asks for them: from a fresh container (under
+/// `--out`, or the one shipped in `assets/compiled/`), else solved where
+/// missing and compressed; with `raw` as solved.
 pub fn load(
     ctx: &super::CompileContext,
     renderer: &mut crate::renderer::Renderer,
     raw: bool,
 ) -> Result<()> {
-    let Some(g) = renderer.glass.as_ref() else {
+    let Some(g) = GlassObject::for_scene(ctx.scene) else {
         return Ok(());
     };
-    let (index, origin, size) = (g.lens_object(), g.cube.origin, g.cube.color.desc.width);
-    let Some(settings) = ctx.scene.objects[index as usize].glass.clone() else {
-        return Ok(());
-    };
-    if settings.shell_lines(ctx.scene.orbit.samples).is_empty() {
+    if renderer.glass.is_none() {
         return Ok(());
     }
-    let g = GlassObject {
-        scene: ctx.scene,
-        index,
-        settings,
-        origin,
-        traced_key: crate::glass::shell::shell_key(ctx.scene, index, origin, size),
-    };
-    // A fresh container plays without the maps it was made from.
     let key = packed_key(&g, ctx.size);
-    let file = pack::container_path(ctx.out);
+    // A fresh container plays without the maps it was made from.
     let cached = match raw {
         true => None,
-        false => read_fresh(&file, &key),
+        false => fresh_container(ctx, &key),
     };
     let (shells, bytes) = match cached {
-        Some(bytes) => (
-            pack::decode(bytes.clone(), azimuths(&g), &file)?,
-            bytes.len() as u64,
-        ),
-        None => {
-            let traced =
-                crate::glass::shell::room_shell_bytes(ctx.scene, ctx.out, index, origin, size)?;
-            let shells = sample_shells(&g, ctx.out, ctx.device, ctx.size, &traced)?;
-            match raw {
-                true => {
-                    let bytes = shells.maps.iter().map(|m| m.len() as u64).sum();
-                    (shells, bytes)
-                }
-                false => pack_shells(shells, &key, ctx.out, size)?,
+        Some((file, bytes)) => {
+            if !file.starts_with(ctx.out) {
+                eprintln!(
+                    "{}: playing the shipped per-sample shell maps {} (its key matches; \
+                     --recompile solves them here)",
+                    ctx.scene.name,
+                    file.display()
+                );
             }
+            let len = bytes.len() as u64;
+            (pack::decode(bytes, azimuths(&g), &file)?, len)
         }
+        None => compile_shells(ctx, &g, &key, raw)?,
     };
     renderer.load_glass_samples(&shells)?;
     renderer.map_bytes = Some(bytes);

@@ -24,7 +24,8 @@ pub struct CompileArgs {
     /// the maps every shard wrote into --out; fails if a sample is missing.
     #[arg(long)]
     pub merge: bool,
-    /// Also copy the compiled container and room light maps into DIR
+    /// Also copy the compiled container and room light maps (a glass
+    /// scene: its per-sample shell maps' container) into DIR
     /// (`assets/compiled/<scene>` regenerates the shipped scene).
     #[arg(long)]
     pub ship: Option<PathBuf>,
