@@ -47,6 +47,10 @@ impl GpuMesh {
 pub struct GpuScene {
     /// Parallel to `scene.objects`.
     pub meshes: Vec<GpuMesh>,
+    /// Parallel to `scene.objects`: a mirror or glossy object's caps over
+    /// its openings (`inference::caps`, drawn black as its inside), None
+    /// for other objects and closed meshes.
+    pub caps: Vec<Option<GpuMesh>>,
     /// Parallel to `scene.textures`.
     pub textures: Vec<Image>,
     /// 1×1 white, bound where a material has no texture.
@@ -65,6 +69,11 @@ impl GpuScene {
             .iter()
             .map(|o| GpuMesh::upload(device, &o.name, &o.mesh))
             .collect::<GpuResult<Vec<_>>>()?;
+        let caps = scene
+            .objects
+            .iter()
+            .map(|o| upload_caps(device, scene, o))
+            .collect::<GpuResult<Vec<_>>>()?;
         let mut textures = Vec::with_capacity(scene.textures.len());
         for texture in &scene.textures {
             textures.push(upload_texture(device, executor, texture)?);
@@ -81,6 +90,7 @@ impl GpuScene {
         )?;
         Ok(Self {
             meshes,
+            caps,
             textures,
             white,
             sampler: Sampler::trilinear(device, vk::SamplerAddressMode::REPEAT)?,
@@ -98,6 +108,27 @@ impl GpuScene {
             .and_then(|i| self.textures.get(i))
             .unwrap_or(&self.white)
     }
+}
+
+/// The caps of `o` when it reflects and has openings.
+fn upload_caps(
+    device: &Device,
+    scene: &Scene,
+    o: &inference::scene::Object,
+) -> GpuResult<Option<GpuMesh>> {
+    use inference::scene::Material;
+    let reflects = matches!(
+        scene.materials.get(o.material),
+        Some(Material::Mirror { .. } | Material::Glossy { .. })
+    );
+    let caps = match reflects {
+        true => inference::caps::boundary_caps(&o.mesh),
+        false => return Ok(None),
+    };
+    if caps.indices.is_empty() {
+        return Ok(None);
+    }
+    GpuMesh::upload(device, &format!("{} caps", o.name), &caps).map(Some)
 }
 
 fn upload_texture(device: &Device, executor: &mut Executor, texture: &Texture) -> GpuResult<Image> {

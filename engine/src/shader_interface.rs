@@ -271,6 +271,9 @@ pub struct RemPush {
     pub axis_z: Vec4,
 }
 
+/// `shaders/reflector_interior.vert`: the position of binding 0.
+pub const INTERIOR_ATTRIBUTES: [vk::VertexInputAttributeDescription; 1] = [Vertex::ATTRIBUTES[0]];
+
 /// `shaders/rem.vert`: position and normal of binding 0.
 pub const REM_ATTRIBUTES: [vk::VertexInputAttributeDescription; 2] =
     [Vertex::ATTRIBUTES[0], Vertex::ATTRIBUTES[1]];
@@ -298,6 +301,9 @@ pub mod spirv {
     pub const PTM_VERT: &[u8] = shader!("ptm.vert");
     pub const PTM_FRAG: &[u8] = shader!("ptm.frag");
     pub const PEM_GBUFFER_FRAG: &[u8] = shader!("pem_gbuffer.frag");
+    pub const PEM_GBUFFER_INTERIOR_FRAG: &[u8] = shader!("pem_gbuffer_interior.frag");
+    pub const REFLECTOR_INTERIOR_VERT: &[u8] = shader!("reflector_interior.vert");
+    pub const REFLECTOR_INTERIOR_FRAG: &[u8] = shader!("reflector_interior.frag");
     pub const PEM_COMPOSITE_VERT: &[u8] = shader!("pem_composite.vert");
     pub const PEM_COMPOSITE_FRAG: &[u8] = shader!("pem_composite.frag");
     pub const RELIGHT_DIRECTIONAL_FRAG: &[u8] = shader!("relight_directional.frag");

@@ -79,6 +79,8 @@ pub struct MirrorDraw {
 pub struct MirrorRenderer {
     device: Device,
     pipeline: Pipeline,
+    /// The reflectors' insides, black (`super::interior`).
+    interior: Pipeline,
     lut: Image,
     lut_sampler: Sampler,
     cube_sampler: Sampler,
@@ -92,10 +94,12 @@ impl MirrorRenderer {
         depth_format: vk::Format,
     ) -> GpuResult<Self> {
         let pipeline = mirror_pipeline(device, color_format, depth_format)?;
+        let interior = super::interior::black_interior(device, color_format, depth_format)?;
         let lut = fresnel_lut_image(device, executor)?;
         Ok(Self {
             device: device.clone(),
             pipeline,
+            interior,
             lut,
             lut_sampler: Sampler::trilinear(device, vk::SamplerAddressMode::CLAMP_TO_EDGE)?,
             cube_sampler: Sampler::trilinear(device, vk::SamplerAddressMode::CLAMP_TO_EDGE)?,
@@ -179,6 +183,19 @@ impl Pass for MirrorPass<'_> {
                 if let Some(mesh) = self.gpu.meshes.get(draw.object) {
                     draw_mesh(&r.device, cmd, mesh, Some(&draw.texgen));
                 }
+            }
+            // The insides (caps over openings) after the front faces.
+            let push = crate::shader_interface::PemPush {
+                view_proj: self.view_proj,
+                ..Default::default()
+            };
+            r.interior.bind(cmd, None, &push)?;
+            let caps = self
+                .draws
+                .iter()
+                .filter_map(|d| self.gpu.caps.get(d.object));
+            for caps in caps.flatten() {
+                draw_mesh(&r.device, cmd, caps, None);
             }
             Ok(())
         })

@@ -2,6 +2,7 @@
 
 pub mod em_capture;
 pub mod glass;
+pub mod interior;
 pub mod mirror;
 pub mod panorama_cube;
 pub mod pem;

@@ -26,6 +26,8 @@ pub enum Shading {
     SingleEm,
     /// A 2D texture on the mesh's UVs: binding texture.
     Ptm,
+    /// The reflector's inside (caps over its openings), black: no bindings.
+    Interior,
 }
 
 impl Shading {
@@ -34,6 +36,7 @@ impl Shading {
             Shading::Layered => 3,
             Shading::SingleEm => 2,
             Shading::Ptm => 1,
+            Shading::Interior => 0,
         }
     }
 }
@@ -43,12 +46,15 @@ pub struct PemPipelines {
     layered: [Pipeline; 2],
     single: [Pipeline; 2],
     ptm: [Pipeline; 2],
+    /// Drawn by the first pass only (blending never needs it).
+    interior: Pipeline,
 }
 
 impl PemPipelines {
     pub fn new(device: &Device, color: vk::Format, depth: vk::Format) -> GpuResult<Self> {
         let make = |shading: Shading, blend: bool| {
             let (name, vertex_spirv, fragment_spirv) = match shading {
+                Shading::Interior => return super::interior::black_interior(device, color, depth),
                 Shading::Layered => ("pem layered", spirv::PEM_VERT, spirv::PEM_LAYERED_FRAG),
                 Shading::SingleEm => ("pem single", spirv::PEM_VERT, spirv::PEM_DISTANT_FRAG),
                 Shading::Ptm => ("ptm", spirv::PTM_VERT, spirv::PTM_FRAG),
@@ -91,6 +97,7 @@ impl PemPipelines {
                 make(Shading::SingleEm, true)?,
             ],
             ptm: [make(Shading::Ptm, false)?, make(Shading::Ptm, true)?],
+            interior: make(Shading::Interior, false)?,
         })
     }
 
@@ -99,6 +106,7 @@ impl PemPipelines {
             Shading::Layered => &self.layered,
             Shading::SingleEm => &self.single,
             Shading::Ptm => &self.ptm,
+            Shading::Interior => return &self.interior,
         };
         &pair[usize::from(blend)]
     }
@@ -152,9 +160,10 @@ impl Pass for PemPass<'_> {
                     f0_weight: draw.f0.extend(self.weight),
                     slot: glam::Vec4::new(draw.slot as f32, 0.0, draw.lod_bias, 0.0),
                 };
+                let set = (draw.shading != Shading::Interior).then_some(draw.set);
                 self.pipelines
                     .get(draw.shading, self.blend)
-                    .bind(cmd, Some(draw.set), &push)?;
+                    .bind(cmd, set, &push)?;
                 // SAFETY: a pipeline with this vertex layout is bound inside
                 // dynamic rendering; the index range lies within `indices`,
                 // whose entries index the mesh's vertices and the texgen

@@ -61,9 +61,11 @@ impl GBuffer {
     }
 }
 
-/// The two pipelines of deferred compositing.
+/// The pipelines of deferred compositing: the G-buffer, the reflectors'
+/// insides into it, and the composite.
 pub struct DeferredPipelines {
     pub gbuffer: Pipeline,
+    pub interior: Pipeline,
     pub composite: Pipeline,
 }
 
@@ -88,6 +90,14 @@ impl DeferredPipelines {
                 stencil: StencilTest::Mark,
             },
         )?;
+        // The insides: the stencil stays unmarked and the cosine says
+        // "nothing drawn" (pem_gbuffer_interior.frag).
+        let interior = super::interior::interior_pipeline(
+            device,
+            ("pem g-buffer interior", spirv::PEM_GBUFFER_INTERIOR_FRAG),
+            &GBUFFER_FORMATS,
+            depth,
+        )?;
         let composite = Pipeline::new(
             device,
             &PipelineDesc {
@@ -106,7 +116,11 @@ impl DeferredPipelines {
                 stencil: StencilTest::Equal,
             },
         )?;
-        Ok(Self { gbuffer, composite })
+        Ok(Self {
+            gbuffer,
+            interior,
+            composite,
+        })
     }
 }
 
@@ -121,6 +135,9 @@ pub struct GBufferDraw<'a> {
     pub texgen: (&'a Buffer, &'a Buffer),
     pub stencil: u32,
     pub local: bool,
+    /// The reflector's inside: `mesh` is its caps, drawn with the interior
+    /// pipeline (no set, no mark).
+    pub interior: bool,
     /// The reflector's LOD bias, added to the recorded levels of detail.
     pub lod_bias: f32,
     /// Binds the distant and local map arrays of the reflector's EM
@@ -133,6 +150,8 @@ pub struct GBufferDraw<'a> {
 pub struct GBufferPass<'a> {
     pub device: &'a Device,
     pub pipeline: &'a Pipeline,
+    /// For the draws of reflectors' insides.
+    pub interior: &'a Pipeline,
     pub gbuffer: &'a GBuffer,
     /// The frame's depth/stencil (cleared by this pass).
     pub depth: &'a Image,
@@ -182,17 +201,24 @@ impl Pass for GBufferPass<'_> {
                     slot: Vec4::new(0.0, f32::from(draw.local), draw.lod_bias, 0.0),
                     ..PemPush::default()
                 };
-                self.pipeline.bind(cmd, Some(draw.set), &push)?;
+                match draw.interior {
+                    true => self.interior.bind(cmd, None, &push)?,
+                    false => self.pipeline.bind(cmd, Some(draw.set), &push)?,
+                }
                 // SAFETY: the G-buffer pipeline (position + two texgen
-                // streams) is bound inside dynamic rendering; the index range
-                // lies within `indices`, whose entries index the mesh and both
-                // streams (one entry per vertex).
+                // streams) or the interior one (position) is bound inside
+                // dynamic rendering; the index range lies within `indices`,
+                // whose entries index the mesh (and, for the reflector
+                // itself, both streams: one entry per vertex).
                 unsafe {
-                    d.cmd_set_stencil_reference(
-                        cmd,
-                        vk::StencilFaceFlags::FRONT_AND_BACK,
-                        draw.stencil,
-                    );
+                    // The interior pipeline marks nothing (no stencil state).
+                    if !draw.interior {
+                        d.cmd_set_stencil_reference(
+                            cmd,
+                            vk::StencilFaceFlags::FRONT_AND_BACK,
+                            draw.stencil,
+                        );
+                    }
                     d.cmd_bind_vertex_buffers(cmd, 0, &[draw.mesh.vertices.raw], &[0]);
                     d.cmd_bind_vertex_buffers(
                         cmd,

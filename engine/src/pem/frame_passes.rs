@@ -43,7 +43,14 @@ impl PemPlayer {
             // pixel it covers once, whichever part the pixel belongs to.
             let stencil = ri as u32 + 1;
             let class = self.class_of(r)?;
-            gdraws.extend(gbuffer_draws(r, mesh, stencil, layered, class.gbuffer_set));
+            let caps = gpu.caps.get(r.object).and_then(Option::as_ref);
+            gdraws.extend(gbuffer_draws(
+                r,
+                (mesh, caps),
+                stencil,
+                layered,
+                class.gbuffer_set,
+            ));
             let Some(area) = composite_area(r, view_proj, extent) else {
                 continue;
             };
@@ -64,6 +71,7 @@ impl PemPlayer {
         let fill = GBufferPass {
             device: &self.device,
             pipeline: &self.sets.deferred.gbuffer,
+            interior: &self.sets.deferred.interior,
             gbuffer,
             depth: target.depth,
             draws: gdraws,
@@ -110,6 +118,10 @@ impl PemPlayer {
             let mut draws = Vec::new();
             for (ri, r) in self.reflectors.iter().enumerate() {
                 draws.extend(self.draws_of(gpu, r, slots[ri][i])?);
+                // After its front faces, which hide most of it from the depth test.
+                if i == 0 {
+                    draws.extend(interior_draw(gpu, r));
+                }
             }
             passes.push(Box::new(PemPass {
                 name: if i == 0 { "pem" } else { "pem_blend" },
@@ -180,16 +192,35 @@ impl PemPlayer {
     }
 }
 
-/// A reflector's two G-buffer draws: its hull triangles with the distant
-/// layer alone, then the rest with the local layer too when `layered`;
-/// `set` binds the maps of its EM resolution.
+/// A reflector's inside: its caps, black (`Shading::Interior`); None for
+/// a closed reflector.
+fn interior_draw<'a>(gpu: &'a GpuScene, r: &'a PemReflector) -> Option<PemDraw<'a>> {
+    let caps = gpu.caps.get(r.object)?.as_ref()?;
+    Some(PemDraw {
+        shading: Shading::Interior,
+        set: vk::DescriptorSet::null(),
+        mesh: caps,
+        indices: &caps.indices,
+        first_index: 0,
+        index_count: caps.index_count,
+        texgen: None,
+        f0: r.f0,
+        slot: 0,
+        lod_bias: 0.0,
+    })
+}
+
+/// A reflector's G-buffer draws: its hull triangles with the distant
+/// layer alone, then the rest with the local layer too when `layered`
+/// (`set` binds the maps of its EM resolution), then its inside (`caps`,
+/// unmarked) when it has openings.
 fn gbuffer_draws<'a>(
     r: &'a PemReflector,
-    mesh: &'a GpuMesh,
+    (mesh, caps): (&'a GpuMesh, Option<&'a GpuMesh>),
     stencil: u32,
     layered: bool,
     set: vk::DescriptorSet,
-) -> [GBufferDraw<'a>; 2] {
+) -> Vec<GBufferDraw<'a>> {
     let local_stream = if layered {
         &r.texgen_local
     } else {
@@ -203,17 +234,26 @@ fn gbuffer_draws<'a>(
         texgen: (&r.texgen_distant, local_stream),
         stencil,
         local,
+        interior: false,
         lod_bias: r.lod_bias,
         set,
     };
-    [
+    let mut draws = vec![
         draw(0, r.hull_index_count, false),
         draw(
             r.hull_index_count,
             r.index_count - r.hull_index_count,
             layered,
         ),
-    ]
+    ];
+    draws.extend(caps.map(|caps| GBufferDraw {
+        mesh: caps,
+        indices: &caps.indices,
+        index_count: caps.index_count,
+        interior: true,
+        ..draw(0, 0, false)
+    }));
+    draws
 }
 
 /// Where a reflector's composite draw shades: its screen bounds (the whole
