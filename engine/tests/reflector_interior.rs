@@ -3,13 +3,14 @@
 //! dark; the rasterizer culls back faces, so without the caps over the
 //! openings (`inference::caps`, `passes::interior`) those pixels showed
 //! the room through the teapot (~0.3 linear against ~0). The default
-//! (deferred) frame and the static EM frame both draw them dark.
+//! (deferred) frame, the static EM frame and the REM frame draw them dark.
 
 mod common;
 
 use common::*;
 use engine::pem::player::{PemKind, PemSettings};
 use engine::pem::source::MapSource;
+use engine::rem::sources::{RemSettings, reflector, trace};
 use engine::renderer::{FrameMode, Renderer};
 use inference::scene::Scene;
 use inference::trace::SceneBvh;
@@ -52,12 +53,25 @@ fn the_lid_gap_shows_the_dark_inside_not_the_room() {
     let container = engine::compile::shipped::root().join("teapot/teapot.ptxc");
     let device = validated_device();
     let luminance = |p: &[f32; 4]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
-    for mode in [FrameMode::Pem, FrameMode::StaticEm] {
+    // REM from small, quickly traced source maps (the inside does not
+    // depend on them).
+    let rem_settings = RemSettings {
+        size: 32,
+        level: 0,
+        spp: 4,
+        lobe_samples: 4,
+    };
+    let object = reflector(&scene).expect("reflector");
+    let rem_maps = trace(&scene, object, rem_settings).expect("REM source maps");
+    for mode in [FrameMode::Pem, FrameMode::StaticEm, FrameMode::Rem] {
         let mut r = Renderer::new(&device, &scene, SIZE.0, SIZE.1).expect("renderer");
         if mode == FrameMode::Pem {
             let source = MapSource::container(&scene, &container).expect("shipped container");
             let settings = PemSettings::new(PemKind::Layered);
             r.set_pem(&scene, settings, source).expect("set-up");
+        }
+        if mode == FrameMode::Rem {
+            r.set_rem(&scene, &rem_maps, true).expect("REM set-up");
         }
         r.frame(mode, eye, scene.orbit.view(eye)).expect("frame");
         let pixels = r.pixels().expect("pixels");

@@ -3,9 +3,10 @@
 //! (`inference::caps`), drawn with depth, both sides, so that it sees the
 //! dark inside, as the tracer does, and not the room through the object,
 //! as culled back faces showed (96 pixels of the teapot at 12° on the
-//! orbit, 0–2 of 255 traced against ~155 drawn). The forward passes draw
-//! them black; the deferred G-buffer records "nothing drawn" and leaves
-//! the stencil unmarked, so the room's cleared black stays.
+//! orbit, 0–2 of 255 traced against ~155 drawn). The forward passes
+//! (multipass, static EM, REM) draw them black; the deferred G-buffer
+//! records "nothing drawn" and leaves the stencil unmarked, so the room's
+//! cleared black stays.
 //! `shaders/reflector_interior.*`, `pem_gbuffer_interior.frag`.
 
 use crate::backend::{Device, GpuResult, Pipeline, PipelineDesc, StencilTest};

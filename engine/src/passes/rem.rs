@@ -55,6 +55,8 @@ pub struct RemRenderer {
     device: Device,
     warp: Pipeline,
     shade: Pipeline,
+    /// The reflector's inside, black (`super::interior`).
+    interior: Pipeline,
     sources: Image,
     blended: Image,
     blended_depth: Image,
@@ -112,6 +114,7 @@ impl RemRenderer {
         )?;
         let warp = pipeline(device, Stage::Warp, (MAP_FORMAT, MAP_DEPTH))?;
         let shade = pipeline(device, Stage::Shade, (color_format, depth_format))?;
+        let interior = super::interior::black_interior(device, color_format, depth_format)?;
         let sampler = Sampler::new(
             device,
             vk::SamplerAddressMode::CLAMP_TO_EDGE,
@@ -123,6 +126,7 @@ impl RemRenderer {
             device: device.clone(),
             warp,
             shade,
+            interior,
             sources,
             blended,
             blended_depth,
@@ -320,6 +324,15 @@ impl Pass for RemPass<'_> {
             r.shade.bind(cmd, Some(r.shade_set), &self.push)?;
             if let Some(mesh) = self.gpu.meshes.get(r.object) {
                 draw_mesh(&r.device, cmd, mesh, None);
+            }
+            // Its inside (caps over its openings) after its front faces.
+            if let Some(Some(caps)) = self.gpu.caps.get(r.object) {
+                let push = crate::shader_interface::PemPush {
+                    view_proj: self.push.view_proj,
+                    ..Default::default()
+                };
+                r.interior.bind(cmd, None, &push)?;
+                draw_mesh(&r.device, cmd, caps, None);
             }
             Ok(())
         })
