@@ -5,6 +5,8 @@
 //! is solved again; a bad τ and hybrid without glass fail cleanly; an
 //! object near the glass plays as a layer of its own, traced once.
 
+mod common;
+
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -172,11 +174,7 @@ fn a_glass_scene_compiles_and_ships_its_shell_maps() {
         engine(&args)
     };
     let o = compile(&["--ship", dest.to_str().expect("utf-8 path")]);
-    let log = format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let log = common::output_text(&o);
     assert!(o.status.success(), "{log}");
     assert!(log.contains("solved 3 per-sample shell maps"), "{log}");
     assert!(log.contains("shipped"), "{log}");

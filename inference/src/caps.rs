@@ -20,7 +20,7 @@ type Key = (i64, i64, i64);
 pub fn boundary_caps(mesh: &Mesh) -> Mesh {
     let loops = boundary_loops(mesh);
     let mut caps = Mesh::default();
-    for ring in loops.iter().filter(|l| l.len() >= 3) {
+    for ring in &loops {
         let c = ring.iter().copied().sum::<Vec3>() / ring.len() as f32;
         for (i, &a) in ring.iter().enumerate() {
             let b = ring[(i + 1) % ring.len()];

@@ -9,9 +9,12 @@
 //! cleared black stays.
 //! `shaders/reflector_interior.*`, `pem_gbuffer_interior.frag`.
 
+use super::target::draw_mesh;
 use crate::backend::{Device, GpuResult, Pipeline, PipelineDesc, StencilTest};
+use crate::gpu_scene::GpuMesh;
 use crate::shader_interface::{INTERIOR_ATTRIBUTES, PemPush, Vertex, spirv};
 use ash::vk;
+use glam::Mat4;
 
 /// The inside's pipeline with `fragment_spirv` over `color_formats` (one
 /// frame colour: `reflector_interior.frag`; the G-buffer's three:
@@ -50,4 +53,25 @@ pub fn black_interior(
 ) -> GpuResult<Pipeline> {
     let names = ("reflector interior", spirv::REFLECTOR_INTERIOR_FRAG);
     interior_pipeline(device, names, &[color], depth)
+}
+
+/// Records `caps` with `pipeline` (a [`black_interior`]) under
+/// `view_proj`, inside a pass's rendering, after the reflectors' front
+/// faces (which hide most of them from the depth test).
+pub fn record_caps<'a>(
+    device: &Device,
+    cmd: vk::CommandBuffer,
+    pipeline: &Pipeline,
+    view_proj: Mat4,
+    caps: impl IntoIterator<Item = &'a GpuMesh>,
+) -> GpuResult<()> {
+    let push = PemPush {
+        view_proj,
+        ..Default::default()
+    };
+    pipeline.bind(cmd, None, &push)?;
+    for mesh in caps {
+        draw_mesh(device, cmd, mesh, None);
+    }
+    Ok(())
 }

@@ -185,18 +185,17 @@ impl Pass for MirrorPass<'_> {
                 }
             }
             // The insides (caps over openings) after the front faces.
-            let push = crate::shader_interface::PemPush {
-                view_proj: self.view_proj,
-                ..Default::default()
-            };
-            r.interior.bind(cmd, None, &push)?;
             let caps = self
                 .draws
                 .iter()
                 .filter_map(|d| self.gpu.caps.get(d.object));
-            for caps in caps.flatten() {
-                draw_mesh(&r.device, cmd, caps, None);
-            }
+            super::interior::record_caps(
+                &r.device,
+                cmd,
+                &r.interior,
+                self.view_proj,
+                caps.flatten(),
+            )?;
             Ok(())
         })
     }

@@ -326,14 +326,8 @@ impl Pass for RemPass<'_> {
                 draw_mesh(&r.device, cmd, mesh, None);
             }
             // Its inside (caps over its openings) after its front faces.
-            if let Some(Some(caps)) = self.gpu.caps.get(r.object) {
-                let push = crate::shader_interface::PemPush {
-                    view_proj: self.push.view_proj,
-                    ..Default::default()
-                };
-                r.interior.bind(cmd, None, &push)?;
-                draw_mesh(&r.device, cmd, caps, None);
-            }
+            let caps = self.gpu.caps.get(r.object).and_then(Option::as_ref);
+            super::interior::record_caps(&r.device, cmd, &r.interior, self.push.view_proj, caps)?;
             Ok(())
         })
     }
