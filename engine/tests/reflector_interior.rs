@@ -4,6 +4,8 @@
 //! openings (`inference::caps`, `passes::interior`) those pixels showed
 //! the room through the teapot (~0.3 linear against ~0). The default
 //! (deferred) frame, the static EM frame and the REM frame draw them dark.
+//! An open surface (a mirror pane) is not a solid with openings: it keeps
+//! its reflection.
 
 mod common;
 
@@ -18,8 +20,13 @@ use inference::trace::camera::CameraRays;
 
 const SIZE: (u32, u32) = (640, 480);
 
-/// The pixels whose centre ray first meets the teapot from inside.
+/// The pixels whose centre ray first meets the teapot from inside (or,
+/// with `front`, from outside).
 fn pixels_seeing_the_inside(scene: &Scene, eye: glam::Vec3) -> Vec<usize> {
+    pixels_on_the_reflector(scene, eye, false)
+}
+
+fn pixels_on_the_reflector(scene: &Scene, eye: glam::Vec3, front: bool) -> Vec<usize> {
     let bvh = SceneBvh::build(scene);
     let cam = CameraRays::new(scene, eye, SIZE.0, SIZE.1);
     let teapot = scene.objects.iter().position(|o| o.name == "teapot");
@@ -35,7 +42,7 @@ fn pixels_seeing_the_inside(scene: &Scene, eye: glam::Vec3) -> Vec<usize> {
             }
             let mesh = &scene.objects[h.prim.object as usize].mesh;
             let [a, b, c] = mesh.triangle(h.prim.triangle as usize);
-            if (b - a).cross(c - a).dot(d) > 0.0 {
+            if ((b - a).cross(c - a).dot(d) > 0.0) != front {
                 inside.push((py * SIZE.0 + px) as usize);
             }
         }
@@ -87,5 +94,51 @@ fn the_lid_gap_shows_the_dark_inside_not_the_room() {
             inside.len()
         );
     }
+    assert_no_validation_messages();
+}
+
+#[test]
+fn a_mirror_pane_keeps_its_reflection() {
+    // The teapot replaced by a square mirror pane facing the eye's side
+    // (0.96 m wide at the object's scale): its outline is a boundary loop,
+    // but a cap over it would be the pane itself, drawn black.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let pane = inference::scene::Mesh {
+        positions: [(-3.0, 0.0), (3.0, 0.0), (3.0, 6.0), (-3.0, 6.0)]
+            .map(|(x, y)| glam::Vec3::new(x, y, 0.0))
+            .to_vec(),
+        normals: vec![glam::Vec3::Z; 4],
+        uvs: vec![glam::Vec2::ZERO; 4],
+        indices: vec![0, 1, 2, 0, 2, 3],
+    };
+    inference::scene::obj::write_obj(&dir.path().join("pane.obj"), &pane, "pane")
+        .expect("write pane");
+    let tiny = std::fs::read_to_string(tiny_scene(dir.path())).expect("tiny scene");
+    let text = tiny.replacen(
+        "mesh = { generator = \"newell_teapot\", segments = 6 }",
+        "mesh = { obj = \"pane.obj\" }",
+        1,
+    );
+    assert!(text != tiny, "the tiny scene's teapot line moved");
+    let path = dir.path().join("pane.toml");
+    std::fs::write(&path, text).expect("write scene");
+    let scene = Scene::load(path.to_str().expect("utf-8")).expect("pane scene");
+    let eye = scene.orbit.eye(12.0, 0.0);
+    let on_pane = pixels_on_the_reflector(&scene, eye, true);
+    assert!(on_pane.len() >= 10_000, "{} pane pixels", on_pane.len());
+    let device = validated_device();
+    let mut r = Renderer::new(&device, &scene, SIZE.0, SIZE.1).expect("renderer");
+    r.frame(FrameMode::StaticEm, eye, scene.orbit.view(eye))
+        .expect("frame");
+    let pixels = r.pixels().expect("pixels");
+    let black = on_pane
+        .iter()
+        .filter(|&&i| pixels[i][..3].iter().all(|&c| c < 1e-4))
+        .count();
+    assert!(
+        black * 100 <= on_pane.len(),
+        "{black} of {} pane pixels black",
+        on_pane.len()
+    );
     assert_no_validation_messages();
 }
