@@ -19,7 +19,11 @@ type Key = (i64, i64, i64);
 /// body's rim under the lid, is 11.7%; 13.4% for the body alone), whose inside
 /// the tracer sees dark after a few mirror bounces; a larger loop outlines
 /// an open surface (a mirror pane: 100%, a bowl: 50%), whose inside faces
-/// the eye and which a black cap would hide or z-fight.
+/// the eye and which a black cap would hide or z-fight. The share is of the
+/// whole mesh, not of the connected part a loop bounds: the teapot's lid,
+/// spout and handle are parts of their own, open where they meet the body,
+/// and their loops are its openings. A pane inside a larger model is
+/// therefore capped; give it an object of its own.
 pub const MAX_OPENING_SHARE: f32 = 0.25;
 
 /// The cap triangles of `mesh`'s boundary loops that close openings (see
