@@ -232,3 +232,50 @@ fn bad_size_is_rejected_by_the_parser() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("WIDTHxHEIGHT"));
 }
+
+#[test]
+fn bad_angles_and_tau_fail_before_any_work() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out");
+    let out_s = out.to_str().expect("utf-8");
+    for (args, needle) in [
+        (
+            vec!["eval", "--elevation", "95", "--out", out_s],
+            "strictly between -90 and 90",
+        ),
+        (
+            vec!["eval", "--elevation", "10,nan", "--out", out_s],
+            "strictly between -90 and 90",
+        ),
+        (
+            vec![
+                "trace",
+                "--view-angle",
+                "10",
+                "--elevation",
+                "120",
+                "--out",
+                out_s,
+            ],
+            "strictly between -90 and 90",
+        ),
+        (
+            vec!["trace", "--view-angle", "inf", "--out", out_s],
+            "an angle in degrees",
+        ),
+        (
+            vec!["--scene", "glass", "--tau", "0", "--out", out_s],
+            "0.1..=1000.0 subpixels",
+        ),
+        (
+            vec!["infer", "--sample", "0", "--eps-f", "nan", "--out", out_s],
+            "a finite weight >= 0",
+        ),
+    ] {
+        let o = engine(&args, &[]);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        assert!(stderr(&o).contains(needle), "{args:?}: {}", stderr(&o));
+        // Refused by the parser: nothing traced, compiled or written.
+        assert!(!out.exists(), "{args:?} wrote {}", out.display());
+    }
+}

@@ -94,14 +94,15 @@ pub struct TraceArgs {
     #[arg(long)]
     pub all: bool,
     /// Trace a free view at this orbit azimuth in degrees (off the sample grid).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_degrees)]
     pub view_angle: Option<f32>,
     /// With --view-angle: elevation above the orbit in degrees.
     #[arg(
         long,
         default_value_t = 0.0,
         allow_hyphen_values = true,
-        requires = "view_angle"
+        requires = "view_angle",
+        value_parser = parse_elevation
     )]
     pub elevation: f32,
     /// Samples per pixel [default: 16].
@@ -166,7 +167,7 @@ pub struct InferArgs {
     #[arg(long)]
     pub spp: Option<u32>,
     /// Pyramidal regularization weight ε_f.
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = 0.1, value_parser = parse_weight)]
     pub eps_f: f32,
     /// Turn the Khronos validation layer on (see the main command).
     #[arg(long)]
@@ -193,7 +194,12 @@ pub struct EvalArgs {
     pub views: u32,
     /// Elevations of the "above" views over the orbit plane, in degrees,
     /// comma-separated (the `*_above` fields report the first).
-    #[arg(long, value_delimiter = ',', default_values_t = [10.0, 20.0, 30.0])]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_values_t = [10.0, 20.0, 30.0],
+        value_parser = parse_elevation
+    )]
     pub elevation: Vec<f32>,
     /// Samples per pixel of the traced references.
     #[arg(long, default_value_t = 16)]
@@ -330,7 +336,7 @@ pub struct PemArgs {
     /// Hybrid glass: split triangles whose vertex ray paths differ until
     /// their projected edges are below TAU subpixels (⅓ pixel) [default:
     /// the scene's `[objects.glass] tau`].
-    #[arg(long)]
+    #[arg(long, value_parser = parse_tau)]
     pub tau: Option<f32>,
     /// Hybrid glass: play the one traced room shell map even where the
     /// scene asks for per-sample shell maps (`[objects.glass] shell_every`).
@@ -359,6 +365,43 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
         return Err(expected());
     }
     Ok((w, h))
+}
+
+/// An angle in degrees: finite.
+pub fn parse_degrees(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(d) if d.is_finite() => Ok(d),
+        _ => Err(format!("expected an angle in degrees, got {s:?}")),
+    }
+}
+
+/// An elevation above the orbit plane: strictly between −90° and 90° (at
+/// ±90° the eye stands over the look-at point and the view has no up;
+/// past it the eye crosses the pole).
+pub fn parse_elevation(s: &str) -> Result<f32, String> {
+    match parse_degrees(s) {
+        Ok(d) if d.abs() < 90.0 => Ok(d),
+        _ => Err(format!(
+            "expected an elevation in degrees strictly between -90 and 90, got {s:?}"
+        )),
+    }
+}
+
+/// A regularization weight: finite and not negative.
+pub fn parse_weight(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(w) if w.is_finite() && w >= 0.0 => Ok(w),
+        _ => Err(format!("expected a finite weight >= 0, got {s:?}")),
+    }
+}
+
+/// A tessellation threshold τ in subpixels, checked before any work starts.
+pub fn parse_tau(s: &str) -> Result<f32, String> {
+    let range = inference::scene::glass::GLASS_TAU;
+    match s.trim().parse::<f32>() {
+        Ok(t) if range.contains(&t) => Ok(t),
+        _ => Err(format!("expected {range:?} subpixels, got {s:?}")),
+    }
 }
 
 /// A compression ratio: finite and above 1.
