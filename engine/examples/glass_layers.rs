@@ -71,7 +71,13 @@ fn main() -> Result<()> {
             ..PemOptions::default()
         };
         let ctx = compile_context(&place, &session.scene, &session.out);
-        let mut source = setup_mode(&ctx, &mut session.renderer, Mode::Hybrid, &pem, 16)?;
+        let mut source = setup_mode(
+            &ctx,
+            &mut session.renderer,
+            Mode::Hybrid,
+            &pem,
+            Default::default(),
+        )?;
         let mut frames = vec![source.frame(&mut session.renderer, &session.scene, eye)?.1];
         if let Some(g) = session.renderer.glass.as_mut().filter(|_| !traced_shell) {
             println!(

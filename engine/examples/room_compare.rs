@@ -72,7 +72,13 @@ fn main() -> Result<()> {
     for room in [RoomShading::Inferred, RoomShading::Analytic] {
         let pem = flags.pem(room);
         let ctx = compile_context(&place, &session.scene, &session.out);
-        let mut source = setup_mode(&ctx, &mut session.renderer, Mode::LayeredPem, &pem, 16)?;
+        let mut source = setup_mode(
+            &ctx,
+            &mut session.renderer,
+            Mode::LayeredPem,
+            &pem,
+            Default::default(),
+        )?;
         source.frame(&mut session.renderer, &session.scene, eye)?;
         let pixels = source.frame(&mut session.renderer, &session.scene, eye)?.1;
         let s = frame_scores(&traced, &pixels, width, height)?;

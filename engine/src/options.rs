@@ -221,11 +221,26 @@ pub struct PlayOptions {
     pub exr: bool,
     /// With `capture`: also write the path as a video (`crate::video`).
     pub video: bool,
-    /// Samples per pixel of `Mode::Trace` frames.
-    pub trace_spp: u32,
+    /// How `Mode::Trace` frames are traced.
+    pub trace: TraceFrames,
     /// A light that moves along the path (static-EM frames, the reflector
     /// showing the room relit for it).
     pub light_path: Option<LightPathOptions>,
+}
+
+/// `Mode::Trace` frames: samples per pixel and the tracer's seed (another
+/// seed traces an independent image of the same view: what a reference's
+/// noise alone scores against it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TraceFrames {
+    pub spp: u32,
+    pub seed: u64,
+}
+
+impl Default for TraceFrames {
+    fn default() -> Self {
+        Self { spp: 16, seed: 0 }
+    }
 }
 
 /// `--light-path`: which path, and the relightable panorama it plays
@@ -248,7 +263,7 @@ impl PlayOptions {
             capture: true,
             exr: false,
             video: true,
-            trace_spp: 16,
+            trace: TraceFrames::default(),
             light_path: None,
         }
     }

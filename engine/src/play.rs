@@ -4,7 +4,9 @@
 use crate::backend::create_device;
 use crate::capture;
 use crate::compile::CompileContext;
-use crate::options::{LightPathOptions, Mode, PemOptions, PlayOptions, RoomShading, RunPlace};
+use crate::options::{
+    LightPathOptions, Mode, PemOptions, PlayOptions, RoomShading, RunPlace, TraceFrames,
+};
 use crate::pem::path::{default_frames, path_view};
 use crate::pem::player::{PemKind, PemSettings};
 use crate::perf::{PerfLog, PerfReport};
@@ -80,7 +82,7 @@ pub fn setup_mode<'s>(
     renderer: &mut Renderer,
     mode: Mode,
     pem: &PemOptions,
-    trace_spp: u32,
+    trace: TraceFrames,
 ) -> Result<FrameSource<'s>> {
     let inferred_room = matches!(
         mode,
@@ -110,7 +112,8 @@ pub fn setup_mode<'s>(
             let settings = TraceSettings {
                 width,
                 height,
-                spp: trace_spp,
+                spp: trace.spp,
+                seed: trace.seed,
                 ..TraceSettings::default()
             };
             FrameSource::Trace(Box::new(Tracer::new(ctx.scene)?), settings)
@@ -174,7 +177,7 @@ pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<Played> {
     } = Session::open(place)?;
     let ctx = compile_context(place, &scene, &out);
     let mode = play_mode(opts, &scene)?;
-    let mut source = setup_mode(&ctx, &mut renderer, mode, &opts.pem, opts.trace_spp)?;
+    let mut source = setup_mode(&ctx, &mut renderer, mode, &opts.pem, opts.trace)?;
     let light = match opts.light_path {
         Some(lp) => Some(setup_light_path(&scene, &out, lp, &mut renderer)?),
         None => None,

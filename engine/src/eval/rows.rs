@@ -3,7 +3,7 @@
 //! command's flags, so `engine <flags>` replays what a row measured.
 
 use crate::backend::Filtering;
-use crate::options::{Maps, Mode, PemOptions, RoomShading};
+use crate::options::{Maps, Mode, PemOptions, RoomShading, TraceFrames};
 use crate::pem::settings::Compositing;
 use std::collections::BTreeMap;
 
@@ -13,9 +13,15 @@ pub struct Row {
     pub label: String,
     pub mode: Mode,
     pub pem: PemOptions,
-    /// Samples per pixel of a traced row.
-    pub trace_spp: u32,
+    /// A traced row's samples per pixel and seed.
+    pub trace: TraceFrames,
 }
+
+/// The row whose frames are the references traced again with another
+/// seed at their own samples per pixel: what the references' noise alone
+/// scores (a noise-free frame would score about 3 dB higher, half the
+/// squared error).
+pub const REFERENCE_NOISE: &str = "trace reference-noise";
 
 impl Row {
     fn new(label: &str, mode: Mode) -> Self {
@@ -23,11 +29,20 @@ impl Row {
             label: label.into(),
             mode,
             pem: PemOptions::default(),
-            trace_spp: 16,
+            trace: TraceFrames::default(),
         }
     }
     fn with(mut self, f: impl FnOnce(&mut PemOptions)) -> Self {
         f(&mut self.pem);
+        self
+    }
+
+    /// The row as measured against references traced at `spp`: the
+    /// [`REFERENCE_NOISE`] row traces at their samples per pixel.
+    pub fn against_references(mut self, spp: u32) -> Row {
+        if self.label == REFERENCE_NOISE {
+            self.trace.spp = spp;
+        }
         self
     }
 
@@ -41,7 +56,10 @@ impl Row {
             });
         }
         if self.mode == Mode::Trace {
-            words.push(format!("--trace-spp {}", self.trace_spp));
+            words.push(format!("--trace-spp {}", self.trace.spp));
+            if self.trace.seed != 0 {
+                words.push(format!("--trace-seed {}", self.trace.seed));
+            }
         }
         words.join(" ")
     }
@@ -62,7 +80,10 @@ impl Row {
             settings.insert(name.replace('-', "_"), v);
         }
         if self.mode == Mode::Trace {
-            settings.insert("trace_spp".into(), self.trace_spp.into());
+            settings.insert("trace_spp".into(), self.trace.spp.into());
+            if self.trace.seed != 0 {
+                settings.insert("trace_seed".into(), self.trace.seed.into());
+            }
         }
         settings
     }
@@ -101,10 +122,24 @@ pub fn all_rows() -> Vec<Row> {
         Row::new("ptm", Mode::Ptm),
         Row::new("ptm nearest-sample", Mode::Ptm).with(|p| p.blend = false),
         Row {
-            trace_spp: 4,
+            trace: TraceFrames { spp: 4, seed: 0 },
             ..Row::new("trace 4spp", Mode::Trace)
         },
+        reference_noise(),
     ]
+}
+
+/// [`REFERENCE_NOISE`]; its samples per pixel are set to the references'
+/// when the eval runs.
+fn reference_noise() -> Row {
+    let references = inference::trace::TraceSettings::default().seed;
+    Row {
+        trace: TraceFrames {
+            spp: 16,
+            seed: references.wrapping_add(1),
+        },
+        ..Row::new(REFERENCE_NOISE, Mode::Trace)
+    }
 }
 
 /// The rows of a scene with a glass object: hybrid at τ = 3 (labelled
@@ -128,9 +163,10 @@ pub fn glass_rows() -> Vec<Row> {
     }));
     rows.push(Row::new("static-em", Mode::StaticEm));
     rows.push(Row {
-        trace_spp: 4,
+        trace: TraceFrames { spp: 4, seed: 0 },
         ..Row::new("trace 4spp", Mode::Trace)
     });
+    rows.push(reference_noise());
     rows
 }
 
@@ -185,5 +221,32 @@ mod tests {
         assert_eq!(rows[0].settings()["tau"], serde_json::json!(3));
         assert!(rows.iter().any(|r| r.mode == Mode::StaticEm));
         assert!(rows.iter().any(|r| r.mode == Mode::Trace));
+    }
+
+    #[test]
+    fn the_reference_noise_row_traces_another_seed_at_the_references_spp() {
+        let references = inference::trace::TraceSettings::default().seed;
+        for rows in [all_rows(), glass_rows()] {
+            let noise = rows
+                .into_iter()
+                .find(|r| r.label == REFERENCE_NOISE)
+                .expect("row")
+                .against_references(64);
+            assert_eq!(noise.mode, Mode::Trace);
+            assert_eq!(noise.trace.spp, 64);
+            assert_ne!(noise.trace.seed, references);
+            let seed = noise.trace.seed;
+            assert_eq!(
+                noise.flags(),
+                format!("--mode trace --trace-spp 64 --trace-seed {seed}")
+            );
+            assert_eq!(noise.settings()["trace_seed"], serde_json::json!(seed));
+        }
+        // Other rows keep their own samples per pixel.
+        let four = all_rows()
+            .into_iter()
+            .find(|r| r.label == "trace 4spp")
+            .expect("row");
+        assert_eq!(four.against_references(64).trace.spp, 4);
     }
 }

@@ -63,6 +63,10 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
         ..
     } = Session::open(place)?;
     let (rows, relight_wanted) = selected_rows(&opts.rows, &scene)?;
+    let rows: Vec<Row> = rows
+        .into_iter()
+        .map(|r| r.against_references(opts.spp))
+        .collect();
     let out = opts.out.clone().unwrap_or_else(|| data.join("eval"));
     crate::util::files::claim_dir(&out)?;
     let relight = match relight_wanted {
@@ -87,7 +91,7 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
     let (mut table_rows, mut pictures, mut skipped) = (Vec::new(), Vec::new(), Vec::new());
     for row in &rows {
         progress.set_message(row.label.clone());
-        let mut source = match setup_mode(&ctx, &mut renderer, row.mode, &row.pem, row.trace_spp) {
+        let mut source = match setup_mode(&ctx, &mut renderer, row.mode, &row.pem, row.trace) {
             Ok(s) => s,
             Err(e) => {
                 // A row whose maps cannot be made is reported, not fatal.

@@ -147,7 +147,7 @@ pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
         &mut renderer,
         Mode::LayeredPem,
         &PemOptions::default(),
-        1,
+        Default::default(),
     )?;
     let settings = TraceSettings {
         width: place.size.0,

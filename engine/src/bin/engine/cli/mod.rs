@@ -276,6 +276,10 @@ pub struct PlayArgs {
     /// Samples per pixel of `--mode trace` frames.
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub trace_spp: u32,
+    /// Seed of `--mode trace` frames (the same seed gives the same image;
+    /// another, an independent one).
+    #[arg(long, default_value_t = 0)]
+    pub trace_seed: u64,
     /// Move a light along the path while playing (static-EM frames: the
     /// reflector shows the room relit for the light by spherical harmonics,
     /// the room is lit by it; the scene's lights are dark).
@@ -436,7 +440,10 @@ impl PlayArgs {
             capture: !self.no_capture,
             exr: self.exr,
             video: !self.no_video,
-            trace_spp: self.trace_spp,
+            trace: engine::options::TraceFrames {
+                spp: self.trace_spp,
+                seed: self.trace_seed,
+            },
             light_path: self.light_path.map(|path| LightPathOptions {
                 path,
                 size: self.light_path_size,
