@@ -146,7 +146,7 @@ fn glass_compiles_its_shell_once_and_plays_hybrid() {
     assert!(
         stderr
             .lines()
-            .any(|l| l.starts_with("error:") && l.contains("--tau 0")),
+            .any(|l| l.starts_with("error:") && l.contains("'0' for '--tau")),
         "{stderr}"
     );
 }
