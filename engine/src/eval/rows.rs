@@ -121,22 +121,38 @@ pub fn all_rows() -> Vec<Row> {
         }),
         Row::new("ptm", Mode::Ptm),
         Row::new("ptm nearest-sample", Mode::Ptm).with(|p| p.blend = false),
-        Row {
-            trace: TraceFrames { spp: 4, seed: 0 },
-            ..Row::new("trace 4spp", Mode::Trace)
-        },
+        trace_4spp(),
         reference_noise(),
     ]
+}
+
+/// A seed other than the references': traced rows share no samples with
+/// the images they are scored against (the same seed would replay the
+/// references' first samples and read high).
+fn independent_seed() -> u64 {
+    inference::trace::TraceSettings::default()
+        .seed
+        .wrapping_add(1)
+}
+
+/// The tracer at 4 spp: its speed and its noise.
+fn trace_4spp() -> Row {
+    Row {
+        trace: TraceFrames {
+            spp: 4,
+            seed: independent_seed(),
+        },
+        ..Row::new("trace 4spp", Mode::Trace)
+    }
 }
 
 /// [`REFERENCE_NOISE`]; its samples per pixel are set to the references'
 /// when the eval runs.
 fn reference_noise() -> Row {
-    let references = inference::trace::TraceSettings::default().seed;
     Row {
         trace: TraceFrames {
             spp: 16,
-            seed: references.wrapping_add(1),
+            seed: independent_seed(),
         },
         ..Row::new(REFERENCE_NOISE, Mode::Trace)
     }
@@ -162,10 +178,7 @@ pub fn glass_rows() -> Vec<Row> {
         p.traced_shell = true;
     }));
     rows.push(Row::new("static-em", Mode::StaticEm));
-    rows.push(Row {
-        trace: TraceFrames { spp: 4, seed: 0 },
-        ..Row::new("trace 4spp", Mode::Trace)
-    });
+    rows.push(trace_4spp());
     rows.push(reference_noise());
     rows
 }
@@ -204,7 +217,7 @@ mod tests {
         assert_eq!(nearest.flags(), "--mode ptm --no-blend");
         assert_eq!(nearest.settings()["no_blend"], serde_json::json!(true));
         let trace = rows.iter().find(|r| r.mode == Mode::Trace).expect("row");
-        assert_eq!(trace.flags(), "--mode trace --trace-spp 4");
+        assert_eq!(trace.flags(), "--mode trace --trace-spp 4 --trace-seed 1");
     }
 
     #[test]
@@ -242,11 +255,17 @@ mod tests {
             );
             assert_eq!(noise.settings()["trace_seed"], serde_json::json!(seed));
         }
-        // Other rows keep their own samples per pixel.
+        // Other rows keep their own samples per pixel; no traced row
+        // shares the references' seed.
         let four = all_rows()
             .into_iter()
             .find(|r| r.label == "trace 4spp")
             .expect("row");
         assert_eq!(four.against_references(64).trace.spp, 4);
+        for row in all_rows().into_iter().chain(glass_rows()) {
+            if row.mode == Mode::Trace {
+                assert_ne!(row.trace.seed, references, "{}", row.label);
+            }
+        }
     }
 }
