@@ -202,6 +202,25 @@ fn eval_ranks_the_methods_against_the_tracer() {
         let db = num(noise, f);
         assert!(db.is_finite() && db > 10.0 && db < 60.0, "{f}: {db}");
     }
+    // Every other row states its scores with that noise taken out: higher
+    // than against the noisy references, where not within the noise.
+    assert!(noise.get("noise_free").is_none(), "{noise}");
+    for r in rows
+        .iter()
+        .filter(|r| r["settings"]["label"] != "trace reference-noise")
+    {
+        let free = &r["noise_free"];
+        assert!(free.is_object(), "{r}");
+        for f in ["psnr_frame_on_db", "psnr_frame_between_db", "psnr_on_db"] {
+            if let Some(db) = free[f].as_f64() {
+                assert!(db > num(r, f), "{f}: {db} <= {}\n{r}", num(r, f));
+            }
+        }
+    }
+    assert!(
+        log.contains("With the references' noise taken out"),
+        "{log}"
+    );
     assert_views_above(rows);
     assert_methods_beat_static_em(rows, &log);
     assert_compile_minutes(rows, &data);

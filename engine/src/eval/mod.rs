@@ -5,6 +5,7 @@
 
 pub mod chart;
 pub mod metrics;
+pub mod noise;
 pub mod pictures;
 pub mod plot;
 pub mod reference;

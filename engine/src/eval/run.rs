@@ -134,6 +134,7 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
         });
     }
     progress.finish_and_clear();
+    super::noise::attach(&mut table_rows);
     let table = EvalTable {
         rows: table_rows,
         relight,
@@ -162,6 +163,7 @@ fn summary(
         );
         text += &table.to_markdown();
         text += &table.above_markdown();
+        text += &super::noise::markdown(&table.rows);
     }
     text += &table
         .relight
@@ -492,5 +494,6 @@ fn table_row(row: &Row, results: &[ViewResult], views: u32) -> EvalRow {
         shell_layers: None,
         compile_minutes: None,
         above,
+        noise_free: None,
     }
 }

@@ -86,6 +86,10 @@ pub struct EvalRow {
     /// the first's).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub above: Vec<AboveScore>,
+    /// The PSNRs with the references' own noise taken out, when the eval
+    /// measured it (`super::noise`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise_free: Option<super::noise::NoiseFree>,
 }
 
 /// One elevation's views above the plane: mean PSNR and FLIP over the
@@ -332,6 +336,7 @@ mod tests {
             shell_layers: None,
             compile_minutes: None,
             above: Vec::new(),
+            noise_free: None,
         }
     }
 
