@@ -58,6 +58,14 @@ impl View {
     }
 }
 
+/// The seed of the eval's references: no compile traces with it (the maps'
+/// traces use 0, the glass shell solves' frames 1), so every reference is
+/// held out, the views on samples too.
+pub const REFERENCE_SEED: u64 = 2;
+const _: () = assert!(
+    REFERENCE_SEED != crate::compile::glass_shells::views::SOLVE_FRAME_SEED && REFERENCE_SEED != 0
+);
+
 /// The traced reference of one view, seen through one reflector. Every
 /// per-pixel vector has `width × height` entries, row-major from the top
 /// (the order of `Renderer::pixels()`).

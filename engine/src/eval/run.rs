@@ -212,6 +212,7 @@ fn references(
         width,
         height,
         spp,
+        seed: super::reference::REFERENCE_SEED,
         progress: true,
         ..TraceSettings::default()
     };

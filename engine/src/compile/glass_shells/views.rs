@@ -13,6 +13,11 @@ use inference::glass::{Lens, Screen, ShellSet, TessSettings, tessellate};
 use inference::probe::{Lookup, ProbeGeometry};
 use inference::trace::{TraceSettings, Tracer, camera};
 
+/// The seed of the frames the shell maps are solved against: not the
+/// maps' traces' (0), not the eval's references'
+/// (`crate::eval::reference::REFERENCE_SEED`).
+pub const SOLVE_FRAME_SEED: u64 = 1;
+
 /// How a view is traced and tessellated.
 #[derive(Clone, Copy, Debug)]
 pub struct ViewSettings {
@@ -51,7 +56,7 @@ pub fn frame_view(
     let frame = tracer.render(
         eye,
         &TraceSettings {
-            seed: 1,
+            seed: SOLVE_FRAME_SEED,
             ..settings
         },
     )?;
