@@ -146,16 +146,21 @@ mod tests {
             ],
         ];
         let mut m = Mesh::default();
-        for (i, f) in faces.iter().enumerate().filter(|(i, _)| !skip.contains(i)) {
-            let _ = i;
-            // Each face has its own corners, as patches do: welding joins them.
-            let base = m.positions.len() as u32;
-            m.positions.extend(f);
-            m.indices
-                .extend([base, base + 1, base + 2, base, base + 2, base + 3]);
+        for (_, &f) in faces.iter().enumerate().filter(|(i, _)| !skip.contains(i)) {
+            push_quad(&mut m, f);
         }
-        m.normals = vec![Vec3::Y; m.positions.len()];
         m
+    }
+
+    /// Appends quad `q` (corners counter-clockwise seen from its front) as
+    /// two triangles with corners of its own, as patches have: welding
+    /// joins them.
+    fn push_quad(m: &mut Mesh, q: [Vec3; 4]) {
+        let base = m.positions.len() as u32;
+        m.positions.extend(q);
+        m.normals.extend([Vec3::Y; 4]);
+        m.indices
+            .extend([base, base + 1, base + 2, base, base + 2, base + 3]);
     }
 
     #[test]
@@ -174,10 +179,7 @@ mod tests {
         // The fan lies in the opening's plane and covers its whole area.
         assert!(caps.positions.iter().all(|p| (p.y - 1.0).abs() < 1e-6));
         let area: f32 = (0..caps.triangle_count())
-            .map(|t| {
-                let [a, b, c] = caps.triangle(t);
-                0.5 * (b - a).cross(c - a).length()
-            })
+            .map(|t| triangle_area(caps.triangle(t)))
             .sum();
         assert!((area - 1.0).abs() < 1e-5, "{area}");
     }
@@ -212,17 +214,13 @@ mod tests {
             for i in 0..segments {
                 let q = [
                     point(i, j),
-                    point(i + 1, j),
-                    point(i + 1, j + 1),
                     point(i, j + 1),
+                    point(i + 1, j + 1),
+                    point(i + 1, j),
                 ];
-                let base = m.positions.len() as u32;
-                m.positions.extend(q);
-                m.indices
-                    .extend([base, base + 2, base + 1, base, base + 3, base + 2]);
+                push_quad(&mut m, q);
             }
         }
-        m.normals = vec![Vec3::Y; m.positions.len()];
         m
     }
 

@@ -45,15 +45,17 @@ pub fn attach(rows: &mut [EvalRow]) {
     let Some(noise) = rows.iter().find(|r| label(r) == REFERENCE_NOISE).cloned() else {
         return;
     };
-    let pair = |a: Option<f64>, n: Option<f64>| a.zip(n).and_then(|(a, n)| without_noise(a, n));
     for row in rows.iter_mut().filter(|r| label(r) != REFERENCE_NOISE) {
+        let free = |f: fn(&EvalRow) -> Option<f64>| {
+            f(row).zip(f(&noise)).and_then(|(r, n)| without_noise(r, n))
+        };
         row.noise_free = Some(NoiseFree {
-            psnr_on_db: without_noise(row.psnr_on_db, noise.psnr_on_db),
-            psnr_between_db: without_noise(row.psnr_between_db, noise.psnr_between_db),
-            psnr_above_db: without_noise(row.psnr_above_db, noise.psnr_above_db),
-            psnr_frame_on_db: pair(row.psnr_frame_on_db, noise.psnr_frame_on_db),
-            psnr_frame_between_db: pair(row.psnr_frame_between_db, noise.psnr_frame_between_db),
-            psnr_frame_above_db: pair(row.psnr_frame_above_db, noise.psnr_frame_above_db),
+            psnr_on_db: free(|r| Some(r.psnr_on_db)),
+            psnr_between_db: free(|r| Some(r.psnr_between_db)),
+            psnr_above_db: free(|r| Some(r.psnr_above_db)),
+            psnr_frame_on_db: free(|r| r.psnr_frame_on_db),
+            psnr_frame_between_db: free(|r| r.psnr_frame_between_db),
+            psnr_frame_above_db: free(|r| r.psnr_frame_above_db),
         });
     }
 }

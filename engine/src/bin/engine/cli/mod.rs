@@ -9,10 +9,13 @@ use engine::options::{
 use engine::pem::settings::Compositing;
 use std::path::PathBuf;
 
+pub use parse::{parse_degrees, parse_elevation, parse_ratio, parse_size, parse_tau, parse_weight};
+
 mod bench;
 mod codec;
 mod compile;
 mod export;
+mod parse;
 mod place;
 mod relight;
 pub use bench::BenchArgs;
@@ -359,65 +362,6 @@ pub struct PemArgs {
     pub rem_level: u32,
 }
 
-/// Parses `WIDTHxHEIGHT`, each 1..=8192.
-pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let expected = || format!("expected WIDTHxHEIGHT (each 1 to 8192, e.g. 640x480), got {s:?}");
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(expected)?;
-    let w: u32 = w.trim().parse().map_err(|_| expected())?;
-    let h: u32 = h.trim().parse().map_err(|_| expected())?;
-    if !(1..=8192).contains(&w) || !(1..=8192).contains(&h) {
-        return Err(expected());
-    }
-    Ok((w, h))
-}
-
-/// An angle in degrees: finite.
-pub fn parse_degrees(s: &str) -> Result<f32, String> {
-    match s.trim().parse::<f32>() {
-        Ok(d) if d.is_finite() => Ok(d),
-        _ => Err(format!("expected an angle in degrees, got {s:?}")),
-    }
-}
-
-/// An elevation above the orbit plane: strictly between −90° and 90° (at
-/// ±90° the eye stands over the look-at point and the view has no up;
-/// past it the eye crosses the pole).
-pub fn parse_elevation(s: &str) -> Result<f32, String> {
-    match parse_degrees(s) {
-        Ok(d) if d.abs() < 90.0 => Ok(d),
-        _ => Err(format!(
-            "expected an elevation in degrees strictly between -90 and 90, got {s:?}"
-        )),
-    }
-}
-
-/// A regularization weight: finite and not negative.
-pub fn parse_weight(s: &str) -> Result<f32, String> {
-    match s.trim().parse::<f32>() {
-        Ok(w) if w.is_finite() && w >= 0.0 => Ok(w),
-        _ => Err(format!("expected a finite weight >= 0, got {s:?}")),
-    }
-}
-
-/// A tessellation threshold τ in subpixels, checked before any work starts.
-pub fn parse_tau(s: &str) -> Result<f32, String> {
-    let range = inference::scene::glass::GLASS_TAU;
-    match s.trim().parse::<f32>() {
-        Ok(t) if range.contains(&t) => Ok(t),
-        _ => Err(format!("expected {range:?} subpixels, got {s:?}")),
-    }
-}
-
-/// A compression ratio: finite and above 1.
-pub fn parse_ratio(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(r) if r.is_finite() && r > 1.0 => Ok(r),
-        _ => Err(format!(
-            "expected a compression ratio above 1 (e.g. 384), got {s:?}"
-        )),
-    }
-}
-
 impl PlayArgs {
     /// Where the run happens.
     pub fn place(&self) -> RunPlace {
@@ -529,14 +473,6 @@ mod tests {
             ])
             .is_err()
         );
-    }
-
-    #[test]
-    fn sizes_parse_and_reject() {
-        assert_eq!(parse_size("640x480"), Ok((640, 480)));
-        for bad in ["640", "0x480", "640x", "axb", "9000x10", "-1x5"] {
-            assert!(parse_size(bad).is_err(), "{bad}");
-        }
     }
 
     #[test]

@@ -1,0 +1,79 @@
+//! The command line's value parsers: each refuses what the engine cannot
+//! use before any work starts, naming the value and what was expected.
+
+/// Parses `WIDTHxHEIGHT`, each 1..=8192.
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let expected = || format!("expected WIDTHxHEIGHT (each 1 to 8192, e.g. 640x480), got {s:?}");
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(expected)?;
+    let w: u32 = w.trim().parse().map_err(|_| expected())?;
+    let h: u32 = h.trim().parse().map_err(|_| expected())?;
+    if !(1..=8192).contains(&w) || !(1..=8192).contains(&h) {
+        return Err(expected());
+    }
+    Ok((w, h))
+}
+
+/// A number that parses and passes `ok`, else "expected {expected}".
+fn number<T: std::str::FromStr + Copy>(
+    s: &str,
+    ok: impl Fn(T) -> bool,
+    expected: &str,
+) -> Result<T, String> {
+    match s.trim().parse::<T>() {
+        Ok(v) if ok(v) => Ok(v),
+        _ => Err(format!("expected {expected}, got {s:?}")),
+    }
+}
+
+/// An angle in degrees: finite.
+pub fn parse_degrees(s: &str) -> Result<f32, String> {
+    number(s, f32::is_finite, "an angle in degrees")
+}
+
+/// An elevation above the orbit plane: strictly between −90° and 90° (at
+/// ±90° the eye stands over the look-at point and the view has no up;
+/// past it the eye crosses the pole).
+pub fn parse_elevation(s: &str) -> Result<f32, String> {
+    number(
+        s,
+        |d: f32| d.abs() < 90.0,
+        "an elevation in degrees strictly between -90 and 90",
+    )
+}
+
+/// A regularization weight: finite and not negative.
+pub fn parse_weight(s: &str) -> Result<f32, String> {
+    number(
+        s,
+        |w: f32| w.is_finite() && w >= 0.0,
+        "a finite weight >= 0",
+    )
+}
+
+/// A tessellation threshold τ in subpixels.
+pub fn parse_tau(s: &str) -> Result<f32, String> {
+    let range = inference::scene::glass::GLASS_TAU;
+    number(s, |t| range.contains(&t), &format!("{range:?} subpixels"))
+}
+
+/// A compression ratio: finite and above 1.
+pub fn parse_ratio(s: &str) -> Result<f64, String> {
+    number(
+        s,
+        |r: f64| r.is_finite() && r > 1.0,
+        "a compression ratio above 1 (e.g. 384)",
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_parse_and_reject() {
+        assert_eq!(parse_size("640x480"), Ok((640, 480)));
+        for bad in ["640", "0x480", "640x", "axb", "9000x10", "-1x5"] {
+            assert!(parse_size(bad).is_err(), "{bad}");
+        }
+    }
+}
