@@ -238,10 +238,22 @@ fn a_2d_viewpoint_space_is_refused_before_anything_compiles() {
 fn a_budget_below_the_start_lines_is_refused_before_anything_compiles() {
     let dir = tempfile::tempdir().expect("temp dir");
     let data = dir.path().join("data");
+    // The shipped teapot's rings skip lines: place starts from a full grid.
+    let o = run_engine(&["place", "--scene", "teapot", "--data", s(&data)]);
+    let log = output_text(&o);
+    assert!(!o.status.success(), "{log}");
+    assert!(
+        log.contains("ring_line_every") && log.contains("teapot.toml"),
+        "{log}"
+    );
+    let tiny = tiny_scene(dir.path());
+    let text = std::fs::read_to_string(&tiny).expect("tiny scene");
+    let dense = dir.path().join("dense.toml");
+    std::fs::write(&dense, text.replacen("samples = 3", "samples = 100", 1)).expect("write");
     let o = run_engine(&[
         "place",
         "--scene",
-        "teapot",
+        s(&dense),
         "--data",
         s(&data),
         "--start",
@@ -252,7 +264,7 @@ fn a_budget_below_the_start_lines_is_refused_before_anything_compiles() {
     let log = output_text(&o);
     assert!(!o.status.success(), "{log}");
     assert!(
-        log.contains("--max-samples") && log.contains("teapot.toml"),
+        log.contains("--max-samples") && log.contains("dense.toml"),
         "{log}"
     );
     assert!(
@@ -425,7 +437,8 @@ fn assert_grid_placement(dense: &Path, data: &Path, out: &Path) {
     assert_eq!(scene.orbit.sample_count(), 6);
     // A 1D orbit has no grid to place.
     let none = out.join("teapot-data");
-    let o = run_engine(&["place", "--grid", "--scene", "teapot", "--data", s(&none)]);
+    let tiny = dense.with_file_name("tiny.toml"); // dense_tiny's 1D scene
+    let o = run_engine(&["place", "--grid", "--scene", s(&tiny), "--data", s(&none)]);
     let log = output_text(&o);
     assert!(!o.status.success() && log.contains("--grid"), "{log}");
 }

@@ -23,10 +23,11 @@ const F16_MAX: f32 = 65504.0;
 
 /// The codec's parameter grid of `orbit`'s viewpoint samples: its azimuth
 /// lines × elevation rings as a 2D grid (2D 8×8 parameter blocks, thesis
-/// ch. 4) when it has rings, else the 1D orbit. Sample `k` (azimuth line
-/// `k % samples` of ring `k / samples`) is the grid's linear index `k`.
+/// ch. 4) when it has rings, else the 1D orbit (and the rings one after
+/// another when the upper ones skip lines: not a grid). Sample `k` is the
+/// grid's linear index `k`.
 pub fn orbit_grid(orbit: &inference::scene::Orbit) -> ParamGrid {
-    if orbit.rings > 1 {
+    if orbit.rings > 1 && orbit.is_tensor() {
         ParamGrid::two_d(orbit.samples, orbit.rings)
     } else {
         ParamGrid::one_d(orbit.sample_count())
@@ -227,12 +228,19 @@ mod tests {
     #[test]
     fn rings_are_a_2d_grid_whose_linear_order_is_the_sample_order() {
         let mut scene = inference::scene::Scene::load("teapot").expect("built-in scene");
+        // The shipped rings skip lines: one sequence, ring after ring.
+        assert_eq!(
+            orbit_grid(&scene.orbit),
+            ParamGrid::one_d(scene.orbit.sample_count())
+        );
+        scene.orbit.rings = 1;
         assert_eq!(
             orbit_grid(&scene.orbit),
             ParamGrid::one_d(scene.orbit.samples)
         );
         scene.orbit.samples = 4;
         scene.orbit.rings = 3;
+        scene.orbit.ring_line_every = 1;
         let grid = orbit_grid(&scene.orbit);
         assert_eq!(grid, ParamGrid::two_d(4, 3));
         // Grid dimension 0 is the azimuth line, dimension 1 the ring.

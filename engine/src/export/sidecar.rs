@@ -41,7 +41,9 @@ pub struct Sidecar {
 
 /// The viewpoint space: `azimuth_lines` azimuths per ring, `rings`
 /// elevations above the orbit plane; sample `k` is azimuth line
-/// `k % azimuth_lines` of ring `k / azimuth_lines`.
+/// `k % azimuth_lines` of ring `k / azimuth_lines`, unless the rings above
+/// the first keep every `ring_line_every`-th line only (and the last),
+/// numbered after the first ring's (`samples` lists every eye).
 #[derive(Serialize)]
 pub struct OrbitJson {
     pub center: [f32; 3],
@@ -58,6 +60,9 @@ pub struct OrbitJson {
     /// The rings' elevations when placed unevenly (`[orbit] ring_elevations_deg`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ring_elevations_deg: Option<Vec<f32>>,
+    /// Present when the rings above the first skip lines.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ring_line_every: Option<u32>,
 }
 
 #[derive(Serialize)]
@@ -144,6 +149,7 @@ impl Sidecar {
                 rings: o.rings.max(1),
                 ring_step_deg: o.ring_step_deg,
                 ring_elevations_deg: o.elevations.clone(),
+                ring_line_every: (!o.is_tensor()).then_some(o.ring_line_every),
             },
             maps: specs.iter().map(|s| map_json(s, jobs)).collect(),
             samples,

@@ -29,9 +29,13 @@ pub fn path_view(orbit: &Orbit, i: u32, frames: u32) -> (f32, f32) {
 }
 
 /// Frames of the default run: half again the sample count, every ring's
-/// samples counted (at least 2).
+/// samples counted (at least 2); with sparse upper rings, the first ring's
+/// (the path runs along its lines).
 pub fn default_frames(orbit: &Orbit) -> u32 {
-    let n = orbit.sample_count();
+    let n = match orbit.is_tensor() {
+        true => orbit.sample_count(),
+        false => orbit.samples,
+    };
     (n + n / 2).max(2)
 }
 
@@ -53,6 +57,7 @@ mod tests {
             ring_step_deg: 10.0,
             azimuths: None,
             elevations: None,
+            ring_line_every: 1,
         };
         let frames = default_frames(&o);
         assert_eq!(frames, 150);

@@ -40,6 +40,7 @@ mod tests {
             ring_step_deg: 10.0,
             azimuths: None,
             elevations: None,
+            ring_line_every: 1,
         };
         let grid = ViewGrid::from_orbit(&orbit);
         for k in [0, 37, 99] {
@@ -71,6 +72,7 @@ mod tests {
             ring_step_deg: 10.0,
             azimuths: None,
             elevations: None,
+            ring_line_every: 1,
         };
         let grid = ViewGrid::from_orbit(&orbit);
         assert_eq!(grid.len(), orbit.sample_count());

@@ -137,6 +137,14 @@ pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
         mut renderer,
         ..
     } = Session::open(place)?;
+    if !scene.orbit.is_tensor() {
+        bail!(
+            "{}: orbit.ring_line_every = {}: engine place refines a full grid of lines × \
+             rings (expected ring_line_every = 1 in the dense scene it starts from)",
+            scene.source.display(),
+            scene.orbit.ring_line_every
+        );
+    }
     let mut planned = Planned::new(&scene, opts)?;
     let out = opts.out.clone().unwrap_or_else(|| data.join("place"));
     crate::util::files::claim_dir(&out)?;

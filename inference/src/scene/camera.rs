@@ -19,7 +19,9 @@ pub struct Camera {
 /// where those say (placed where the scene needs them); `start_deg` is
 /// then the first and `step_deg` their mean spacing. Likewise with
 /// `elevations` the rings sit where those say, the first at 0°, and
-/// `ring_step_deg` is their mean spacing.
+/// `ring_step_deg` is their mean spacing. With `ring_line_every` = n > 1
+/// the rings above the first keep every n-th line only (and the last):
+/// sample `k` runs over the first ring's lines, then each ring's own.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Orbit {
     pub center: Vec3,
@@ -36,6 +38,17 @@ pub struct Orbit {
     pub azimuths: Option<Vec<f32>>,
     /// Explicit ring elevations, degrees, increasing from 0 (`rings` of them).
     pub elevations: Option<Vec<f32>>,
+    /// The rings above the first keep every this-many lines (1: all).
+    pub ring_line_every: u32,
+}
+
+/// Every `every`-th of `lines` azimuth lines and the last, increasing.
+pub fn upper_lines(lines: u32, every: u32) -> Vec<u32> {
+    let mut v: Vec<u32> = (0..lines).step_by(every.max(1) as usize).collect();
+    if lines > 0 && v.last() != Some(&(lines - 1)) {
+        v.push(lines - 1);
+    }
+    v
 }
 
 /// Keeps the eye off the poles, where a y-up look-at is undefined.
@@ -115,15 +128,47 @@ impl Orbit {
         Ok(self.eye(azimuth, elevation))
     }
 
-    /// Every viewpoint sample: azimuth lines × rings.
+    /// Every viewpoint sample: the first ring's lines, then each ring's.
     pub fn sample_count(&self) -> u32 {
-        self.samples * self.rings.max(1)
+        let upper = upper_lines(self.samples, self.ring_line_every).len() as u32;
+        self.samples + self.rings.max(1).saturating_sub(1) * upper
+    }
+
+    /// The azimuth lines (indices) ring `ring` holds, increasing.
+    pub fn ring_lines(&self, ring: u32) -> Vec<u32> {
+        match ring {
+            0 => (0..self.samples).collect(),
+            _ => upper_lines(self.samples, self.ring_line_every),
+        }
+    }
+
+    /// (azimuth line, ring) of sample `sample`.
+    pub fn sample_line_ring(&self, sample: u32) -> (u32, u32) {
+        let n = self.samples.max(1);
+        if sample < n {
+            return (sample, 0);
+        }
+        let upper = upper_lines(self.samples, self.ring_line_every);
+        let m = upper.len().max(1) as u32;
+        let (ring, at) = (1 + (sample - n) / m, (sample - n) % m);
+        (upper.get(at as usize).copied().unwrap_or(0), ring)
+    }
+
+    /// Sample `sample`'s place among its ring's samples, and their count
+    /// (a ring's samples are numbered consecutively).
+    pub fn ring_position(&self, sample: u32) -> (u32, u32) {
+        let n = self.samples.max(1);
+        if sample < n {
+            return (sample, n);
+        }
+        let m = upper_lines(self.samples, self.ring_line_every).len().max(1) as u32;
+        ((sample - n) % m, m)
     }
 
     /// (azimuth, elevation) of sample `sample`, degrees.
     pub fn sample_angles(&self, sample: u32) -> (f32, f32) {
-        let n = self.samples.max(1);
-        (self.angle_deg(sample % n), self.ring_elevation(sample / n))
+        let (line, ring) = self.sample_line_ring(sample);
+        (self.angle_deg(line), self.ring_elevation(ring))
     }
 
     /// Elevation of ring `ring`, degrees (not range-checked: past the last
@@ -143,6 +188,12 @@ impl Orbit {
         (0..self.rings.max(1))
             .map(|j| self.ring_elevation(j))
             .collect()
+    }
+
+    /// Whether every ring holds every line (a tensor grid: sample `k` at
+    /// line `k % samples` of ring `k / samples`).
+    pub fn is_tensor(&self) -> bool {
+        self.rings <= 1 || self.ring_line_every <= 1
     }
 
     /// Right-handed world-to-view matrix looking from `eye` at `center`, y up (view space
@@ -175,6 +226,7 @@ mod tests {
             ring_step_deg: 10.0,
             azimuths: None,
             elevations: None,
+            ring_line_every: 1,
         }
     }
 
@@ -183,6 +235,7 @@ mod tests {
         let o = Orbit {
             azimuths: Some(vec![0.0, 10.0, 14.0]),
             elevations: None,
+            ring_line_every: 1,
             start_deg: 0.0,
             step_deg: 7.0,
             samples: 3,

@@ -61,6 +61,9 @@ pub struct OrbitFile {
     pub ring_step_deg: Option<f32>,
     /// Rings placed where the scene needs them (`engine place --rings`).
     pub ring_elevations_deg: Option<Vec<f32>>,
+    /// The rings above the first keep every this-many azimuth lines (and
+    /// the last) [1: every line].
+    pub ring_line_every: Option<u32>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -2,8 +2,9 @@
 //! azimuths × elevations above the orbit plane (a 1D orbit is one row at
 //! elevation 0). Lines need not be evenly spaced — the compile step places
 //! them where the scene needs them — and sample `k` is `(i_az, i_el)` with
-//! `k = i_az + n_az · i_el`. A view between lines blends the corners of
-//! its cell bilinearly.
+//! `k = i_az + n_az · i_el`. Rings above the first may keep every n-th
+//! line only (`ring_line_every`), numbered after the first ring's. A view
+//! between lines blends the corners of its cell bilinearly.
 
 use super::camera::Orbit;
 use glam::Vec3;
@@ -26,6 +27,14 @@ pub struct ViewGrid {
     /// --rings`). `None`: every ring.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub elevations_used: Option<Vec<u32>>,
+    /// The rings above the first hold every this-many lines and the last
+    /// (0 or 1: every line, a tensor grid).
+    #[serde(default, skip_serializing_if = "is_tensor")]
+    pub ring_line_every: u32,
+}
+
+fn is_tensor(every: &u32) -> bool {
+    *every <= 1
 }
 
 /// The samples one view draws from, nearest first, weights summing to 1.
@@ -59,6 +68,16 @@ impl ViewGrid {
             elevations_deg: orbit.ring_elevations(),
             azimuths_used: None,
             elevations_used: None,
+            ring_line_every: orbit.ring_line_every,
+        }
+    }
+
+    /// The lines (indices into `azimuths_deg`) ring `ring` holds.
+    fn ring_lines(&self, ring: u32) -> Vec<u32> {
+        let n = self.azimuths_deg.len() as u32;
+        match ring {
+            0 => (0..n).collect(),
+            _ => super::camera::upper_lines(n, self.ring_line_every),
         }
     }
 
@@ -77,9 +96,14 @@ impl ViewGrid {
         self
     }
 
-    /// The azimuth lines in use, every `spacing`-th of them.
-    fn azimuth_lines(&self, spacing: u32) -> Vec<usize> {
-        used(&self.azimuths_used, self.azimuths_deg.len(), spacing)
+    /// The azimuth lines in use on ring `ring`, every `spacing`-th of them.
+    fn azimuth_lines(&self, spacing: u32, ring: u32) -> Vec<usize> {
+        let on_ring = self.ring_lines(ring);
+        let mut lines = used(&self.azimuths_used, self.azimuths_deg.len(), spacing);
+        if ring > 0 && self.ring_line_every > 1 {
+            lines.retain(|&i| on_ring.binary_search(&(i as u32)).is_ok());
+        }
+        lines
     }
 
     /// The elevation rings in use, every `spacing`-th of them.
@@ -88,7 +112,8 @@ impl ViewGrid {
     }
 
     pub fn len(&self) -> u32 {
-        (self.azimuths_deg.len() * self.elevations_deg.len()) as u32
+        let rings = self.elevations_deg.len() as u32;
+        self.azimuths_deg.len() as u32 + rings.saturating_sub(1) * self.ring_lines(1).len() as u32
     }
 
     pub fn is_empty(&self) -> bool {
@@ -98,11 +123,25 @@ impl ViewGrid {
     /// `(i_az, i_el)` of sample `k`.
     pub fn coords(&self, k: u32) -> (u32, u32) {
         let n = self.azimuths_deg.len().max(1) as u32;
-        (k % n, k / n)
+        if k < n {
+            return (k, 0);
+        }
+        let upper = self.ring_lines(1);
+        let m = upper.len().max(1) as u32;
+        let at = ((k - n) % m) as usize;
+        (upper.get(at).copied().unwrap_or(0), 1 + (k - n) / m)
     }
 
+    /// Sample `k` at line `i_az` of ring `i_el` (on a ring that skips
+    /// lines, its nearest line at or before `i_az`).
     pub fn index(&self, i_az: u32, i_el: u32) -> u32 {
-        i_az + self.azimuths_deg.len() as u32 * i_el
+        let n = self.azimuths_deg.len() as u32;
+        if i_el == 0 {
+            return i_az;
+        }
+        let upper = self.ring_lines(1);
+        let at = upper.partition_point(|&l| l <= i_az).saturating_sub(1) as u32;
+        n + (i_el - 1) * upper.len() as u32 + at
     }
 
     /// (azimuth, elevation) of sample `k`, degrees.
@@ -126,11 +165,14 @@ impl ViewGrid {
     /// `blend` false, the nearest alone. Finite for every input.
     pub fn blend(&self, azimuth: f32, elevation: f32, spacing: u32, blend: bool) -> SampleBlend {
         let azimuth = unwrap_around(&self.azimuths_deg, azimuth);
-        let (a0, a1, ta) = bracket(&self.azimuths_deg, &self.azimuth_lines(spacing), azimuth);
         let elevation_lines = self.elevation_lines(spacing);
         let (e0, e1, te) = bracket(&self.elevations_deg, &elevation_lines, elevation);
         let mut samples: Vec<(u32, f32)> = Vec::with_capacity(4);
+        let mut nearest = None;
         for (i_el, we) in [(e0, 1.0 - te), (e1, te)] {
+            let lines = self.azimuth_lines(spacing, i_el);
+            let (a0, a1, ta) = bracket(&self.azimuths_deg, &lines, azimuth);
+            nearest.get_or_insert(self.index(a0, i_el));
             for (i_az, wa) in [(a0, 1.0 - ta), (a1, ta)] {
                 let w = wa * we;
                 let k = self.index(i_az, i_el);
@@ -147,7 +189,7 @@ impl ViewGrid {
         }
         let total: f32 = samples.iter().map(|s| s.1).sum();
         if samples.is_empty() || !total.is_finite() || total <= 0.0 {
-            return SampleBlend::one(self.index(a0, e0));
+            return SampleBlend::one(nearest.unwrap_or(0));
         }
         samples.iter_mut().for_each(|s| s.1 /= total);
         SampleBlend { samples }
@@ -160,8 +202,18 @@ impl ViewGrid {
     /// grid; 0 for a dimension with one line).
     pub fn cell_size(&self, azimuth: f32, elevation: f32, spacing: u32) -> (f32, f32) {
         let azimuth = unwrap_around(&self.azimuths_deg, azimuth);
+        let ring = bracket(
+            &self.elevations_deg,
+            &self.elevation_lines(spacing),
+            elevation,
+        )
+        .0;
         (
-            span(&self.azimuths_deg, &self.azimuth_lines(spacing), azimuth),
+            span(
+                &self.azimuths_deg,
+                &self.azimuth_lines(spacing, ring),
+                azimuth,
+            ),
             span(
                 &self.elevations_deg,
                 &self.elevation_lines(spacing),
@@ -247,6 +299,7 @@ mod tests {
             elevations_deg: vec![0.0],
             azimuths_used: None,
             elevations_used: None,
+            ring_line_every: 1,
         }
     }
 
@@ -273,6 +326,7 @@ mod tests {
             elevations_deg: vec![0.0, 15.0, 30.0],
             azimuths_used: None,
             elevations_used: None,
+            ring_line_every: 1,
         };
         assert_eq!(g.len(), 9);
         assert_eq!(g.coords(5), (2, 1));
@@ -295,6 +349,7 @@ mod tests {
             elevations_deg: vec![0.0, 5.0, 10.0, 15.0, 20.0],
             azimuths_used: None,
             elevations_used: None,
+            ring_line_every: 1,
         }
         .with_elevations_used(Some(&[4, 0, 9]));
         assert_eq!(g.elevations_used, Some(vec![0, 4]));
@@ -311,6 +366,42 @@ mod tests {
             all.blend(4.0, 5.0, 1, true),
             SampleBlend::one(all.index(1, 1))
         );
+    }
+
+    #[test]
+    fn sparse_upper_rings_number_their_own_lines_and_blend_among_them() {
+        // 9 lines 1° apart; rings at 0° and 10° keep every 4th (and the
+        // last): lines 0, 4, 8 → samples 9, 10, 11.
+        let g = ViewGrid {
+            azimuths_deg: (0..9).map(|k| k as f32).collect(),
+            elevations_deg: vec![0.0, 10.0],
+            ring_line_every: 4,
+            ..Default::default()
+        };
+        assert_eq!(g.len(), 12);
+        assert_eq!(
+            (g.coords(3), g.coords(10), g.coords(11)),
+            ((3, 0), (4, 1), (8, 1))
+        );
+        for k in 0..g.len() {
+            let (a, e) = g.coords(k);
+            assert_eq!(g.index(a, e), k, "{k}");
+        }
+        // On the upper ring between its lines 4 and 8: 3/4 of the way.
+        let b = g.blend(7.0, 10.0, 1, true);
+        assert_eq!(b.indices().collect::<Vec<_>>(), [11, 10]);
+        assert!((b.samples[0].1 - 0.75).abs() < 1e-5, "{b:?}");
+        // Half way up at 7°: the first ring's 7 alone, the upper ring's two.
+        let b = g.blend(7.0, 5.0, 1, true);
+        let w = |k| b.samples.iter().find(|s| s.0 == k).map_or(0.0, |s| s.1);
+        assert!(
+            (w(7) - 0.5).abs() < 1e-5 && (w(11) - 0.375).abs() < 1e-5,
+            "{b:?}"
+        );
+        assert!((w(10) - 0.125).abs() < 1e-5, "{b:?}");
+        assert_eq!(g.cell_size(7.0, 10.0, 1), (4.0, 10.0));
+        assert_eq!(g.cell_size(7.0, 0.0, 1).0, 1.0);
+        assert_eq!(g.blend(2.0, 0.0, 1, true), SampleBlend::one(2));
     }
 
     #[test]
@@ -332,6 +423,7 @@ mod tests {
             elevations_deg: vec![0.0],
             azimuths_used: None,
             elevations_used: None,
+            ring_line_every: 1,
         };
         assert_eq!(single.blend(50.0, 3.0, 1, true), SampleBlend::one(0));
     }

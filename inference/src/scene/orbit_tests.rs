@@ -5,16 +5,17 @@ use super::*;
 
 const EVEN: &str = "start_deg = 0.0\nstep_deg = 1.0\nsamples = 100\n";
 
-/// The shipped teapot scene with its even lines replaced by `lines`.
+/// The shipped teapot scene as a 1D orbit (its sparse rings left out)
+/// with its even lines replaced by `lines`.
 fn with_lines(lines: &str) -> Result<Scene, SceneError> {
-    edited("teapot", EVEN, lines)
+    let text = super::shipped::shipped("teapot").expect("shipped teapot");
+    edited(&super::shipped::without_views_above(text), EVEN, lines)
 }
 
-/// Shipped scene `name` loaded as `placed.toml` with `even` (which it must
-/// contain) replaced by `explicit`.
-fn edited(name: &str, even: &str, explicit: &str) -> Result<Scene, SceneError> {
-    let text = super::shipped::shipped(name).expect("shipped scene");
-    assert!(text.contains(even), "test bug: {name}'s {even:?} changed");
+/// `text` loaded as `placed.toml` with `even` (which it must contain)
+/// replaced by `explicit`.
+fn edited(text: &str, even: &str, explicit: &str) -> Result<Scene, SceneError> {
+    assert!(text.contains(even), "test bug: {even:?} changed");
     let dir = tempfile::tempdir().expect("temp dir");
     let path = dir.path().join("placed.toml");
     std::fs::write(&path, text.replacen(even, explicit, 1)).expect("write scene");
@@ -35,7 +36,7 @@ fn explicit_lines_load_as_the_orbit_samples() {
     let grid = ViewGrid::from_orbit(o);
     assert_eq!(grid.azimuths_deg, [0.0, 12.0, 25.0, 31.0, 99.0]);
     // Sample 3's eye is the even orbit's line 31.
-    let even = Scene::load("teapot").expect("teapot");
+    let even = with_lines(EVEN).expect("teapot");
     let eye = |s: &Scene, k| s.orbit.sample_eye(k).expect("in range");
     assert!(eye(&s, 3).abs_diff_eq(eye(&even, 31), 1e-6));
 }
@@ -43,7 +44,7 @@ fn explicit_lines_load_as_the_orbit_samples() {
 #[test]
 fn explicit_lines_key_the_orbit_and_even_orbits_keep_their_keys() {
     let key = |s: &Scene| crate::trace::cache::scene_key(s);
-    let even = Scene::load("teapot").expect("teapot");
+    let even = with_lines(EVEN).expect("teapot");
     let a = with_lines("azimuths_deg = [0.0, 50.0, 99.0]\n").expect("loads");
     let b = with_lines("azimuths_deg = [0.0, 51.0, 99.0]\n").expect("loads");
     assert_eq!(key(&a).changes(&key(&even)), ["orbit"]);
@@ -75,7 +76,8 @@ const EVEN_RINGS: &str = "rings = 4\nring_step_deg = 10.0\n";
 
 /// The shipped `teapot_rings` scene with its even rings replaced by `rings`.
 fn with_rings(rings: &str) -> Result<Scene, SceneError> {
-    edited("teapot_rings", EVEN_RINGS, rings)
+    let text = super::shipped::shipped("teapot_rings").expect("shipped teapot_rings");
+    edited(text, EVEN_RINGS, rings)
 }
 
 #[test]

@@ -34,12 +34,19 @@ pub fn shipped_names() -> String {
         .join(", ")
 }
 
-/// Scene `text` without its `neighbour_above*` lines: the shipped teapot's
-/// stacking on the plane only, for small scenes derived from it (tests)
-/// that should not trace views above.
+/// Scene `text` without its views above the orbit plane: its
+/// `neighbour_above*` lines and its rings (`rings`, `ring_step_deg`,
+/// `ring_line_every`), so small scenes derived from the shipped teapot
+/// (tests) are 1D orbits that trace nothing above the plane.
 pub fn without_views_above(text: &str) -> String {
+    const ABOVE: [&str; 4] = [
+        "neighbour_above",
+        "rings =",
+        "ring_step_deg =",
+        "ring_line_every =",
+    ];
     let lines = text
         .lines()
-        .filter(|l| !l.trim_start().starts_with("neighbour_above"));
+        .filter(|l| !ABOVE.iter().any(|k| l.trim_start().starts_with(k)));
     lines.map(|l| format!("{l}\n")).collect()
 }

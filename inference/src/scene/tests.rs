@@ -82,6 +82,10 @@ fn committed_teapot_scene_loads() {
     assert_eq!(names, ["floor", "walls", "ceiling", "light", "teapot"]);
     assert_eq!(s.orbit.samples, 100);
     assert_eq!(s.orbit.step_deg, 1.0);
+    // Rings at 10°, 20°, 30° keep lines 0, 4, …, 96 and 99.
+    assert_eq!((s.orbit.rings, s.orbit.ring_line_every), (4, 4));
+    assert_eq!(s.orbit.sample_count(), 100 + 3 * 26);
+    assert_eq!(s.orbit.sample_angles(100 + 26 + 25), (99.0, 20.0));
 
     let teapot = s.object("teapot").expect("teapot object");
     assert_eq!(teapot.mesh.triangle_count(), 39_800);
@@ -208,6 +212,16 @@ fn bad_numbers_name_their_field() {
         ("radius = 1.8", "radius = 1.8\nsamples = 0", "orbit.samples"),
         ("radius = 1.8", "radius = 1.8\nrings = 0", "orbit.rings"),
         ("radius = 1.8", "radius = 1.8\nrings = 17", "orbit.rings"),
+        (
+            "radius = 1.8",
+            "radius = 1.8\nrings = 2\nring_line_every = 0",
+            "orbit.ring_line_every",
+        ),
+        (
+            "radius = 1.8",
+            "radius = 1.8\nrings = 2\nring_line_every = 100001",
+            "orbit.ring_line_every",
+        ),
         (
             "radius = 1.8",
             "radius = 1.8\nrings = 3\nring_step_deg = 50.0",
@@ -442,7 +456,8 @@ fn every_shipped_scene_loads_and_the_rings_scene_is_2d() {
 
 #[test]
 fn ring_layouts_change_the_orbit_key_and_1d_orbits_keep_theirs() {
-    let s = Scene::load("teapot").expect("teapot");
+    let mut s = Scene::load("teapot").expect("teapot");
+    (s.orbit.rings, s.orbit.ring_line_every) = (1, 1);
     let key = |s: &Scene| crate::trace::cache::scene_key(s);
     let base = key(&s);
     // A 1D orbit's key ignores the (unused) ring step: old caches stay valid.
@@ -459,6 +474,15 @@ fn ring_layouts_change_the_orbit_key_and_1d_orbits_keep_theirs() {
     let mut lines = rings.clone();
     lines.orbit.samples = 50;
     assert_eq!(key(&lines).changes(&key(&rings)), ["orbit"]);
+    // Sparse upper rings renumber the samples above the first ring.
+    let mut sparse = rings.clone();
+    sparse.orbit.ring_line_every = 4;
+    assert_eq!(key(&sparse).changes(&key(&rings)), ["orbit"]);
+    // The shipped teapot is that sparse grid.
+    assert_eq!(
+        key(&Scene::load("teapot").expect("teapot")).changes(&base),
+        ["orbit"]
+    );
 }
 
 #[test]

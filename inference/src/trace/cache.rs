@@ -68,6 +68,11 @@ fn content_key(scene: &Scene) -> Key {
                     h.write_u32(o.samples);
                     h.write_u32(o.rings);
                     h.f32(o.ring_step_deg);
+                    // Sparse upper rings renumber their samples.
+                    if o.ring_line_every > 1 {
+                        h.str("ring line every");
+                        h.write_u32(o.ring_line_every);
+                    }
                 }
                 // Explicit lines: every one (even orbits keep their keys).
                 if let Some(lines) = &o.azimuths {

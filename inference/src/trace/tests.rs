@@ -74,6 +74,7 @@ pub(super) fn scene(objects: Vec<(&str, Mesh, Material)>) -> Scene {
             ring_step_deg: 10.0,
             azimuths: None,
             elevations: None,
+            ring_line_every: 1,
         },
         lights: vec![],
         directional_lights: vec![],
@@ -346,10 +347,10 @@ fn bad_scenes_and_settings_name_the_field() {
     let s = teapot();
     let tracer = Tracer::new(&s).expect("valid");
     let e = tracer
-        .sample_eye(100)
+        .sample_eye(178)
         .expect_err("out of range")
         .to_string();
-    assert!(e.contains("100") && e.contains("0..100"), "{e}");
+    assert!(e.contains("178") && e.contains("0..178"), "{e}");
     let mut settings = small(0);
     let e = tracer
         .render(Vec3::ONE, &settings)

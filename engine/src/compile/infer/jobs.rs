@@ -37,7 +37,7 @@ pub enum StackedView {
 /// The views stacked into sample `k`'s solves: its neighbouring samples'
 /// (`stack.deg` None) or the views `deg` degrees either side of it on its
 /// ring, then those `stack.above_deg` above it at its azimuth, or at the
-/// grid azimuth nearest it (`stack.above_spacing`). A sample's own trace
+/// grid azimuth nearest it (`stack.above_spacing`), on the first ring. A sample's own trace
 /// where one sits at a view, else a free view (shared by the samples
 /// either side of it when they lie 2·`deg` apart, and by those nearest one
 /// grid azimuth).
@@ -49,7 +49,7 @@ pub fn stacked_views_of(orbit: &Orbit, k: u32, stack: &Stack) -> Vec<StackedView
             .map_or(StackedView::Free(a, e), StackedView::Sample)
     };
     let mut views: Vec<StackedView> = match stack.deg {
-        None => ring_neighbours(k, orbit.samples.max(1))
+        None => ring_neighbours(k, orbit.ring_position(k))
             .into_iter()
             .map(StackedView::Sample)
             .collect(),
@@ -59,8 +59,16 @@ pub fn stacked_views_of(orbit: &Orbit, k: u32, stack: &Stack) -> Vec<StackedView
         Some(d) => nearest_on_grid(azimuth, orbit.sample_angles(0).0, d),
         None => azimuth,
     };
-    views.extend(stack.above_deg.iter().map(|&e| at(above, elevation + e)));
+    if stacks_above(orbit, k) {
+        views.extend(stack.above_deg.iter().map(|&e| at(above, elevation + e)));
+    }
     views
+}
+
+/// Whether sample `k` stacks the views above: only the first ring's
+/// samples do (the rings above it are views above themselves).
+pub fn stacks_above(orbit: &Orbit, k: u32) -> bool {
+    orbit.sample_line_ring(k).1 == 0
 }
 
 /// The azimuth of the grid `start + i·spacing` nearest `azimuth` (ties
@@ -260,25 +268,26 @@ pub fn map_key(trace: &Key, job: &Job, options: &SolveOptions, size: (u32, u32))
         .with("map settings", h.finish())
 }
 
-/// Sample `k`'s neighbours on its ring of `lines` azimuth lines (azimuth
-/// line ± 1), where they exist: a ring does not wrap, the orbit is an arc.
-pub(super) fn ring_neighbours(k: u32, lines: u32) -> Vec<u32> {
-    let line = k % lines;
+/// Sample `k`'s neighbours on its ring (azimuth line ± 1 of the ring's
+/// own lines), `k` being at `pos` of the ring's `len` consecutive samples
+/// ([`Orbit::ring_position`]), where they exist: a ring does not wrap, the
+/// orbit is an arc.
+pub(super) fn ring_neighbours(k: u32, (pos, len): (u32, u32)) -> Vec<u32> {
     let mut n = Vec::new();
-    if line > 0 {
+    if pos > 0 {
         n.push(k - 1);
     }
-    if line + 1 < lines {
+    if pos + 1 < len {
         n.push(k + 1);
     }
     n
 }
 
-/// Which of sample `k`'s neighbours its ring's ends cut off: bit 0 the
-/// previous azimuth line, bit 1 the next; 0 for a sample inside the arc.
-pub(super) fn missing_neighbours(k: u32, lines: u32) -> u64 {
-    let line = k % lines;
-    u64::from(line == 0) | u64::from(line + 1 >= lines) << 1
+/// Which of a sample's neighbours its ring's ends cut off (the sample at
+/// `pos` of `len`): bit 0 the previous azimuth line, bit 1 the next; 0 for
+/// a sample inside the arc.
+pub(super) fn missing_neighbours((pos, len): (u32, u32)) -> u64 {
+    u64::from(pos == 0) | u64::from(pos + 1 >= len) << 1
 }
 
 #[cfg(test)]
@@ -332,20 +341,31 @@ mod tests {
     #[test]
     fn neighbours_stay_on_their_ring_and_inside_the_arc() {
         // 1D orbit of 3: the ends have one neighbour.
-        assert_eq!(ring_neighbours(0, 3), vec![1]);
-        assert_eq!(ring_neighbours(1, 3), vec![0, 2]);
-        assert_eq!(ring_neighbours(2, 3), vec![1]);
+        assert_eq!(ring_neighbours(0, (0, 3)), vec![1]);
+        assert_eq!(ring_neighbours(1, (1, 3)), vec![0, 2]);
+        assert_eq!(ring_neighbours(2, (2, 3)), vec![1]);
         assert_eq!(
-            [0, 1, 2].map(|k| missing_neighbours(k, 3)),
+            [0, 1, 2].map(|k| missing_neighbours((k, 3))),
             [0b01, 0b00, 0b10]
         );
         // Ring 1 of 4-line rings: samples 4..8, never 3 or 8.
-        assert_eq!(ring_neighbours(4, 4), vec![5]);
-        assert_eq!(ring_neighbours(7, 4), vec![6]);
-        assert_eq!(ring_neighbours(5, 4), vec![4, 6]);
+        let mut o = Scene::load("teapot").expect("teapot").orbit;
+        (o.samples, o.rings, o.ring_line_every) = (4, 3, 1);
+        let n = |o: &inference::scene::Orbit, k| ring_neighbours(k, o.ring_position(k));
+        assert_eq!(
+            [n(&o, 4), n(&o, 7), n(&o, 5)],
+            [vec![5], vec![6], vec![4, 6]]
+        );
+        // Sparse upper rings (every 2nd line and the last of 4: 0, 2, 3):
+        // ring 1 is samples 4..7, ring 2 7..10.
+        o.ring_line_every = 2;
+        assert_eq!(o.sample_count(), 10);
+        let ns = [4, 6, 7, 9].map(|k| n(&o, k));
+        assert_eq!(ns, [vec![5], vec![5], vec![8], vec![8]]);
+        assert_eq!(o.sample_angles(6), (o.angle_deg(3), o.ring_elevation(1)));
         // A single sample has neither.
-        assert_eq!(ring_neighbours(0, 1), Vec::<u32>::new());
-        assert_eq!(missing_neighbours(0, 1), 0b11);
+        assert_eq!(ring_neighbours(0, (0, 1)), Vec::<u32>::new());
+        assert_eq!(missing_neighbours((0, 1)), 0b11);
     }
 
     #[test]

@@ -153,9 +153,9 @@ impl<'a> Plan<'a> {
         // whether the arc ends beside it: a 1D orbit's trace keys leave out
         // the sample count. Offset views follow from the sample's eye and
         // the offset, which the map key holds.
-        let lines = self.scene.orbit.samples.max(1);
+        let place = self.scene.orbit.ring_position(k);
         let stacks_samples = job.neighbour_weight() > 0.0 && job.neighbour_deg().is_none();
-        match (stacks_samples, missing_neighbours(k, lines)) {
+        match (stacks_samples, missing_neighbours(place)) {
             (true, missing) if missing != 0 => key.with("neighbours missing", missing),
             _ => key,
         }

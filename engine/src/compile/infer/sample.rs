@@ -3,7 +3,7 @@
 
 use super::baselines::{StaticEm, static_em_psnr, static_ems};
 use super::display_weights::view_weights;
-use super::jobs::{Stack, StackedView, stacked_views_of};
+use super::jobs::{Stack, StackedView, stacked_views_of, stacks_above};
 use super::pictures::{write_comparison, write_map_picture};
 use super::report::{LayerReport, SampleReport, finite_or_max};
 use super::targets::{composite_pixels, specular_pixels, target_pixels};
@@ -129,9 +129,15 @@ impl<'a> SampleRun<'a> {
     /// The traces of the views stacked into sample `k`'s solves
     /// ([`stacked_views_of`]), free views traced when missing.
     fn stacked_traces(&self, k: u32, stack: &Stack) -> Result<Vec<StackedTrace>> {
-        let views = stacked_views_of(&self.plan.scene.orbit, k, stack);
+        let orbit = &self.plan.scene.orbit;
+        let views = stacked_views_of(orbit, k, stack);
         // The views above come last, one per elevation.
-        let first_above = views.len() - stack.above_deg.len();
+        let above = if stacks_above(orbit, k) {
+            stack.above_deg.len()
+        } else {
+            0
+        };
+        let first_above = views.len() - above;
         views
             .into_iter()
             .enumerate()

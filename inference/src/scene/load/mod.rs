@@ -174,7 +174,15 @@ impl Loader<'_> {
         let o = &file.orbit;
         let lines = self.azimuth_lines(o)?;
         let rings = self.ring_layout(o)?;
-        if lines.samples * rings.rings > MAX_SAMPLES {
+        let every = o.ring_line_every.unwrap_or(1);
+        if !(1..=MAX_SAMPLES).contains(&every) {
+            return Err(self.err(
+                "orbit.ring_line_every",
+                format!("{every} (expected 1 to {MAX_SAMPLES} lines)"),
+            ));
+        }
+        let upper = crate::scene::camera::upper_lines(lines.samples, every).len() as u32;
+        if lines.samples + (rings.rings - 1) * upper > MAX_SAMPLES {
             let field = match rings.elevations {
                 Some(_) => "orbit.ring_elevations_deg",
                 None => "orbit.rings",
@@ -198,6 +206,7 @@ impl Loader<'_> {
             ring_step_deg: rings.step_deg,
             azimuths: lines.azimuths,
             elevations: rings.elevations,
+            ring_line_every: every,
         })
     }
 
