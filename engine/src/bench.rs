@@ -89,6 +89,8 @@ pub struct BenchRow {
 #[derive(Serialize)]
 pub struct BenchReport {
     pub views: u32,
+    /// The views' elevation above the orbit plane, degrees.
+    pub elevation_deg: f32,
     pub frames_per_view: u32,
     /// Reflector pixels covered at the views (median over the views).
     pub covered_pixels: u64,
@@ -128,8 +130,9 @@ pub fn room_pass(rows: &[(&str, &[PassReport])]) -> Option<RoomPass> {
 impl BenchReport {
     pub fn table(&self) -> String {
         let mut out = format!(
-            "{} views between samples x {} frames; maps resident but in the last row; {} reflector pixels\n{:<28} {:>9} {:>7} {:>9} {:>8} {:>7} {:>9} {:>10}\n",
+            "{} views between samples at {:+.1}° x {} frames; maps resident but in the last row; {} reflector pixels\n{:<28} {:>9} {:>7} {:>9} {:>8} {:>7} {:>9} {:>10}\n",
             self.views,
+            self.elevation_deg,
             self.frames_per_view,
             self.covered_pixels,
             "variant",
@@ -173,6 +176,10 @@ pub struct BenchOptions {
     /// Untimed frames first at each view.
     pub warmup: u32,
     pub pem: PemOptions,
+    /// The views' elevation above the orbit plane, degrees [default: half
+    /// way to the first ring above it, so four samples blend; 0 on a 1D
+    /// orbit].
+    pub elevation_deg: Option<f32>,
 }
 
 pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
@@ -191,8 +198,12 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
     let per_view = opts.frames_per_view.max(1);
     let mut logs: Vec<PerfLog> = variants.iter().map(|_| PerfLog::default()).collect();
     let progress = indicatif::ProgressBar::new(u64::from(2 * views * per_view));
+    let elevation = opts
+        .elevation_deg
+        .unwrap_or_else(|| between_rings(&scene.orbit));
     let run = Run {
         orbit: &scene.orbit,
+        elevation,
         variants: &variants,
         which: &which,
         views,
@@ -216,6 +227,7 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
     let room_pass = room_pass(&passes);
     let report = BenchReport {
         views,
+        elevation_deg: elevation,
         frames_per_view: per_view,
         covered_pixels: covered as u64,
         moving_covered_pixels: moving_covered as u64,
@@ -278,6 +290,8 @@ fn renderers_for(
 /// The measuring loop's fixed inputs.
 struct Run<'a> {
     orbit: &'a inference::scene::Orbit,
+    /// The views' elevation, degrees.
+    elevation: f32,
     variants: &'a [(&'static str, Draws)],
     which: &'a [usize],
     views: u32,
@@ -286,16 +300,16 @@ struct Run<'a> {
     progress: &'a indicatif::ProgressBar,
 }
 
-impl Run<'_> {
-    /// With elevation rings, views sit between rings too: four samples blend.
-    fn between_rings(&self) -> f32 {
-        if self.orbit.rings > 1 {
-            0.5 * self.orbit.ring_elevation(1)
-        } else {
-            0.0
-        }
+/// With elevation rings, views sit between rings too: four samples blend.
+fn between_rings(orbit: &inference::scene::Orbit) -> f32 {
+    if orbit.rings > 1 {
+        0.5 * orbit.ring_elevation(1)
+    } else {
+        0.0
     }
+}
 
+impl Run<'_> {
     /// Every variant but the last, interleaved view by view with the maps
     /// resident; returns the median covered reflector pixels.
     fn resident(&self, renderers: &mut [Renderer], logs: &mut [PerfLog]) -> Result<f64> {
@@ -305,7 +319,7 @@ impl Run<'_> {
         let view_eye = |v: u32| {
             let k =
                 ((v as f32 + 0.5) / self.views as f32 * o.samples.saturating_sub(1) as f32) as u32;
-            o.eye(o.between_deg(k, 0.5), self.between_rings())
+            o.eye(o.between_deg(k, 0.5), self.elevation)
         };
         let frames = self.warmup + self.per_view;
         for v in 0..self.views {
@@ -346,7 +360,7 @@ impl Run<'_> {
         let moving = self.variants.len() - 1;
         let last = o.samples.saturating_sub(1).max(1);
         let mut eyes = Vec::new();
-        let eye_of = |i: u32| o.eye(o.between_deg(i % last, 0.5), self.between_rings());
+        let eye_of = |i: u32| o.eye(o.between_deg(i % last, 0.5), self.elevation);
         for i in 0..self.warmup + self.views * self.per_view {
             let eye = eye_of(i);
             let start = Instant::now();

@@ -107,6 +107,8 @@ fn assert_bench_rows(scene: &Path, out: &Path) {
         "1",
         "--warmup",
         "0",
+        "--elevation",
+        "7.5",
         "--out",
         out.to_str().expect("utf-8"),
         "--validate",
@@ -115,6 +117,9 @@ fn assert_bench_rows(scene: &Path, out: &Path) {
     let bench: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("bench.json")).expect("bench.json"))
             .expect("JSON");
+    // The views where asked, said in the report and the table.
+    assert_eq!(bench["elevation_deg"].as_f64(), Some(7.5), "{bench}");
+    assert!(text(&o).contains("at +7.5°"), "{}", text(&o));
     let rows = bench["rows"].as_array().expect("rows");
     let names: Vec<&str> = rows.iter().filter_map(|r| r["name"].as_str()).collect();
     for v in [

@@ -1,6 +1,6 @@
 //! `engine bench`'s command line.
 
-use super::{PemArgs, device, parse_size};
+use super::{PemArgs, device, parse_elevation, parse_size};
 use clap::Args;
 use engine::options::RunPlace;
 use std::path::PathBuf;
@@ -19,6 +19,11 @@ pub struct BenchArgs {
     /// Frame size as WIDTHxHEIGHT.
     #[arg(long, default_value = "640x480", value_parser = parse_size)]
     pub size: (u32, u32),
+    /// The views' elevation above the orbit plane in degrees [default: half
+    /// way to the scene's first ring above it, where four samples blend; 0
+    /// on a 1D orbit].
+    #[arg(long, value_parser = parse_elevation, allow_hyphen_values = true)]
+    pub elevation: Option<f32>,
     /// Output folder for bench.json and the compiled maps [default:
     /// out/<scene>]; the engine writes only into folders it made or that
     /// were empty.

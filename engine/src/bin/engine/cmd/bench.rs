@@ -9,6 +9,7 @@ pub fn run(args: &BenchArgs) -> Result<String> {
         frames_per_view: args.frames,
         warmup: args.warmup,
         pem: args.pem.options(),
+        elevation_deg: args.elevation,
     };
     Ok(bench(&args.place(), &opts)?.table())
 }
