@@ -3,6 +3,7 @@
 use glam::{Mat4, Vec3};
 
 use super::error::SceneError;
+use super::ring_lines::RingLines;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
@@ -40,15 +41,6 @@ pub struct Orbit {
     pub elevations: Option<Vec<f32>>,
     /// The rings above the first keep every this-many lines (1: all).
     pub ring_line_every: u32,
-}
-
-/// Every `every`-th of `lines` azimuth lines and the last, increasing.
-pub fn upper_lines(lines: u32, every: u32) -> Vec<u32> {
-    let mut v: Vec<u32> = (0..lines).step_by(every.max(1) as usize).collect();
-    if lines > 0 && v.last() != Some(&(lines - 1)) {
-        v.push(lines - 1);
-    }
-    v
 }
 
 /// Keeps the eye off the poles, where a y-up look-at is undefined.
@@ -128,41 +120,28 @@ impl Orbit {
         Ok(self.eye(azimuth, elevation))
     }
 
-    /// Every viewpoint sample: the first ring's lines, then each ring's.
-    pub fn sample_count(&self) -> u32 {
-        let upper = upper_lines(self.samples, self.ring_line_every).len() as u32;
-        self.samples + self.rings.max(1).saturating_sub(1) * upper
+    /// How the samples are numbered over the rings' lines.
+    pub fn ring_lines(&self) -> RingLines {
+        RingLines {
+            lines: self.samples,
+            every: self.ring_line_every,
+        }
     }
 
-    /// The azimuth lines (indices) ring `ring` holds, increasing.
-    pub fn ring_lines(&self, ring: u32) -> Vec<u32> {
-        match ring {
-            0 => (0..self.samples).collect(),
-            _ => upper_lines(self.samples, self.ring_line_every),
-        }
+    /// Every viewpoint sample: the first ring's lines, then each ring's.
+    pub fn sample_count(&self) -> u32 {
+        self.ring_lines().count(self.rings)
     }
 
     /// (azimuth line, ring) of sample `sample`.
     pub fn sample_line_ring(&self, sample: u32) -> (u32, u32) {
-        let n = self.samples.max(1);
-        if sample < n {
-            return (sample, 0);
-        }
-        let upper = upper_lines(self.samples, self.ring_line_every);
-        let m = upper.len().max(1) as u32;
-        let (ring, at) = (1 + (sample - n) / m, (sample - n) % m);
-        (upper.get(at as usize).copied().unwrap_or(0), ring)
+        self.ring_lines().coords(sample)
     }
 
     /// Sample `sample`'s place among its ring's samples, and their count
     /// (a ring's samples are numbered consecutively).
     pub fn ring_position(&self, sample: u32) -> (u32, u32) {
-        let n = self.samples.max(1);
-        if sample < n {
-            return (sample, n);
-        }
-        let m = upper_lines(self.samples, self.ring_line_every).len().max(1) as u32;
-        ((sample - n) % m, m)
+        self.ring_lines().position(sample)
     }
 
     /// (azimuth, elevation) of sample `sample`, degrees.

@@ -7,6 +7,7 @@
 //! between lines blends the corners of its cell bilinearly.
 
 use super::camera::Orbit;
+use super::ring_lines::RingLines;
 use glam::Vec3;
 
 /// Weights below this count as "exactly on a sample": no blend.
@@ -72,12 +73,11 @@ impl ViewGrid {
         }
     }
 
-    /// The lines (indices into `azimuths_deg`) ring `ring` holds.
-    fn ring_lines(&self, ring: u32) -> Vec<u32> {
-        let n = self.azimuths_deg.len() as u32;
-        match ring {
-            0 => (0..n).collect(),
-            _ => super::camera::upper_lines(n, self.ring_line_every),
+    /// How the samples are numbered over the rings' lines.
+    fn ring_lines(&self) -> RingLines {
+        RingLines {
+            lines: self.azimuths_deg.len() as u32,
+            every: self.ring_line_every,
         }
     }
 
@@ -98,7 +98,7 @@ impl ViewGrid {
 
     /// The azimuth lines in use on ring `ring`, every `spacing`-th of them.
     fn azimuth_lines(&self, spacing: u32, ring: u32) -> Vec<usize> {
-        let on_ring = self.ring_lines(ring);
+        let on_ring = self.ring_lines().on_ring(ring);
         let mut lines = used(&self.azimuths_used, self.azimuths_deg.len(), spacing);
         if ring > 0 && self.ring_line_every > 1 {
             lines.retain(|&i| on_ring.binary_search(&(i as u32)).is_ok());
@@ -112,8 +112,7 @@ impl ViewGrid {
     }
 
     pub fn len(&self) -> u32 {
-        let rings = self.elevations_deg.len() as u32;
-        self.azimuths_deg.len() as u32 + rings.saturating_sub(1) * self.ring_lines(1).len() as u32
+        self.ring_lines().count(self.elevations_deg.len() as u32)
     }
 
     pub fn is_empty(&self) -> bool {
@@ -122,26 +121,13 @@ impl ViewGrid {
 
     /// `(i_az, i_el)` of sample `k`.
     pub fn coords(&self, k: u32) -> (u32, u32) {
-        let n = self.azimuths_deg.len().max(1) as u32;
-        if k < n {
-            return (k, 0);
-        }
-        let upper = self.ring_lines(1);
-        let m = upper.len().max(1) as u32;
-        let at = ((k - n) % m) as usize;
-        (upper.get(at).copied().unwrap_or(0), 1 + (k - n) / m)
+        self.ring_lines().coords(k)
     }
 
     /// Sample `k` at line `i_az` of ring `i_el` (on a ring that skips
     /// lines, its nearest line at or before `i_az`).
     pub fn index(&self, i_az: u32, i_el: u32) -> u32 {
-        let n = self.azimuths_deg.len() as u32;
-        if i_el == 0 {
-            return i_az;
-        }
-        let upper = self.ring_lines(1);
-        let at = upper.partition_point(|&l| l <= i_az).saturating_sub(1) as u32;
-        n + (i_el - 1) * upper.len() as u32 + at
+        self.ring_lines().index(i_az, i_el)
     }
 
     /// (azimuth, elevation) of sample `k`, degrees.

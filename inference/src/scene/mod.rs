@@ -14,6 +14,7 @@ pub mod material;
 pub mod mesh;
 pub mod obj;
 pub mod placed;
+pub mod ring_lines;
 pub mod room;
 pub mod shipped;
 pub mod texture;

@@ -455,37 +455,6 @@ fn every_shipped_scene_loads_and_the_rings_scene_is_2d() {
 }
 
 #[test]
-fn ring_layouts_change_the_orbit_key_and_1d_orbits_keep_theirs() {
-    let mut s = Scene::load("teapot").expect("teapot");
-    (s.orbit.rings, s.orbit.ring_line_every) = (1, 1);
-    let key = |s: &Scene| crate::trace::cache::scene_key(s);
-    let base = key(&s);
-    // A 1D orbit's key ignores the (unused) ring step: old caches stay valid.
-    let mut one = s.clone();
-    one.orbit.ring_step_deg = 25.0;
-    assert_eq!(key(&one), base);
-    // Rings move samples k ≥ samples off the plane: the key says so.
-    let mut rings = s.clone();
-    rings.orbit.rings = 3;
-    assert_eq!(key(&rings).changes(&base), ["orbit"]);
-    let mut step = rings.clone();
-    step.orbit.ring_step_deg = 15.0;
-    assert_eq!(key(&step).changes(&key(&rings)), ["orbit"]);
-    let mut lines = rings.clone();
-    lines.orbit.samples = 50;
-    assert_eq!(key(&lines).changes(&key(&rings)), ["orbit"]);
-    // Sparse upper rings renumber the samples above the first ring.
-    let mut sparse = rings.clone();
-    sparse.orbit.ring_line_every = 4;
-    assert_eq!(key(&sparse).changes(&key(&rings)), ["orbit"]);
-    // The shipped teapot is that sparse grid.
-    assert_eq!(
-        key(&Scene::load("teapot").expect("teapot")).changes(&base),
-        ["orbit"]
-    );
-}
-
-#[test]
 fn directional_and_point_lights_are_optional_and_checked() {
     let base = load(BASE).expect("base scene");
     assert!(base.directional_lights.is_empty() && base.point_lights.is_empty());

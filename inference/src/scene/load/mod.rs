@@ -181,8 +181,11 @@ impl Loader<'_> {
                 format!("{every} (expected 1 to {MAX_SAMPLES} lines)"),
             ));
         }
-        let upper = crate::scene::camera::upper_lines(lines.samples, every).len() as u32;
-        if lines.samples + (rings.rings - 1) * upper > MAX_SAMPLES {
+        let layout = crate::scene::ring_lines::RingLines {
+            lines: lines.samples,
+            every,
+        };
+        if layout.count(rings.rings) > MAX_SAMPLES {
             let field = match rings.elevations {
                 Some(_) => "orbit.ring_elevations_deg",
                 None => "orbit.rings",
