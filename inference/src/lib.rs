@@ -4,6 +4,7 @@
 //! texture/EM inference and the diffuse objects' light maps.
 //! Pure CPU, no Vulkan.
 
+pub mod atlas;
 pub mod caps;
 pub mod em_geometry;
 pub mod files;
