@@ -15,8 +15,18 @@ pub enum MapLayer {
     Local,
     /// The whole specular appearance on one sphere-at-infinity EM.
     Sphere,
-    /// A parameterized texture map on the reflector's UVs.
+    /// A parameterized texture map on the reflector's atlas.
     Ptm,
+}
+
+/// The smallest PTM edge: the atlas needs room for its charts (at 16² the
+/// tiny test teapot's 52 charts get 9 texel centres, at 64² 774).
+pub const PTM_MIN_EDGE: u32 = 64;
+
+/// The edge of a PTM beside `resolution`² EMs: the same, at least
+/// [`PTM_MIN_EDGE`].
+pub fn ptm_edge(resolution: u32) -> u32 {
+    resolution.max(PTM_MIN_EDGE)
 }
 
 impl MapLayer {
@@ -38,8 +48,8 @@ impl MapLayer {
     pub fn shape(self, resolution: u32) -> TextureShape {
         match self {
             MapLayer::Ptm => TextureShape::Tex2D {
-                width: resolution,
-                height: resolution,
+                width: ptm_edge(resolution),
+                height: ptm_edge(resolution),
             },
             _ => TextureShape::Cube { size: resolution },
         }

@@ -219,6 +219,21 @@ fn assert_export_round_trips(dir: &Path, scene_path: &Path, infer: &Path) {
     assert_eq!(geometry("teapot.specular_distant"), "box");
     assert_eq!(geometry("teapot.specular_local"), "ellipsoid");
     assert_eq!(geometry("teapot.ptm"), serde_json::Value::Null);
+    // The PTM's atlas mesh: the teapot's triangles, each corner at its own
+    // place, and the sidecar names it.
+    let ptm = sidecar["maps"]
+        .as_array()
+        .and_then(|m| m.iter().find(|m| m["name"] == "teapot.ptm"))
+        .expect("PTM listed");
+    assert_eq!(ptm["atlas"], "teapot.ptm_atlas.obj");
+    let atlas = inference::scene::obj::load_obj(&ktx.join("teapot.ptm_atlas.obj")).expect("atlas");
+    let teapot = &scene.object("teapot").expect("teapot").mesh;
+    assert_eq!(atlas.triangle_count(), teapot.triangle_count());
+    assert!(
+        atlas.positions.len() > teapot.positions.len(),
+        "seams repeat vertices"
+    );
+    assert!(log(&o).contains("PTM atlas mesh"), "{}", log(&o));
 
     let foreign = dir.join("foreign");
     std::fs::create_dir(&foreign).expect("mkdir");
@@ -255,7 +270,9 @@ fn assert_ktx2_equals_map(path: &Path, spec: &MapSpec, exr: &Path) {
     let layout = spec.layout();
     let h = reader.header();
     assert_eq!(h.format, Some(ktx2::Format::R32G32B32A32_SFLOAT));
-    assert_eq!((h.pixel_width, h.pixel_height), (16, 16));
+    // The tiny scene's 16² EMs; its PTM at the smallest PTM edge.
+    let edge = if spec.layer == MapLayer::Ptm { 64 } else { 16 };
+    assert_eq!((h.pixel_width, h.pixel_height), (edge, edge));
     assert_eq!(
         (h.face_count, h.level_count),
         (layout.faces(), layout.levels())

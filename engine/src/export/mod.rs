@@ -11,11 +11,12 @@ pub mod ktx2;
 pub mod sidecar;
 
 use crate::compile::infer::jobs_for;
-use crate::maps::{MapSpec, map_path, map_specs};
+use crate::maps::{MapLayer, MapSpec, map_path, map_specs};
 use crate::util::files::{check_overwrite, claim_dir, write, write_json};
 use anyhow::{Context, Result, bail};
 use inference::infer::maps::parse_map;
 use inference::scene::Scene;
+use inference::scene::obj::write_obj;
 use std::path::{Path, PathBuf};
 
 /// The sidecar's file name inside the export folder.
@@ -35,6 +36,8 @@ pub struct ExportedFile {
 #[derive(Clone, Debug)]
 pub struct Exported {
     pub files: Vec<ExportedFile>,
+    /// Each PTM's mesh on its atlas (OBJ).
+    pub atlases: Vec<PathBuf>,
     pub sidecar: PathBuf,
 }
 
@@ -53,6 +56,9 @@ impl Exported {
             self.files.len(),
             self.sidecar.display()
         );
+        for a in &self.atlases {
+            out += &format!("  PTM atlas mesh: {}\n", a.display());
+        }
         for f in self.files.iter().filter(|f| f.sample == 0) {
             out += &format!(
                 "  sample 0 {}: {} ({} bytes)\n",
@@ -100,10 +106,45 @@ pub fn export_ktx2(scene: &Scene, infer_dir: &Path, out: &Path) -> Result<Export
             });
         }
     }
+    let atlases = (specs.iter().filter(|s| s.layer == MapLayer::Ptm))
+        .map(|spec| write_atlas(scene, spec, out))
+        .collect::<Result<_>>()?;
     let sidecar = out.join(SIDECAR);
     check_overwrite(&sidecar)?;
     write_json(&sidecar, &sidecar::Sidecar::new(scene, &specs, &jobs))?;
-    Ok(Exported { files, sidecar })
+    Ok(Exported {
+        files,
+        atlases,
+        sidecar,
+    })
+}
+
+/// `<object>.ptm_atlas.obj`: the mesh a PTM is drawn on (its atlas,
+/// `inference::atlas`: vertices repeated where charts meet; `vt` as the
+/// engine samples, v = 0 the texture's first row).
+pub fn atlas_file_name(object: &str) -> String {
+    format!("{object}.ptm_atlas.obj")
+}
+
+fn write_atlas(scene: &Scene, spec: &MapSpec, out: &Path) -> Result<PathBuf> {
+    let Some(object) = scene.object(&spec.object) else {
+        bail!(
+            "{}: no object {} in the scene",
+            scene.source.display(),
+            spec.object
+        );
+    };
+    let edge = crate::maps::ptm_edge(spec.resolution);
+    let mesh = inference::atlas::build(&object.mesh, edge).mesh(&object.mesh);
+    let path = out.join(atlas_file_name(&spec.object));
+    check_overwrite(&path)?;
+    let header = format!(
+        "{}'s PTM atlas ({edge}² texels), written by pem-engine {}",
+        spec.object,
+        env!("CARGO_PKG_VERSION")
+    );
+    write_obj(&path, &mesh, &header).with_context(|| format!("writing {}", path.display()))?;
+    Ok(path)
 }
 
 /// Sample `k`'s map `spec` as an RGBA texture: checked against its key
@@ -147,7 +188,7 @@ pub fn read_texture<'w>(
         width,
         height,
         faces: layout.faces(),
-        premultiplied: spec.layer == crate::maps::MapLayer::Local,
+        premultiplied: spec.layer == MapLayer::Local,
         levels,
         writer,
     })

@@ -70,7 +70,7 @@ pub struct MapJson {
     /// `<object>.<layer>`, as in the file names.
     pub name: String,
     pub object: String,
-    /// `distant`, `local` or `ptm` (a texture on the object's UVs).
+    /// `distant`, `local` or `ptm` (a texture on the object's atlas).
     pub layer: &'static str,
     /// `cube` (6 faces) or `2d`.
     pub kind: &'static str,
@@ -83,6 +83,9 @@ pub struct MapJson {
     pub alpha: &'static str,
     /// Where the cube is looked up (absent for a PTM).
     pub em: Option<EmJson>,
+    /// A PTM's mesh with its atlas coordinates, beside the maps.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub atlas: Option<String>,
 }
 
 #[derive(Serialize)]
@@ -179,7 +182,7 @@ fn map_json(spec: &MapSpec, jobs: &[Job]) -> MapJson {
             MapLayer::Ptm => "ptm",
         },
         kind: if layout.faces() == 6 { "cube" } else { "2d" },
-        size: spec.resolution,
+        size: layout.level_size(0).0,
         levels: layout.levels(),
         inferred_channels: spec.layer.channels(),
         alpha: if spec.layer == MapLayer::Local {
@@ -188,6 +191,7 @@ fn map_json(spec: &MapSpec, jobs: &[Job]) -> MapJson {
             "opaque"
         },
         em,
+        atlas: (spec.layer == MapLayer::Ptm).then(|| super::atlas_file_name(&spec.object)),
     }
 }
 

@@ -186,7 +186,16 @@ impl PemPlayer {
                     r.index_count - r.hull_index_count,
                 ),
             ],
-            PemKind::Ptm => vec![draw(Shading::Ptm, s.ptm_set, 0, r.index_count)],
+            PemKind::Ptm => {
+                let Some(atlas) = r.ptm_mesh.as_ref() else {
+                    return Err(GpuError::Invalid(format!("{}: no PTM atlas", r.name)));
+                };
+                vec![PemDraw {
+                    mesh: atlas,
+                    indices: &atlas.indices,
+                    ..draw(Shading::Ptm, s.ptm_set, 0, atlas.index_count)
+                }]
+            }
             _ => vec![draw(Shading::SingleEm, s.single_set, 0, r.index_count)],
         })
     }

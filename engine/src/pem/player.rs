@@ -18,6 +18,7 @@ use crate::backend::upload::level_regions;
 use crate::backend::{Buffer, Device, GpuError, GpuResult, Image, ImageDesc};
 use crate::gpu_scene::GpuScene;
 use crate::graph::Executor;
+use crate::maps::ptm_edge;
 use crate::passes::pem_deferred::GBuffer;
 use crate::passes::target::{AroundRoom, Load, Target};
 use crate::passes::upload::{Upload, UploadPass};
@@ -105,7 +106,7 @@ impl PemPlayer {
             .map(|&(resolution, members)| {
                 let arrays = layers
                     .iter()
-                    .map(|&l| map_array(device, l, resolution >> settings.drop_levels, members))
+                    .map(|&l| map_array(device, l, (resolution, settings.drop_levels), members))
                     .collect::<Result<Vec<_>>>()?;
                 Ok((resolution, arrays))
             })
@@ -415,13 +416,22 @@ fn assign_classes(reflectors: &mut [PemReflector]) -> Result<Vec<(u32, usize)>> 
 }
 
 /// The array a `layer`'s maps play from: one element per slot of every
-/// reflector, RGBA16F, full MIP chain.
-fn map_array(device: &Device, layer: MapLayer, size: u32, reflectors: usize) -> Result<Image> {
+/// reflector, RGBA16F, full MIP chain from the level `drop` below the
+/// finest of a reflector with `resolution`² EMs.
+fn map_array(
+    device: &Device,
+    layer: MapLayer,
+    (resolution, drop): (u32, u32),
+    reflectors: usize,
+) -> Result<Image> {
     let format = vk::Format::R16G16B16A16_SFLOAT;
     let count = (reflectors * SLOTS) as u32;
     let desc = match layer {
-        MapLayer::Ptm => ImageDesc::new_2d_array(format, size, size, count),
-        _ => ImageDesc::new_cube_array(format, size, count),
+        MapLayer::Ptm => {
+            let edge = ptm_edge(resolution) >> drop;
+            ImageDesc::new_2d_array(format, edge, edge, count)
+        }
+        _ => ImageDesc::new_cube_array(format, resolution >> drop, count),
     }
     .all_mip_levels()
     .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST);
@@ -438,7 +448,10 @@ fn dropped_bytes(layer: MapLayer, resolution: u32, drop: u32) -> GpuResult<u64> 
         return Ok(0);
     }
     let desc = match layer {
-        MapLayer::Ptm => ImageDesc::new_2d(vk::Format::R16G16B16A16_SFLOAT, resolution, resolution),
+        MapLayer::Ptm => {
+            let edge = ptm_edge(resolution);
+            ImageDesc::new_2d(vk::Format::R16G16B16A16_SFLOAT, edge, edge)
+        }
         _ => ImageDesc::new_cube(vk::Format::R16G16B16A16_SFLOAT, resolution),
     }
     .all_mip_levels();

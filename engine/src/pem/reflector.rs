@@ -5,8 +5,10 @@
 
 use super::ahead::{TexgenFrame, TexgenInputs, TexgenRequest};
 use super::residency::{SLOTS, SlotTable};
-use super::settings::PemSettings;
+use super::settings::{PemKind, PemSettings};
 use crate::backend::{Buffer, Device};
+use crate::gpu_scene::GpuMesh;
+use crate::maps::ptm_edge;
 use anyhow::{Result, bail};
 use ash::vk;
 use glam::Vec3;
@@ -42,6 +44,8 @@ pub struct PemReflector {
     pub index_count: u32,
     pub texgen_distant: Buffer,
     pub texgen_local: Buffer,
+    /// The mesh on its PTM atlas (`inference::atlas`), when PTMs play.
+    pub ptm_mesh: Option<GpuMesh>,
     pub table: SlotTable,
     /// Its map class (EM resolution) in the frame's sets.
     pub class: usize,
@@ -86,6 +90,12 @@ impl PemReflector {
                 MemoryLocation::CpuToGpu,
             )
         };
+        let ptm_mesh = (settings.kind == PemKind::Ptm)
+            .then(|| {
+                let atlas = inference::atlas::build(&o.mesh, ptm_edge(resolution)).mesh(&o.mesh);
+                GpuMesh::upload(device, &format!("{} PTM atlas", o.name), &atlas)
+            })
+            .transpose()?;
         Ok(PemReflector {
             object,
             name: o.name.clone(),
@@ -116,6 +126,7 @@ impl PemReflector {
             index_count: indices.len() as u32,
             texgen_distant: stream("texgen distant")?,
             texgen_local: stream("texgen local")?,
+            ptm_mesh,
             table: SlotTable::new(SLOTS),
             // Set when the player groups the reflectors by resolution.
             class: 0,

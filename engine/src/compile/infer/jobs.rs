@@ -2,15 +2,17 @@
 //! layer on its geometry, on request one sphere-at-infinity EM for its
 //! whole specular appearance, and its PTM — and the key of each.
 
-use crate::maps::{MapLayer, reflective};
+use crate::maps::{MapLayer, ptm_edge, reflective};
 use anyhow::{Result, bail};
 use glam::Vec3;
+use inference::atlas;
 use inference::em_geometry::{EmGeometry, bounding_ellipsoid};
 use inference::key::{Fnv, Key};
-use inference::scene::{EM_RESOLUTIONS, EmLayer, Object, Orbit, Scene};
+use inference::scene::{EM_RESOLUTIONS, EmLayer, Mesh, Object, Orbit, Scene};
 use inference::solve::SolveOptions;
 use inference::solve::layout::TextureShape;
 use std::hash::Hasher;
+use std::sync::Arc;
 
 /// Bump when a change to inference changes the maps it makes.
 pub const INFERENCE_VERSION: u32 = 3;
@@ -89,6 +91,9 @@ pub struct Job<'a> {
     pub geometry: Option<EmGeometry>,
     pub origin: Vec3,
     pub resolution: u32,
+    /// The PTM's mesh on its atlas (`inference::atlas`), what its probe
+    /// renders draw; None for an EM.
+    pub atlas: Option<Arc<Mesh>>,
 }
 
 impl Job<'_> {
@@ -175,6 +180,7 @@ pub fn jobs_for(scene: &Scene, em_size: Option<u32>, sphere: bool) -> Result<Vec
             geometry,
             origin,
             resolution,
+            atlas: None,
         };
         for &layer in &em.layers {
             let geometry = match layer {
@@ -192,7 +198,11 @@ pub fn jobs_for(scene: &Scene, em_size: Option<u32>, sphere: bool) -> Result<Vec
         if sphere {
             jobs.push(job(MapLayer::Sphere, Some(EmGeometry::SphereAtInfinity)));
         }
-        jobs.push(job(MapLayer::Ptm, None));
+        let atlas = atlas::build(&object.mesh, ptm_edge(resolution)).mesh(&object.mesh);
+        jobs.push(Job {
+            atlas: Some(Arc::new(atlas)),
+            ..job(MapLayer::Ptm, None)
+        });
     }
     Ok(jobs)
 }
@@ -223,6 +233,13 @@ pub fn map_key(trace: &Key, job: &Job, options: &SolveOptions, size: (u32, u32))
     // their keys.
     if job.object.display_weight() {
         h.str("display weights");
+    }
+    // Added with the PTM's atlas (its texels were the mesh's own UVs):
+    // the atlas itself, so any change of it re-solves the PTM.
+    if let Some(atlas) = &job.atlas {
+        h.str("atlas");
+        atlas.uvs.iter().for_each(|&uv| h.v2(uv));
+        atlas.indices.iter().for_each(|&i| h.write_u32(i));
     }
     // Added with the LOD bias: maps read without one keep their keys.
     if job.geometry.is_some() && job.object.lod_bias() != 0.0 {
@@ -293,12 +310,14 @@ pub(super) fn missing_neighbours((pos, len): (u32, u32)) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::{
-        Stack, StackedView, jobs_for, map_key, missing_neighbours, nearest_on_grid,
+        Job, Stack, StackedView, jobs_for, map_key, missing_neighbours, nearest_on_grid,
         ring_neighbours, stacked_views_of,
     };
+    use crate::maps::MapLayer;
     use inference::key::Key;
     use inference::scene::Scene;
     use inference::solve::SolveOptions;
+    use std::sync::Arc;
 
     #[test]
     fn the_neighbour_weight_keys_every_map() {
@@ -335,6 +354,40 @@ mod tests {
         assert_eq!(with.len(), 4, "distant, local, sphere, PTM");
         for ((name, a), (_, b)) in with.into_iter().zip(without) {
             assert_ne!(a, b, "{name}: every map stacks, so the weight is keyed");
+        }
+    }
+
+    #[test]
+    fn the_ptm_is_keyed_by_its_atlas() {
+        let scene = Scene::load("teapot").expect("shipped teapot");
+        let jobs = jobs_for(&scene, None, false).expect("jobs");
+        let ptm = jobs.iter().find(|j| j.layer == MapLayer::Ptm).expect("PTM");
+        let atlas = ptm.atlas.as_ref().expect("the PTM's atlas");
+        assert_eq!(atlas.triangle_count(), ptm.object.mesh.triangle_count());
+        assert!(
+            jobs.iter()
+                .filter(|j| j.layer != MapLayer::Ptm)
+                .all(|j| j.atlas.is_none())
+        );
+        let key = |job: &Job| map_key(&Key::new(), job, &SolveOptions::default(), (64, 48));
+        let mut moved = (**atlas).clone();
+        moved.uvs[0].x += 1e-3;
+        let other = Job {
+            atlas: Some(Arc::new(moved)),
+            ..job_like(ptm)
+        };
+        assert_ne!(key(ptm), key(&other), "a changed atlas re-solves the PTM");
+        assert_eq!(key(ptm), key(&job_like(ptm)));
+    }
+
+    fn job_like<'a>(j: &Job<'a>) -> Job<'a> {
+        Job {
+            object: j.object,
+            layer: j.layer,
+            geometry: j.geometry,
+            origin: j.origin,
+            resolution: j.resolution,
+            atlas: j.atlas.clone(),
         }
     }
 

@@ -310,14 +310,26 @@ impl<'a> SampleRun<'a> {
     fn probe_geometry(&self, tag: u64, eye: Vec3, job: &Job, key: &Key) -> ProbeGeometry {
         let (width, height) = self.req.size;
         let mesh = &job.object.mesh;
-        let lookup = match job.geometry {
-            Some(g) => cube_lookup(&g, job.origin, eye, mesh, job.object.lod_bias()),
-            None => Lookup::Uv(mesh.uvs.clone()),
+        let (positions, indices, lookup) = match (job.geometry, &job.atlas) {
+            (Some(g), _) => (
+                mesh.positions.clone(),
+                mesh.indices.clone(),
+                cube_lookup(&g, job.origin, eye, mesh, job.object.lod_bias()),
+            ),
+            // The PTM: on the object's atlas, as playback draws it.
+            (None, atlas) => {
+                let m = atlas.as_deref().unwrap_or(mesh);
+                (
+                    m.positions.clone(),
+                    m.indices.clone(),
+                    Lookup::Uv(m.uvs.clone()),
+                )
+            }
         };
         ProbeGeometry {
             key: key.hash() ^ tag,
-            positions: mesh.positions.clone(),
-            indices: mesh.indices.clone(),
+            positions,
+            indices,
             lookup,
             view_proj: self.projection * self.plan.scene.orbit.view(eye),
             width,
