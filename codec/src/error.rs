@@ -96,6 +96,16 @@ pub enum CodecError {
     /// The caller asked for something the container does not hold.
     #[error("no texture for object {object}, layer {layer}")]
     NoSuchTexture { object: u32, layer: u32 },
+    /// A report's reference maps are not the ones the container holds.
+    #[error(
+        "texture (object {object}, layer {layer}): the container holds {container}, the reference maps {maps} (expected the maps it was encoded from)"
+    )]
+    ReferenceMismatch {
+        object: u32,
+        layer: u32,
+        container: String,
+        maps: String,
+    },
     /// A sample, face or MIP index is out of range.
     #[error("{what} index {got} out of range 0..{limit}")]
     IndexOutOfRange {

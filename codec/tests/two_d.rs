@@ -124,3 +124,33 @@ fn report_matches_a_1d_container_to_a_2d_input_by_linear_index() {
     assert_eq!(against_2d.psnr_db, against_1d.psnr_db);
     assert!((psnr_all(&c, &one_d) - against_1d.psnr_db).abs() < 0.5);
 }
+
+/// Reference maps that are not the container's (fewer samples, another
+/// size) are refused with both shapes named, not measured as garbage.
+#[test]
+fn report_refuses_maps_the_container_was_not_encoded_from() {
+    use codec::report::{ReportOptions, report};
+    let input = scene(&SynthSpec::cube(1, 1, ParamGrid::one_d(12), 16));
+    let (bytes, _) = encode(&input, Target::Ratio(40.0), &EncodeOptions::default()).unwrap();
+    let c = Container::from_bytes(bytes).unwrap();
+    let opts = ReportOptions {
+        jpeg_baseline: false,
+        ffmpeg_baseline: false,
+        videos: Vec::new(),
+    };
+    let fewer = scene(&SynthSpec::cube(1, 1, ParamGrid::one_d(6), 16));
+    let smaller = scene(&SynthSpec::cube(1, 1, ParamGrid::one_d(12), 8));
+    for (other, expect) in [
+        (fewer, "6 samples of 16×16"),
+        (smaller, "12 samples of 8×8"),
+    ] {
+        let e = report(&c, &other, &opts)
+            .expect_err("mismatched maps")
+            .to_string();
+        assert!(
+            e.contains("12 samples of 16×16") && e.contains(expect),
+            "{e}"
+        );
+    }
+    assert!(report(&c, &input, &opts).is_ok());
+}

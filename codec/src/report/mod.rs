@@ -186,15 +186,31 @@ fn measure_texture(
     let mut cache = DecodeCache::default();
     // The container may lay the same samples out on another grid (a 1D
     // sequence of a 2D space): samples match by linear index.
-    let stored = c
-        .textures()
-        .iter()
-        .find(|ct| ct.id == t.id)
-        .map(|ct| ct.grid)
-        .ok_or(crate::error::CodecError::NoSuchTexture {
+    let held = c.textures().iter().find(|ct| ct.id == t.id).ok_or(
+        crate::error::CodecError::NoSuchTexture {
             object: t.id.object,
             layer: t.id.layer,
-        })?;
+        },
+    )?;
+    let describe = |n: usize, l: &crate::input::LeafLayout| {
+        format!(
+            "{n} samples of {}×{}×{} texels, {} channels",
+            l.width, l.height, l.faces, l.channels
+        )
+    };
+    let (stored, theirs) = (
+        describe(held.grid.len(), &held.layout),
+        describe(t.grid.len(), &t.layout),
+    );
+    if stored != theirs {
+        return Err(crate::error::CodecError::ReferenceMismatch {
+            object: t.id.object,
+            layer: t.id.layer,
+            container: stored,
+            maps: theirs,
+        });
+    }
+    let stored = held.grid;
     for pass in 0..2 {
         for s1 in 0..t.grid.n1 {
             for s0 in 0..t.grid.n0 {
@@ -228,10 +244,23 @@ fn measure_texture(
 /// Decodes every sample of every texture, measures PSNR and decode time,
 /// and runs the baselines at the container's byte count.
 pub fn report(c: &Container, reference: &EncodeInput, opts: &ReportOptions) -> Result<CodecReport> {
+    report_with(c, reference, opts, &mut |_| {})
+}
+
+/// [`report`], telling `progress` what it measures as it goes (each
+/// texture decoded, each baseline encoding: the video ones take minutes).
+pub fn report_with(
+    c: &Container,
+    reference: &EncodeInput,
+    opts: &ReportOptions,
+    progress: &mut dyn FnMut(String),
+) -> Result<CodecReport> {
     let mut total = PsnrAccum::default();
     let mut textures = Vec::new();
     let mut times = Vec::new();
-    for t in &reference.textures {
+    let count = reference.textures.len();
+    for (i, t) in reference.textures.iter().enumerate() {
+        progress(format!("decoding texture {} of {count}", i + 1));
         let acc = measure_texture(c, t, &mut times)?;
         total.merge(&acc);
         textures.push(TexturePsnr {
@@ -248,6 +277,7 @@ pub fn report(c: &Container, reference: &EncodeInput, opts: &ReportOptions) -> R
     let mut baselines = Vec::new();
     let mut notes = Vec::new();
     if opts.jpeg_baseline {
+        progress("jpeg-per-texture baseline".into());
         baselines.push(jpeg_baseline(reference, bytes)?);
     }
     if opts.ffmpeg_baseline {
@@ -258,7 +288,11 @@ pub fn report(c: &Container, reference: &EncodeInput, opts: &ReportOptions) -> R
                     notes.push(format!("ffmpeg has no {}: {name} skipped", codec.name()));
                     continue;
                 }
-                match mpeg_texture_baseline(codec, reference, bytes) {
+                progress(format!(
+                    "{}: the smallest CRF within {bytes} bytes (each try encodes every texture)",
+                    codec.baseline_name()
+                ));
+                match mpeg_texture_baseline(codec, reference, bytes, progress) {
                     Ok(b) => baselines.push(b),
                     Err(e) => notes.push(format!("{} failed: {e}", codec.baseline_name())),
                 }

@@ -18,8 +18,9 @@ pub(super) fn mpeg_texture_baseline(
     codec: VideoCodec,
     reference: &EncodeInput,
     target: u64,
+    progress: &mut dyn FnMut(String),
 ) -> Result<Baseline> {
-    Ok(mpeg_texture_baselines_with(codec, reference, &[target], &mut |_| {})?.remove(0))
+    Ok(mpeg_texture_baselines_with(codec, reference, &[target], progress)?.remove(0))
 }
 
 /// [`mpeg_texture_baseline`] at several byte targets, each CRF encoded once

@@ -58,15 +58,24 @@ pub fn codec_report(scene: &Scene, req: &CodecReportRequest) -> Result<String> {
         progress.suspend(|| eprintln!("{m}"));
     };
     say("texture PSNR, decode time, JPEG and MPEG-texture baselines".into());
-    let mut report = codec::report::report(
+    // Each step printed: the video encoders' CRF tries take minutes each.
+    let mut step = |m: String| say(m);
+    let mut report = codec::report::report_with(
         &container,
         &input,
         &codec::report::ReportOptions {
             videos: req.videos.clone(),
             ..Default::default()
         },
+        &mut step,
     )
-    .with_context(|| format!("measuring {}", req.file.display()))?;
+    .with_context(|| {
+        format!(
+            "measuring {} against the maps in {}",
+            req.file.display(),
+            req.infer_dir.display()
+        )
+    })?;
     say("rendered frames".into());
     let mut bench = FrameBench::new(req, scene)?;
     add_rendered_frames(&mut report, bench.as_mut(), &container)?;
