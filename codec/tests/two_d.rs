@@ -106,7 +106,7 @@ fn sample_at_inverts_index_in_one_and_two_d() {
 /// match by linear index.
 #[test]
 fn report_matches_a_1d_container_to_a_2d_input_by_linear_index() {
-    use codec::report::{ReportOptions, report};
+    use codec::report::report;
     let two_d = scene(&SynthSpec::cube(1, 1, ParamGrid::two_d(4, 3), 16));
     let mut one_d = two_d.clone();
     for t in &mut one_d.textures {
@@ -114,11 +114,7 @@ fn report_matches_a_1d_container_to_a_2d_input_by_linear_index() {
     }
     let (bytes, _) = encode(&one_d, Target::Ratio(40.0), &EncodeOptions::default()).unwrap();
     let c = Container::from_bytes(bytes).unwrap();
-    let opts = ReportOptions {
-        jpeg_baseline: false,
-        ffmpeg_baseline: false,
-        videos: Vec::new(),
-    };
+    let opts = no_baselines();
     let against_2d = report(&c, &two_d, &opts).unwrap();
     let against_1d = report(&c, &one_d, &opts).unwrap();
     assert_eq!(against_2d.psnr_db, against_1d.psnr_db);
@@ -129,15 +125,11 @@ fn report_matches_a_1d_container_to_a_2d_input_by_linear_index() {
 /// size) are refused with both shapes named, not measured as garbage.
 #[test]
 fn report_refuses_maps_the_container_was_not_encoded_from() {
-    use codec::report::{ReportOptions, report};
+    use codec::report::report;
     let input = scene(&SynthSpec::cube(1, 1, ParamGrid::one_d(12), 16));
     let (bytes, _) = encode(&input, Target::Ratio(40.0), &EncodeOptions::default()).unwrap();
     let c = Container::from_bytes(bytes).unwrap();
-    let opts = ReportOptions {
-        jpeg_baseline: false,
-        ffmpeg_baseline: false,
-        videos: Vec::new(),
-    };
+    let opts = no_baselines();
     let fewer = scene(&SynthSpec::cube(1, 1, ParamGrid::one_d(6), 16));
     let smaller = scene(&SynthSpec::cube(1, 1, ParamGrid::one_d(12), 8));
     for (other, expect) in [
@@ -153,4 +145,13 @@ fn report_refuses_maps_the_container_was_not_encoded_from() {
         );
     }
     assert!(report(&c, &input, &opts).is_ok());
+}
+
+/// A report of the container alone: no JPEG, no video baselines.
+fn no_baselines() -> codec::report::ReportOptions {
+    codec::report::ReportOptions {
+        jpeg_baseline: false,
+        ffmpeg_baseline: false,
+        videos: Vec::new(),
+    }
 }

@@ -100,9 +100,8 @@ pub fn build(mesh: &Mesh, resolution: u32) -> Atlas {
     let packings: Vec<_> = (GUTTERS.iter())
         .filter_map(|&g| densest_packing(&extents, resolution, g).map(|(s, o)| (s, g, o)))
         .collect();
-    let Some(densest) = packings.iter().map(|p| p.0).reduce(f32::max) else {
-        return Atlas::own_uvs(mesh);
-    };
+    // None fit (no packing at all): the mesh keeps its own UVs.
+    let densest = packings.iter().map(|p| p.0).fold(0.0, f32::max);
     let Some((scale, gutter, origins)) =
         (packings.into_iter()).find(|(s, _, _)| *s >= GUTTER_DENSITY * densest)
     else {
