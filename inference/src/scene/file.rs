@@ -163,6 +163,8 @@ pub struct ObjectFile {
 pub struct MeshFile {
     pub generator: Option<String>,
     pub segments: Option<u32>,
+    /// The tracer's own, finer tessellation of the same surface.
+    pub trace_segments: Option<u32>,
     pub part: Option<TeapotPart>,
     pub obj: Option<String>,
     pub file: Option<String>,

@@ -69,8 +69,12 @@ pub struct Scene {
 #[derive(Clone, Debug)]
 pub struct Object {
     pub name: String,
-    /// Already in world space.
+    /// Already in world space: what the engine draws, solves and plays.
     pub mesh: Mesh,
+    /// The surface the tracer (the gold standard) sees instead, when the
+    /// scene gives one (`mesh.trace_segments`): finer than what playback
+    /// needs to draw (README "Coarser playback tessellation").
+    pub trace_mesh: Option<Mesh>,
     pub material: usize,
     /// Set for objects that get parameterized environment maps.
     pub em: Option<EmSettings>,
@@ -79,6 +83,12 @@ pub struct Object {
 }
 
 impl Object {
+    /// The mesh the tracer intersects: [`Object::trace_mesh`] where the
+    /// scene gives one, else the one the engine draws.
+    pub fn traced_mesh(&self) -> &Mesh {
+        self.trace_mesh.as_ref().unwrap_or(&self.mesh)
+    }
+
     /// The LOD bias of the object's EM lookups (`[objects.em] lod_bias`;
     /// 0, the hardware's own level of detail, without EMs).
     pub fn lod_bias(&self) -> f32 {

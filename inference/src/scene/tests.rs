@@ -336,7 +336,7 @@ fn bad_objects_are_rejected() {
                 r#"{ obj = "tetra.obj" }"#,
                 r#"{ obj = "tetra.obj", segments = 4 }"#,
             ),
-            "objects[0].mesh: `segments` and `part`",
+            "objects[0].mesh: `segments`, `trace_segments` and `part`",
         ),
         (
             obj("transform = { scale = -1.0 }\n"),

@@ -43,7 +43,7 @@ impl SceneBvh {
             .objects
             .iter()
             .enumerate()
-            .map(|(o, object)| (o as u32, &object.mesh))
+            .map(|(o, object)| (o as u32, object.traced_mesh()))
             .collect();
         SceneBvh::from_meshes(&meshes)
     }

@@ -164,7 +164,7 @@ fn geometry(h: &mut Fnv, scene: &Scene) {
     for obj in &scene.objects {
         h.str(&obj.name);
         h.write_u64(obj.material as u64);
-        let m = &obj.mesh;
+        let m = obj.traced_mesh();
         h.write_u64(m.positions.len() as u64);
         m.positions.iter().for_each(|&p| h.v3(p));
         m.normals.iter().for_each(|&n| h.v3(n));

@@ -60,6 +60,8 @@ mod light_tests;
 mod material_tests;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod trace_mesh_tests;
 
 use std::time::{Duration, Instant};
 
@@ -478,7 +480,7 @@ fn validate_objects(scene: &Scene) -> Result<(), TraceError> {
                 ),
             ));
         }
-        let m = &o.mesh;
+        let m = o.traced_mesh();
         let n = m.positions.len();
         if m.indices.len() % 3 != 0 || m.indices.iter().any(|&ix| ix as usize >= n) {
             return Err(bad(

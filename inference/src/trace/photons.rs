@@ -141,13 +141,13 @@ fn targets(integrator: &Integrator, photons: u32) -> Vec<Target> {
                 scene.materials.get(o.material),
                 Some(Material::Mirror { .. } | Material::Glossy { .. } | Material::Glass { .. })
             );
-            if !reflective || o.mesh.positions.is_empty() {
+            let mesh = o.traced_mesh();
+            if !reflective || mesh.positions.is_empty() {
                 continue;
             }
-            let (lo, hi) = o.mesh.bounds();
+            let (lo, hi) = mesh.bounds();
             let center = 0.5 * (lo + hi);
-            let radius = o
-                .mesh
+            let radius = mesh
                 .positions
                 .iter()
                 .map(|p| p.distance(center))

@@ -90,6 +90,7 @@ pub(super) fn scene(objects: Vec<(&str, Mesh, Material)>) -> Scene {
         s.objects.push(Object {
             name: name.to_owned(),
             mesh,
+            trace_mesh: None,
             material: s.materials.len() - 1,
             em: None,
             glass: None,

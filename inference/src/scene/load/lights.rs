@@ -38,6 +38,7 @@ impl Loader<'_> {
         parts.objects.push(Object {
             name: light.name.clone(),
             mesh: light.mesh(),
+            trace_mesh: None,
             material: parts.materials.len() - 1,
             em: None,
             glass: None,

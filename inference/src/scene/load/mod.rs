@@ -129,6 +129,7 @@ impl Loader<'_> {
             objects.push(Object {
                 name: oname.to_owned(),
                 mesh,
+                trace_mesh: None,
                 material,
                 em: None,
                 glass: None,

@@ -33,16 +33,21 @@ impl Loader<'_> {
         }
         let material = lookup(&f("material"), &o.material)?;
         let mut mesh = self.mesh(&f("mesh"), &o.mesh)?;
+        let mut trace_mesh = self.trace_mesh(&f("mesh"), &o.mesh)?;
 
         let t = &o.transform;
         let translate = self.vec3(&f("transform.translate"), t.translate)?;
         let scale = self.positive(&f("transform.scale"), t.scale)?;
         let angle = self.finite(&f("transform.rotate_y_deg"), t.rotate_y_deg)?;
-        mesh.transform(&Affine3A::from_scale_rotation_translation(
+        let placement = Affine3A::from_scale_rotation_translation(
             Vec3::splat(scale),
             Quat::from_rotation_y(angle.to_radians()),
             translate,
-        ));
+        );
+        mesh.transform(&placement);
+        if let Some(m) = &mut trace_mesh {
+            m.transform(&placement);
+        }
 
         let em = match &o.em {
             Some(em) => Some(self.em(&f("em"), em)?),
@@ -55,6 +60,7 @@ impl Loader<'_> {
         Ok(Object {
             name: o.name.clone(),
             mesh,
+            trace_mesh,
             material,
             em,
             glass,
@@ -75,13 +81,7 @@ impl Loader<'_> {
                         format!("unknown generator \"{g}\" (known: newell_teapot)"),
                     ));
                 }
-                let segments = m.segments.unwrap_or(DEFAULT_SEGMENTS);
-                if !(1..=MAX_SEGMENTS).contains(&segments) {
-                    return Err(self.err(
-                        format!("{field}.segments"),
-                        format!("{segments} outside 1..={MAX_SEGMENTS}"),
-                    ));
-                }
+                let segments = self.segments(field, "segments", m.segments)?;
                 let part = m.part.unwrap_or(TeapotPart::Whole);
                 return Ok(teapot::tessellate(segments, part).map_err(nested)?.mesh);
             }
@@ -95,10 +95,10 @@ impl Loader<'_> {
                 ));
             }
         };
-        if m.segments.is_some() || m.part.is_some() {
+        if m.segments.is_some() || m.trace_segments.is_some() || m.part.is_some() {
             return Err(self.err(
                 field,
-                "`segments` and `part` belong to a generator, not to a mesh file",
+                "`segments`, `trace_segments` and `part` belong to a generator, not to a mesh file",
             ));
         }
         let path = self.path.parent().unwrap_or(Path::new(".")).join(name);
@@ -116,6 +116,38 @@ impl Loader<'_> {
             )),
         }
     }
+    /// A generator's tessellation (`key` = `segments` or `trace_segments`),
+    /// checked; [`DEFAULT_SEGMENTS`] when not given.
+    fn segments(&self, field: &str, key: &str, given: Option<u32>) -> Result<u32, SceneError> {
+        let segments = given.unwrap_or(DEFAULT_SEGMENTS);
+        if !(1..=MAX_SEGMENTS).contains(&segments) {
+            return Err(self.err(
+                format!("{field}.{key}"),
+                format!("{segments} outside 1..={MAX_SEGMENTS}"),
+            ));
+        }
+        Ok(segments)
+    }
+
+    /// The tracer's own tessellation of a generated mesh
+    /// (`trace_segments`), when the scene asks for one; the mesh's other
+    /// keys were checked by [`Loader::mesh`].
+    fn trace_mesh(&self, field: &str, m: &MeshFile) -> Result<Option<Mesh>, SceneError> {
+        let Some(given) = m.trace_segments else {
+            return Ok(None);
+        };
+        let segments = self.segments(field, "trace_segments", Some(given))?;
+        let part = m.part.unwrap_or(TeapotPart::Whole);
+        let nested = |source: SceneError| SceneError::Nested {
+            path: self.path.to_owned(),
+            field: field.to_owned(),
+            cause: Box::new(source),
+        };
+        Ok(Some(
+            teapot::tessellate(segments, part).map_err(nested)?.mesh,
+        ))
+    }
+
     fn em(&self, field: &str, em: &EmFile) -> Result<EmSettings, SceneError> {
         if !(em.resolution.is_power_of_two() && EM_RESOLUTIONS.contains(&em.resolution)) {
             return Err(self.err(

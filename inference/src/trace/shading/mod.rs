@@ -122,7 +122,7 @@ impl<'a> Integrator<'a> {
     }
 
     pub(super) fn surface(&self, hit: &Hit, dir: Vec3) -> Surface {
-        let mesh = &self.scene.objects[hit.prim.object as usize].mesh;
+        let mesh = self.scene.objects[hit.prim.object as usize].traced_mesh();
         Surface::at(mesh, hit.prim.triangle as usize, hit.bary, dir)
     }
 
