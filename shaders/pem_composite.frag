@@ -9,8 +9,14 @@ layout(push_constant) uniform Push {
     vec4 f0;     // rgb Schlick F0
     vec4 weight; // weights of up to 4 samples (sum 1)
     vec4 slot;   // array element of each sample's maps
-    vec4 info;   // x = samples, y = 1 when the reflector has a local layer
+    vec4 info;   // x = samples (= SAMPLES), y = 1 when the reflector has a local layer
 } pc;
+
+// How many samples this pipeline variant blends (1 to 4). A constant, not
+// the push constant: lavapipe executes the body of every loop iteration or
+// branch the shader holds, taken or not, so a variant compiles only the
+// lookups it reads (README "PEM playback: speed").
+layout(constant_id = 0) const int SAMPLES = 4;
 
 layout(set = 0, binding = 0) uniform sampler2D g_distant;
 layout(set = 0, binding = 1) uniform sampler2D g_local;
@@ -26,14 +32,10 @@ void main() {
     vec4 d = texelFetch(g_distant, p, 0);
     vec4 l = texelFetch(g_local, p, 0);
     float cos_theta = texelFetch(g_cos, p, 0).r;
-    int samples = int(pc.info.x);
     // The G-buffer marks parts without a local layer by a huge negative LOD.
     bool local_layer = pc.info.y > 0.5 && l.w > -1.0e3;
     vec3 sum = vec3(0.0);
-    for (int s = 0; s < 4; s++) {
-        if (s >= samples) {
-            break;
-        }
+    for (int s = 0; s < SAMPLES; s++) {
         vec3 distant = textureLod(distant_em, vec4(d.xyz, pc.slot[s]), d.w).rgb;
         vec3 c = distant;
         if (local_layer) {

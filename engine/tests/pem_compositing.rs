@@ -11,6 +11,7 @@ mod common;
 use common::*;
 use engine::compare::psnr;
 use engine::pem::player::{Compositing, PemKind, PemSettings};
+use engine::pem::samples::sample_blend;
 use engine::pem::source::MapSource;
 use engine::renderer::{FrameMode, Renderer};
 use inference::scene::Scene;
@@ -99,6 +100,54 @@ fn deferred_and_multipass_frames_agree() {
     assert_no_validation_messages();
 }
 
+/// The composite is compiled once per sample count (lavapipe pays for
+/// every lookup a shader holds, taken or not): on a 2D grid whose upper
+/// ring keeps every other line, views that blend 1, 2, 3 and 4 samples
+/// each draw what multipass draws.
+#[test]
+fn every_composite_variant_draws_what_multipass_draws() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let rings = "rings = 2\nring_step_deg = 15.0\nring_line_every = 2\n";
+    let (scene, out) = compile_with(dir.path(), "rings", -2.0, rings);
+    let orbit = scene.orbit.clone();
+    let grid = inference::scene::ViewGrid::from_orbit(&orbit);
+    let device = validated_device();
+    let frame = |compositing, eye| {
+        let mut r = Renderer::new(&device, &scene, 96, 72).expect("renderer");
+        let settings = PemSettings {
+            compositing,
+            ..PemSettings::new(PemKind::Layered)
+        };
+        let source = MapSource::container(&scene, &out.join("teapot.ptxc")).expect("container");
+        r.set_pem(&scene, settings, source).expect("set-up");
+        r.frame(FrameMode::Pem, eye, orbit.view(eye))
+            .expect("frame");
+        r.pixels().expect("pixels")
+    };
+    let (start, step) = (orbit.start_deg, orbit.step_deg);
+    let mut counts = Vec::new();
+    for (azimuth, elevation) in [
+        (start + step, 0.0),
+        (start + 0.5 * step, 0.0),
+        (start + step, 7.5),
+        (start + 0.5 * step, 7.5),
+    ] {
+        let eye = orbit.eye(azimuth, elevation);
+        let samples = sample_blend(&grid, &orbit, eye, 1, true).samples.len();
+        counts.push(samples);
+        let db = psnr(
+            &frame(Compositing::Multipass, eye),
+            &frame(Compositing::Deferred, eye),
+        );
+        eprintln!(
+            "{samples} samples at ({azimuth}, {elevation}): deferred against multipass {db:.1} dB"
+        );
+        assert!(db >= 85.0, "{samples} samples: {db:.1} dB");
+    }
+    assert_eq!(counts, [1, 2, 3, 4], "the views exercise every variant");
+    assert_no_validation_messages();
+}
+
 /// A diffuse card (both windings) in front of the teapot's right half as
 /// the orbit's first samples see it: an occluder the room pass draws.
 const CARD_OBJ: &str = "v 0.05 0.15 0.8\nv 0.45 0.15 0.8\nv 0.45 0.45 0.8\nv 0.05 0.45 0.8\n\
@@ -113,9 +162,25 @@ material = \"floor\"
 /// The tiny scene with `lod_bias` and the card, compiled into
 /// `dir/<name>` at 96×72.
 fn compile(dir: &std::path::Path, name: &str, lod_bias: f32) -> (Scene, std::path::PathBuf) {
+    compile_with(dir, name, lod_bias, "")
+}
+
+/// [`compile`], `orbit` added after the orbit's `samples` line.
+fn compile_with(
+    dir: &std::path::Path,
+    name: &str,
+    lod_bias: f32,
+    orbit: &str,
+) -> (Scene, std::path::PathBuf) {
     let scene_path = tiny_scene(dir);
     std::fs::write(dir.join("card.obj"), CARD_OBJ).expect("write card");
     let text = std::fs::read_to_string(&scene_path).expect("scene") + CARD;
+    let with_orbit = text.replacen("samples = 3\n", &format!("samples = 3\n{orbit}"), 1);
+    assert!(
+        orbit.is_empty() || with_orbit != text,
+        "the tiny scene sets samples"
+    );
+    let text = with_orbit;
     // The tiny scene inherits the shipped teapot's bias: replace its line.
     let text: String = text
         .lines()

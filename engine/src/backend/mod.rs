@@ -7,6 +7,7 @@ pub mod device;
 pub mod error;
 pub mod image;
 pub mod pipeline;
+mod pipeline_state;
 pub mod queries;
 pub mod texel_view;
 pub mod upload;

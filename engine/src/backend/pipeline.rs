@@ -4,6 +4,7 @@
 
 use super::device::Device;
 use super::error::{GpuError, GpuResult, VkContext};
+use super::pipeline_state::create_graphics_pipeline;
 use ash::vk;
 
 pub struct PipelineDesc<'a> {
@@ -78,7 +79,10 @@ pub enum Binding<'a> {
 pub struct Pipeline {
     device: Device,
     pub name: String,
+    /// Variant 0 ([`Pipeline::with_variants`]).
     pub raw: vk::Pipeline,
+    /// Every variant, `raw` first; they share the layout and the sets.
+    variants: Vec<vk::Pipeline>,
     pub layout: vk::PipelineLayout,
     set_layout: vk::DescriptorSetLayout,
     pool: vk::DescriptorPool,
@@ -89,6 +93,16 @@ const MAX_SETS: u32 = 64;
 
 impl Pipeline {
     pub fn new(device: &Device, desc: &PipelineDesc) -> GpuResult<Self> {
+        Self::with_variants(device, desc, &[])
+    }
+
+    /// One pipeline per value of the fragment shader's specialization
+    /// constant 0 (`layout(constant_id = 0)`; none given: one pipeline,
+    /// the shader's default), sharing one layout and descriptor sets. Why:
+    /// lavapipe runs both sides of a branch, uniform or not, so a loop over
+    /// up to four samples costs four whatever the count; a variant per
+    /// count compiles only what it runs (README "PEM playback: speed").
+    pub fn with_variants(device: &Device, desc: &PipelineDesc, values: &[u32]) -> GpuResult<Self> {
         let limit = device.properties.limits.max_push_constants_size;
         if desc.push_constant_size > limit || desc.push_constant_size % 4 != 0 {
             return Err(GpuError::Invalid(format!(
@@ -100,13 +114,22 @@ impl Pipeline {
             device: device.clone(),
             name: desc.name.into(),
             raw: vk::Pipeline::null(),
+            variants: Vec::new(),
             layout: vk::PipelineLayout::null(),
             set_layout: vk::DescriptorSetLayout::null(),
             pool: vk::DescriptorPool::null(),
             push_constant_size: desc.push_constant_size,
         };
         pipeline.make_layouts(desc)?;
-        pipeline.make_pipeline(desc)?;
+        match values {
+            [] => pipeline.make_pipeline(desc, None)?,
+            values => {
+                for &v in values {
+                    pipeline.make_pipeline(desc, Some(v))?;
+                }
+            }
+        }
+        pipeline.raw = pipeline.variants[0];
         Ok(pipeline)
     }
 
@@ -170,9 +193,10 @@ impl Pipeline {
         Ok(())
     }
 
-    /// The graphics pipeline from the shaders of `desc` (modules destroyed
-    /// again whatever happens).
-    fn make_pipeline(&mut self, desc: &PipelineDesc) -> GpuResult<()> {
+    /// One more variant: the graphics pipeline from the shaders of `desc`,
+    /// the fragment shader's constant 0 set to `spec` if given (modules
+    /// destroyed again whatever happens).
+    fn make_pipeline(&mut self, desc: &PipelineDesc, spec: Option<u32>) -> GpuResult<()> {
         let d = &self.device.device;
         let vertex = shader_module(&self.device, desc.vertex_spirv, desc.name)?;
         let fragment = match shader_module(&self.device, desc.fragment_spirv, desc.name) {
@@ -184,13 +208,14 @@ impl Pipeline {
             }
         };
         // SAFETY: layout and modules were made on this device and are alive.
-        let result = unsafe { create_graphics_pipeline(d, desc, self.layout, vertex, fragment) };
+        let result =
+            unsafe { create_graphics_pipeline(d, desc, self.layout, (vertex, fragment), spec) };
         // SAFETY: pipeline creation has returned; modules are no longer needed.
         unsafe {
             d.destroy_shader_module(vertex, None);
             d.destroy_shader_module(fragment, None);
         }
-        self.raw = result?;
+        self.variants.push(result?);
         Ok(())
     }
 
@@ -285,6 +310,25 @@ impl Pipeline {
         set: Option<vk::DescriptorSet>,
         push: &P,
     ) -> GpuResult<()> {
+        self.bind_variant(cmd, 0, set, push)
+    }
+
+    /// [`Pipeline::bind`] for variant `variant` (an index into the values
+    /// given to [`Pipeline::with_variants`]).
+    pub fn bind_variant<P: bytemuck::Pod>(
+        &self,
+        cmd: vk::CommandBuffer,
+        variant: usize,
+        set: Option<vk::DescriptorSet>,
+        push: &P,
+    ) -> GpuResult<()> {
+        let Some(&raw) = self.variants.get(variant) else {
+            return Err(GpuError::Invalid(format!(
+                "pipeline {}: variant {variant} of {}",
+                self.name,
+                self.variants.len()
+            )));
+        };
         let bytes = bytemuck::bytes_of(push);
         if bytes.len() as u32 != self.push_constant_size {
             return Err(GpuError::Invalid(format!(
@@ -298,7 +342,7 @@ impl Pipeline {
         // with formats matching this pipeline; the set matches its layout.
         unsafe {
             let d = &self.device.device;
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.raw);
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, raw);
             if let Some(set) = set {
                 d.cmd_bind_descriptor_sets(
                     cmd,
@@ -331,165 +375,15 @@ fn shader_module(device: &Device, spirv: &[u8], name: &str) -> GpuResult<vk::Sha
     unsafe { device.device.create_shader_module(&info, None) }.vk("vkCreateShaderModule")
 }
 
-/// # Safety
-/// `layout` and both modules must belong to `d`.
-unsafe fn create_graphics_pipeline(
-    d: &ash::Device,
-    desc: &PipelineDesc,
-    layout: vk::PipelineLayout,
-    vertex: vk::ShaderModule,
-    fragment: vk::ShaderModule,
-) -> GpuResult<vk::Pipeline> {
-    let stages = [
-        vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::VERTEX)
-            .module(vertex)
-            .name(c"main"),
-        vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::FRAGMENT)
-            .module(fragment)
-            .name(c"main"),
-    ];
-    let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
-        .vertex_binding_descriptions(desc.vertex_bindings)
-        .vertex_attribute_descriptions(desc.vertex_attributes);
-    let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
-        .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
-    let viewport = vk::PipelineViewportStateCreateInfo::default()
-        .viewport_count(1)
-        .scissor_count(1);
-    let raster = vk::PipelineRasterizationStateCreateInfo::default()
-        .polygon_mode(vk::PolygonMode::FILL)
-        .cull_mode(desc.cull_mode)
-        .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
-        .line_width(1.0);
-    let multisample = vk::PipelineMultisampleStateCreateInfo::default()
-        .rasterization_samples(vk::SampleCountFlags::TYPE_1);
-    let depth = depth_stencil_state(desc);
-    let blend_attachments = color_blend_attachments(desc);
-    let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
-    let dynamic_states = dynamic_states(desc);
-    let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-    let mut rendering = vk::PipelineRenderingCreateInfo::default()
-        .color_attachment_formats(desc.color_formats)
-        .depth_attachment_format(desc.depth_format)
-        .stencil_attachment_format(stencil_format(desc.depth_format));
-    let info = vk::GraphicsPipelineCreateInfo::default()
-        .stages(&stages)
-        .vertex_input_state(&vertex_input)
-        .input_assembly_state(&assembly)
-        .viewport_state(&viewport)
-        .rasterization_state(&raster)
-        .multisample_state(&multisample)
-        .depth_stencil_state(&depth)
-        .color_blend_state(&blend)
-        .dynamic_state(&dynamic)
-        .layout(layout)
-        .push_next(&mut rendering);
-    // SAFETY: every pointer in `info` borrows locals alive for the call.
-    unsafe { d.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) }
-        .map(|p| p[0])
-        .map_err(|(_, e)| e)
-        .vk("vkCreateGraphicsPipelines")
-}
-
-/// One blend state per colour attachment: the first blended by alpha when
-/// `desc` asks for it, every other written as is.
-fn color_blend_attachments(desc: &PipelineDesc) -> Vec<vk::PipelineColorBlendAttachmentState> {
-    let mut attachment = vk::PipelineColorBlendAttachmentState::default()
-        .color_write_mask(vk::ColorComponentFlags::RGBA);
-    match desc.blend {
-        Blend::Replace => {}
-        Blend::ByAlpha => {
-            attachment = attachment
-                .blend_enable(true)
-                .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
-                .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
-                .color_blend_op(vk::BlendOp::ADD)
-                .src_alpha_blend_factor(vk::BlendFactor::ZERO)
-                .dst_alpha_blend_factor(vk::BlendFactor::ONE)
-                .alpha_blend_op(vk::BlendOp::ADD);
-        }
-        Blend::Add => {
-            attachment = attachment
-                .blend_enable(true)
-                .src_color_blend_factor(vk::BlendFactor::ONE)
-                .dst_color_blend_factor(vk::BlendFactor::ONE)
-                .color_blend_op(vk::BlendOp::ADD)
-                .src_alpha_blend_factor(vk::BlendFactor::ONE)
-                .dst_alpha_blend_factor(vk::BlendFactor::ONE)
-                .alpha_blend_op(vk::BlendOp::ADD);
-        }
-    }
-    let plain = vk::PipelineColorBlendAttachmentState::default()
-        .color_write_mask(vk::ColorComponentFlags::RGBA);
-    (0..desc.color_formats.len())
-        .map(|i| if i == 0 { attachment } else { plain })
-        .collect()
-}
-
-/// The state set per draw rather than baked in. Front face is dynamic: the
-/// same pipeline renders mirrored cube faces; so is the stencil reference:
-/// one pipeline marks or tests every value.
-fn dynamic_states(desc: &PipelineDesc) -> Vec<vk::DynamicState> {
-    let mut dynamic_states = vec![
-        vk::DynamicState::VIEWPORT,
-        vk::DynamicState::SCISSOR,
-        vk::DynamicState::FRONT_FACE,
-    ];
-    if matches!(desc.stencil, StencilTest::Mark | StencilTest::Equal) {
-        dynamic_states.push(vk::DynamicState::STENCIL_REFERENCE);
-    }
-    dynamic_states
-}
-
-/// The stencil attachment format: the depth format when it has a stencil
-/// aspect, else none.
-fn stencil_format(depth_format: vk::Format) -> vk::Format {
-    if matches!(
-        depth_format,
-        vk::Format::D32_SFLOAT_S8_UINT | vk::Format::D24_UNORM_S8_UINT
-    ) {
-        depth_format
-    } else {
-        vk::Format::UNDEFINED
-    }
-}
-
-/// Depth and stencil state from `desc`.
-fn depth_stencil_state(desc: &PipelineDesc) -> vk::PipelineDepthStencilStateCreateInfo<'static> {
-    let depth = desc.depth == DepthTest::TestWrite;
-    let op = |compare, pass, reference| vk::StencilOpState {
-        fail_op: vk::StencilOp::KEEP,
-        pass_op: pass,
-        depth_fail_op: vk::StencilOp::KEEP,
-        compare_op: compare,
-        compare_mask: 0xff,
-        write_mask: 0xff,
-        reference,
-    };
-    let (stencil, face) = match desc.stencil {
-        StencilTest::Off => (false, op(vk::CompareOp::ALWAYS, vk::StencilOp::KEEP, 0)),
-        StencilTest::Mark => (true, op(vk::CompareOp::ALWAYS, vk::StencilOp::REPLACE, 0)),
-        StencilTest::Unmark => (true, op(vk::CompareOp::ALWAYS, vk::StencilOp::ZERO, 0)),
-        StencilTest::Equal => (true, op(vk::CompareOp::EQUAL, vk::StencilOp::KEEP, 0)),
-    };
-    vk::PipelineDepthStencilStateCreateInfo::default()
-        .depth_test_enable(depth)
-        .depth_write_enable(depth)
-        .depth_compare_op(vk::CompareOp::LESS_OR_EQUAL)
-        .stencil_test_enable(stencil)
-        .front(face)
-        .back(face)
-}
-
 impl Drop for Pipeline {
     fn drop(&mut self) {
         // SAFETY: no pending frame uses the pipeline; null handles are
         // ignored by vkDestroy*.
         unsafe {
             let d = &self.device.device;
-            d.destroy_pipeline(self.raw, None);
+            for &p in &self.variants {
+                d.destroy_pipeline(p, None);
+            }
             d.destroy_pipeline_layout(self.layout, None);
             d.destroy_descriptor_pool(self.pool, None);
             d.destroy_descriptor_set_layout(self.set_layout, None);

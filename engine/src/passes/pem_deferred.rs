@@ -8,7 +8,8 @@
 
 use super::target::{Target, render_into, union};
 use crate::backend::{
-    Buffer, DepthTest, Device, GpuResult, Image, ImageDesc, Pipeline, PipelineDesc, StencilTest,
+    Buffer, DepthTest, Device, GpuError, GpuResult, Image, ImageDesc, Pipeline, PipelineDesc,
+    StencilTest,
 };
 use crate::gpu_scene::GpuMesh;
 use crate::graph::{Access, Pass, Usage};
@@ -61,8 +62,12 @@ impl GBuffer {
     }
 }
 
+/// The composite's variants: how many samples each blends (its shader's
+/// `SAMPLES`); variant `i` blends `COMPOSITE_SAMPLES[i]`.
+pub const COMPOSITE_SAMPLES: [u32; 4] = [1, 2, 3, 4];
+
 /// The pipelines of deferred compositing: the G-buffer, the reflectors'
-/// insides into it, and the composite.
+/// insides into it, and the composite (one variant per sample count).
 pub struct DeferredPipelines {
     pub gbuffer: Pipeline,
     pub interior: Pipeline,
@@ -98,7 +103,7 @@ impl DeferredPipelines {
             &GBUFFER_FORMATS,
             depth,
         )?;
-        let composite = Pipeline::new(
+        let composite = Pipeline::with_variants(
             device,
             &PipelineDesc {
                 name: "pem composite",
@@ -115,6 +120,7 @@ impl DeferredPipelines {
                 depth: DepthTest::Off,
                 stencil: StencilTest::Equal,
             },
+            &COMPOSITE_SAMPLES,
         )?;
         Ok(Self {
             gbuffer,
@@ -242,6 +248,8 @@ pub struct CompositeDraw {
     pub area: vk::Rect2D,
     pub bands: Vec<vk::Rect2D>,
     pub push: CompositePush,
+    /// How many samples it blends: picks the pipeline variant.
+    pub samples: usize,
     /// Binds the G-buffer, the map arrays of the reflector's EM resolution
     /// and the Fresnel LUT.
     pub set: vk::DescriptorSet,
@@ -292,7 +300,14 @@ impl Pass for CompositePass<'_> {
         attachments.render(self.device, cmd, || {
             let d = &self.device.device;
             for draw in &self.draws {
-                self.pipeline.bind(cmd, Some(draw.set), &draw.push)?;
+                let variant = COMPOSITE_SAMPLES
+                    .iter()
+                    .position(|&n| n as usize == draw.samples)
+                    .ok_or_else(|| {
+                        GpuError::Invalid(format!("composite of {} samples", draw.samples))
+                    })?;
+                self.pipeline
+                    .bind_variant(cmd, variant, Some(draw.set), &draw.push)?;
                 let scissors = match draw.bands.as_slice() {
                     [] => std::slice::from_ref(&draw.area),
                     bands => bands,

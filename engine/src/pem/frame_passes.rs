@@ -65,6 +65,7 @@ impl PemPlayer {
                     slot: vec4_of(&slot),
                     info: vec4_of(&[weights.len() as f32, f32::from(layered)]),
                 },
+                samples: weights.len(),
                 set: class.composite_set,
             });
         }
