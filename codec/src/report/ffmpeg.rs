@@ -147,16 +147,12 @@ pub fn ffmpeg_round_trip_with(
     crf: u32,
     gop: u32,
 ) -> Result<(Vec<Vec<u8>>, u64)> {
-    let dir = std::env::temp_dir().join(format!(
-        "codec-ffmpeg-{}-{}",
-        std::process::id(),
-        codec.name()
-    ));
-    std::fs::create_dir_all(&dir).map_err(|e| err(e.to_string()))?;
+    let scratch = super::scratch::Scratch::new("codec-ffmpeg", codec.name())?;
+    let dir = scratch.path();
     let mp4 = dir.join("v.mp4");
-    let bytes = encode_video(codec, frames, w, h, crf, gop, &dir, &mp4)?;
+    let bytes = encode_video(codec, frames, w, h, crf, gop, dir, &mp4)?;
     let raw = decode_video(&mp4)?;
-    let _ = std::fs::remove_dir_all(&dir);
+    drop(scratch);
     let fsz = (w * h * 6) as usize;
     if raw.len() < fsz * frames.len() {
         return Err(err(format!(

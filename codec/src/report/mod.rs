@@ -29,6 +29,7 @@ mod ffmpeg;
 mod jpeg;
 mod mpeg_texture;
 mod random_access;
+mod scratch;
 
 pub use decode_times::{path_decode_times, quantile};
 pub use ffmpeg::{

@@ -152,15 +152,8 @@ pub fn video_random_access(
     crf: u32,
     samples: &[usize],
 ) -> Result<RandomAccess> {
-    let dir = std::env::temp_dir().join(format!(
-        "codec-access-{}-{}",
-        std::process::id(),
-        codec.name()
-    ));
-    std::fs::create_dir_all(&dir).map_err(|e| err(e.to_string()))?;
-    let result = video_access_in(codec, reference, crf, samples, &dir);
-    let _ = std::fs::remove_dir_all(&dir);
-    result
+    let scratch = super::scratch::Scratch::new("codec-access", codec.name())?;
+    video_access_in(codec, reference, crf, samples, scratch.path())
 }
 
 fn video_access_in(
