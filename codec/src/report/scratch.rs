@@ -1,10 +1,12 @@
 //! Scratch folders for the video baselines' ffmpeg runs:
-//! `<temp>/<prefix>-<pid>-<encoder>`, removed when dropped (errors and
+//! `<temp>/<prefix>-<pid>-<encoder>-<n>` (`n` counts this process's
+//! folders, so threads never share one), removed when dropped (errors and
 //! panics included). A run that was killed cannot remove its own, so each
 //! new one first removes the folders of its prefix whose process is gone
 //! (where `/proc` says so; elsewhere nothing is swept).
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::ffmpeg::err;
 use crate::error::Result;
@@ -14,12 +16,14 @@ pub(super) struct Scratch {
 }
 
 impl Scratch {
-    /// A fresh, empty folder for this process and `name`; `prefix`'s
+    /// A fresh, empty folder of this process for `name`; `prefix`'s
     /// folders left by dead processes are removed first.
     pub(super) fn new(prefix: &str, name: &str) -> Result<Self> {
+        static NEXT: AtomicU64 = AtomicU64::new(0);
         let temp = std::env::temp_dir();
         sweep(&temp, prefix);
-        let path = temp.join(format!("{prefix}-{}-{name}", std::process::id()));
+        let n = NEXT.fetch_add(1, Ordering::Relaxed);
+        let path = temp.join(format!("{prefix}-{}-{name}-{n}", std::process::id()));
         let _ = std::fs::remove_dir_all(&path);
         std::fs::create_dir_all(&path).map_err(|e| err(format!("{}: {e}", path.display())))?;
         Ok(Self { path })
@@ -81,6 +85,14 @@ mod tests {
         let scratch = Scratch::new(prefix, "x265").expect("scratch");
         let ours = scratch.path().to_path_buf();
         assert!(ours.is_dir());
+        let other = Scratch::new(prefix, "x265").expect("a second one");
+        assert_ne!(
+            other.path(),
+            ours,
+            "two runs of one encoder never share a folder"
+        );
+        drop(other);
+        assert!(ours.is_dir(), "dropping another leaves ours");
         assert!(!dead.exists(), "a dead run's folder is swept");
         assert!(live.exists(), "pid 1 runs: its folder stays");
         drop(scratch);
