@@ -35,18 +35,7 @@ fn deferred_and_multipass_frames_agree() {
         );
         let device = validated_device();
         let orbit = scene.orbit.clone();
-        let frame = |compositing, eye| {
-            let mut r = Renderer::new(&device, &scene, 96, 72).expect("renderer");
-            let settings = PemSettings {
-                compositing,
-                ..PemSettings::new(PemKind::Layered)
-            };
-            let source = MapSource::container(&scene, &out.join("teapot.ptxc")).expect("container");
-            r.set_pem(&scene, settings, source).expect("set-up");
-            r.frame(FrameMode::Pem, eye, orbit.view(eye))
-                .expect("frame");
-            r.pixels().expect("pixels")
-        };
+        let frame = |compositing, eye| draw(&device, &scene, &out, compositing, eye);
         for (what, eye, min_db) in [
             ("on a sample", orbit.sample_eye(1).expect("eye"), 100.0),
             (
@@ -112,18 +101,7 @@ fn every_composite_variant_draws_what_multipass_draws() {
     let orbit = scene.orbit.clone();
     let grid = inference::scene::ViewGrid::from_orbit(&orbit);
     let device = validated_device();
-    let frame = |compositing, eye| {
-        let mut r = Renderer::new(&device, &scene, 96, 72).expect("renderer");
-        let settings = PemSettings {
-            compositing,
-            ..PemSettings::new(PemKind::Layered)
-        };
-        let source = MapSource::container(&scene, &out.join("teapot.ptxc")).expect("container");
-        r.set_pem(&scene, settings, source).expect("set-up");
-        r.frame(FrameMode::Pem, eye, orbit.view(eye))
-            .expect("frame");
-        r.pixels().expect("pixels")
-    };
+    let frame = |compositing, eye| draw(&device, &scene, &out, compositing, eye);
     let (start, step) = (orbit.start_deg, orbit.step_deg);
     let mut counts = Vec::new();
     for (azimuth, elevation) in [
@@ -146,6 +124,26 @@ fn every_composite_variant_draws_what_multipass_draws() {
     }
     assert_eq!(counts, [1, 2, 3, 4], "the views exercise every variant");
     assert_no_validation_messages();
+}
+
+/// One 96×72 layered-PEM frame from `eye`, played from `out`'s container.
+fn draw(
+    device: &engine::backend::Device,
+    scene: &Scene,
+    out: &std::path::Path,
+    compositing: Compositing,
+    eye: glam::Vec3,
+) -> Vec<[f32; 4]> {
+    let mut r = Renderer::new(device, scene, 96, 72).expect("renderer");
+    let settings = PemSettings {
+        compositing,
+        ..PemSettings::new(PemKind::Layered)
+    };
+    let source = MapSource::container(scene, &out.join("teapot.ptxc")).expect("container");
+    r.set_pem(scene, settings, source).expect("set-up");
+    r.frame(FrameMode::Pem, eye, scene.orbit.view(eye))
+        .expect("frame");
+    r.pixels().expect("pixels")
 }
 
 /// A diffuse card (both windings) in front of the teapot's right half as

@@ -81,9 +81,7 @@ impl Loader<'_> {
                         format!("unknown generator \"{g}\" (known: newell_teapot)"),
                     ));
                 }
-                let segments = self.segments(field, "segments", m.segments)?;
-                let part = m.part.unwrap_or(TeapotPart::Whole);
-                return Ok(teapot::tessellate(segments, part).map_err(nested)?.mesh);
+                return self.newell_teapot(field, "segments", m.segments, m.part);
             }
             (None, Some(obj), None) => (obj, false),
             (None, None, Some(file)) => (file, true),
@@ -116,36 +114,39 @@ impl Loader<'_> {
             )),
         }
     }
-    /// A generator's tessellation (`key` = `segments` or `trace_segments`),
-    /// checked; [`DEFAULT_SEGMENTS`] when not given.
-    fn segments(&self, field: &str, key: &str, given: Option<u32>) -> Result<u32, SceneError> {
-        let segments = given.unwrap_or(DEFAULT_SEGMENTS);
+    /// The tracer's own tessellation of a generated mesh
+    /// (`trace_segments`), when the scene asks for one; the mesh's other
+    /// keys were checked by [`Loader::mesh`].
+    fn trace_mesh(&self, field: &str, m: &MeshFile) -> Result<Option<Mesh>, SceneError> {
+        m.trace_segments
+            .map(|given| self.newell_teapot(field, "trace_segments", Some(given), m.part))
+            .transpose()
+    }
+
+    /// Newell's teapot tessellated with `segments` (given under `key`,
+    /// checked; [`DEFAULT_SEGMENTS`] when not given).
+    fn newell_teapot(
+        &self,
+        field: &str,
+        key: &str,
+        segments: Option<u32>,
+        part: Option<TeapotPart>,
+    ) -> Result<Mesh, SceneError> {
+        let segments = segments.unwrap_or(DEFAULT_SEGMENTS);
         if !(1..=MAX_SEGMENTS).contains(&segments) {
             return Err(self.err(
                 format!("{field}.{key}"),
                 format!("{segments} outside 1..={MAX_SEGMENTS}"),
             ));
         }
-        Ok(segments)
-    }
-
-    /// The tracer's own tessellation of a generated mesh
-    /// (`trace_segments`), when the scene asks for one; the mesh's other
-    /// keys were checked by [`Loader::mesh`].
-    fn trace_mesh(&self, field: &str, m: &MeshFile) -> Result<Option<Mesh>, SceneError> {
-        let Some(given) = m.trace_segments else {
-            return Ok(None);
-        };
-        let segments = self.segments(field, "trace_segments", Some(given))?;
-        let part = m.part.unwrap_or(TeapotPart::Whole);
-        let nested = |source: SceneError| SceneError::Nested {
-            path: self.path.to_owned(),
-            field: field.to_owned(),
-            cause: Box::new(source),
-        };
-        Ok(Some(
-            teapot::tessellate(segments, part).map_err(nested)?.mesh,
-        ))
+        let part = part.unwrap_or(TeapotPart::Whole);
+        teapot::tessellate(segments, part)
+            .map(|t| t.mesh)
+            .map_err(|source| SceneError::Nested {
+                path: self.path.to_owned(),
+                field: field.to_owned(),
+                cause: Box::new(source),
+            })
     }
 
     fn em(&self, field: &str, em: &EmFile) -> Result<EmSettings, SceneError> {
