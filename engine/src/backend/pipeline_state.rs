@@ -84,33 +84,25 @@ pub(super) unsafe fn create_graphics_pipeline(
 /// One blend state per colour attachment: the first blended by alpha when
 /// `desc` asks for it, every other written as is.
 fn color_blend_attachments(desc: &PipelineDesc) -> Vec<vk::PipelineColorBlendAttachmentState> {
-    let mut attachment = vk::PipelineColorBlendAttachmentState::default()
-        .color_write_mask(vk::ColorComponentFlags::RGBA);
-    match desc.blend {
-        Blend::Replace => {}
-        Blend::ByAlpha => {
-            attachment = attachment
-                .blend_enable(true)
-                .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
-                .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
-                .color_blend_op(vk::BlendOp::ADD)
-                .src_alpha_blend_factor(vk::BlendFactor::ZERO)
-                .dst_alpha_blend_factor(vk::BlendFactor::ONE)
-                .alpha_blend_op(vk::BlendOp::ADD);
-        }
-        Blend::Add => {
-            attachment = attachment
-                .blend_enable(true)
-                .src_color_blend_factor(vk::BlendFactor::ONE)
-                .dst_color_blend_factor(vk::BlendFactor::ONE)
-                .color_blend_op(vk::BlendOp::ADD)
-                .src_alpha_blend_factor(vk::BlendFactor::ONE)
-                .dst_alpha_blend_factor(vk::BlendFactor::ONE)
-                .alpha_blend_op(vk::BlendOp::ADD);
-        }
-    }
+    use vk::BlendFactor as F;
     let plain = vk::PipelineColorBlendAttachmentState::default()
         .color_write_mask(vk::ColorComponentFlags::RGBA);
+    // Source and destination factors of colour, then of alpha; both added.
+    let blended = |[color_src, color_dst, alpha_src, alpha_dst]: [F; 4]| {
+        plain
+            .blend_enable(true)
+            .src_color_blend_factor(color_src)
+            .dst_color_blend_factor(color_dst)
+            .color_blend_op(vk::BlendOp::ADD)
+            .src_alpha_blend_factor(alpha_src)
+            .dst_alpha_blend_factor(alpha_dst)
+            .alpha_blend_op(vk::BlendOp::ADD)
+    };
+    let attachment = match desc.blend {
+        Blend::Replace => plain,
+        Blend::ByAlpha => blended([F::SRC_ALPHA, F::ONE_MINUS_SRC_ALPHA, F::ZERO, F::ONE]),
+        Blend::Add => blended([F::ONE; 4]),
+    };
     (0..desc.color_formats.len())
         .map(|i| if i == 0 { attachment } else { plain })
         .collect()
