@@ -4,7 +4,10 @@
 //! shared machine disturbs less — plus a hash of every decoded texel (f32 and f16
 //! outputs) so two builds can be checked for identical results.
 //!
-//! `cargo run --release -p codec --example decode_timing -- [CONTAINER] [--reps N] [--hash] [--texture I]`
+//! `cargo run --release -p codec --example decode_timing -- [CONTAINER] [--reps N] [--hash] [--texture I] [--no-ahead]`
+//!
+//! Each leaf's time includes `warm_ahead` (decoding the next samples' coarse
+//! levels), as playback does; `--no-ahead` leaves it out.
 //!
 //! Without a container it encodes the benchmark's synthetic leaf EM
 //! (256×256×6 + MIPs, RGBA, 8 samples, 384:1) first.
@@ -48,6 +51,7 @@ struct Args {
     hash: bool,
     path: Option<String>,
     only: Option<usize>,
+    ahead: bool,
 }
 
 fn parse_args() -> Result<Args, Box<dyn std::error::Error>> {
@@ -57,12 +61,14 @@ fn parse_args() -> Result<Args, Box<dyn std::error::Error>> {
         hash: false,
         path: None,
         only: None,
+        ahead: true,
     };
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
             "--reps" => parsed.reps = it.next().ok_or("--reps N")?.parse()?,
             "--hash" => parsed.hash = true,
+            "--no-ahead" => parsed.ahead = false,
             "--texture" => parsed.only = Some(it.next().ok_or("--texture I")?.parse::<usize>()?),
             p => parsed.path = Some(p.to_string()),
         }
@@ -95,6 +101,7 @@ fn time_texture(
     c: &Container,
     t: &TextureInfo,
     reps: usize,
+    ahead: bool,
     out: &mut [f16],
 ) -> codec::Result<Timed> {
     let mut cache = DecodeCache::default();
@@ -105,6 +112,9 @@ fn time_texture(
             for s0 in 0..t.grid.n0 {
                 let (start, c0) = (Instant::now(), cpu_ms());
                 cache.decode_leaf_all(c, t.id.object, t.id.layer, [s0, s1], out)?;
+                if ahead {
+                    cache.warm_ahead(c, t.id.object, t.id.layer)?;
+                }
                 let ms = start.elapsed().as_secs_f64() * 1e3;
                 let c1 = cpu_ms();
                 cache.end_frame();
@@ -165,7 +175,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             mut cpu,
             peak_images,
             peak_bytes,
-        } = time_texture(&c, t, args.reps, &mut out)?;
+        } = time_texture(&c, t, args.reps, args.ahead, &mut out)?;
         all.extend_from_slice(&times);
         all_cpu.extend_from_slice(&cpu);
         let l = t.layout;
@@ -192,9 +202,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         println!();
     }
     println!(
-        "all: median {:.3} ms wall, {:.3} ms cpu over {} decodes",
+        "all: median {:.3} ms wall, {:.3} ms cpu, p95 {:.3} ms wall, {:.3} ms cpu over {} decodes",
         median(&mut all),
         median(&mut all_cpu),
+        codec::report::quantile(&all, 0.95),
+        codec::report::quantile(&all_cpu, 0.95),
         all.len()
     );
     Ok(())

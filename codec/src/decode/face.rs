@@ -43,7 +43,7 @@ impl DecodeCache {
 
     /// The image keys of `local`'s path through the block's pyramid, root
     /// first; reads and parses the block if it is not cached.
-    fn level_path(
+    pub(super) fn level_path(
         &mut self,
         c: &Container,
         tex: &TextureInfo,
@@ -100,13 +100,25 @@ impl DecodeCache {
             return Ok(());
         }
         self.stats.misses += missing.len() as u64;
+        self.decode_path_levels(tex, block, path, &missing)
+    }
+
+    /// Decodes and caches `path[level]` for each of `levels` from the
+    /// cached block's bytes (see [`Self::level_path`]).
+    pub(super) fn decode_path_levels(
+        &mut self,
+        tex: &TextureInfo,
+        block: usize,
+        path: &[ImageKey],
+        levels: &[usize],
+    ) -> Result<()> {
         // Take the bytes out while decoding (the decoder borrows self).
         let bytes = self
             .blocks
             .get_mut(&block)
             .map(|b| std::mem::take(&mut b.bytes))
             .unwrap_or_default();
-        let result = self.decode_levels(tex, &bytes, block, path, &missing);
+        let result = self.decode_levels(tex, &bytes, block, path, levels);
         if let Some(b) = self.blocks.get_mut(&block) {
             b.bytes = bytes;
         }

@@ -20,10 +20,12 @@
 //! bit-identical to summing dense level images in the same order (root,
 //! …, leaf, then the MIP prediction), which is what the codec first did.
 
+mod ahead;
 mod face;
 mod mips;
 mod texel;
 
+pub use ahead::LOOKAHEAD;
 pub use texel::OutTexel;
 
 use std::collections::HashMap;
@@ -34,6 +36,7 @@ use crate::dct::Dct8;
 use crate::error::{CodecError, Result};
 use crate::pyramid::Plan;
 use crate::sparse::SparseImage;
+use ahead::Motion;
 use mips::Scratch;
 
 /// Cache lifetime parameters: `L = a · b^l` frames.
@@ -90,6 +93,8 @@ pub struct CacheStats {
     pub hits: u64,
     pub misses: u64,
     pub evictions: u64,
+    /// Level images decoded ahead of need ([`DecodeCache::warm_ahead`]).
+    pub warmed: u64,
     pub resident_images: usize,
     pub resident_bytes: usize,
 }
@@ -106,6 +111,8 @@ pub struct DecodeCache {
     pool: Vec<SparseImage>,
     scratch: Scratch,
     stats: CacheStats,
+    /// Each texture's last samples (by texture index), for warming ahead.
+    motion: HashMap<usize, Motion>,
 }
 
 impl Default for DecodeCache {
@@ -125,6 +132,7 @@ impl DecodeCache {
             pool: Vec::new(),
             scratch: Scratch::default(),
             stats: CacheStats::default(),
+            motion: HashMap::new(),
         }
     }
 
@@ -154,6 +162,7 @@ impl DecodeCache {
             pool.push(std::mem::take(&mut e.data));
         }
         self.blocks.clear();
+        self.motion.clear();
     }
 
     pub fn stats(&self) -> CacheStats {
@@ -188,6 +197,7 @@ impl DecodeCache {
                 expected,
             });
         }
+        self.motion.entry(ti).or_default().note(sample);
         for face in 0..tex.layout.faces {
             self.decode_face(
                 c,
@@ -243,6 +253,7 @@ impl DecodeCache {
                 expected,
             });
         }
+        self.motion.entry(ti).or_default().note(sample);
         self.decode_face(
             c,
             tex,

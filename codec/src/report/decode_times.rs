@@ -25,6 +25,7 @@ pub fn path_decode_times(c: &Container, keep_going: &dyn Fn() -> bool) -> Result
                     }
                     let start = Instant::now();
                     cache.decode_leaf_all(c, t.id.object, t.id.layer, [s0, s1], &mut out)?;
+                    cache.warm_ahead(c, t.id.object, t.id.layer)?;
                     let ms = start.elapsed().as_secs_f64() * 1e3;
                     cache.end_frame();
                     if pass == 1 {

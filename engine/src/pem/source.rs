@@ -216,6 +216,11 @@ impl MapSource {
                         )
                     })?;
                 cache.end_frame();
+                // The next samples' coarse levels, a few per read, so a new
+                // pyramid block costs no frame 3–4× the others. Only a head
+                // start: a block failing here fails again, with its error,
+                // when a frame reads it.
+                let _ = cache.warm_ahead(container, texture, 0);
             }
             Kind::Exr { dir } => {
                 let path = map_path(dir, sample, object, layer);
