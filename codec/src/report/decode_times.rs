@@ -10,8 +10,11 @@ use crate::error::Result;
 /// Wall time (ms) of every leaf decode (all faces and MIPs, f16) of every
 /// texture, stepping along the path with the default cache lifetimes as
 /// [`super::report`] does: one untimed pass fills the buffer pool, the
-/// second is timed. `keep_going` is asked before each decode; when it says
-/// no, the times so far are returned.
+/// second is timed. After each leaf the next samples' coarse levels are
+/// warmed ([`DecodeCache::warm_ahead`]), untimed: playback's decode-ahead
+/// worker does that after handing the map over, so no frame waits for it.
+/// `keep_going` is asked before each decode; when it says no, the times
+/// so far are returned.
 pub fn path_decode_times(c: &Container, keep_going: &dyn Fn() -> bool) -> Result<Vec<f64>> {
     let mut times = Vec::new();
     for t in c.textures() {
@@ -25,8 +28,9 @@ pub fn path_decode_times(c: &Container, keep_going: &dyn Fn() -> bool) -> Result
                     }
                     let start = Instant::now();
                     cache.decode_leaf_all(c, t.id.object, t.id.layer, [s0, s1], &mut out)?;
-                    cache.warm_ahead(c, t.id.object, t.id.layer)?;
                     let ms = start.elapsed().as_secs_f64() * 1e3;
+                    // As playback's worker: after the leaf is handed over.
+                    cache.warm_ahead(c, t.id.object, t.id.layer)?;
                     cache.end_frame();
                     if pass == 1 {
                         times.push(ms);

@@ -72,6 +72,7 @@ impl Prefetcher {
                     // the map itself and reports the error there.
                     let ok = decode_into(&mut source, &key, &mut buffer).is_ok();
                     let ms = source.last_read_ms;
+                    let (object, layer) = (key.object.clone(), key.layer);
                     if outbox
                         .send(Decoded {
                             key,
@@ -83,6 +84,9 @@ impl Prefetcher {
                     {
                         break;
                     }
+                    // The map is handed over; the next samples' coarse
+                    // levels fill the time until the next request.
+                    source.warm_ahead(&object, layer);
                 }
             })
             .ok();

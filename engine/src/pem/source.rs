@@ -166,6 +166,28 @@ impl MapSource {
         }
     }
 
+    /// Decodes a share of the coarse pyramid levels the next samples of
+    /// `object`'s `layer` will need, along the way the reads have been
+    /// moving (`codec::DecodeCache::warm_ahead`), so a new pyramid block
+    /// makes no read 3–4× the others. The decode-ahead worker calls it
+    /// after handing over a map, in its idle time. Only a head start:
+    /// nothing for EXR maps, and a block failing here fails again, with
+    /// its error, when a read needs it.
+    pub fn warm_ahead(&mut self, object: &str, layer: MapLayer) {
+        if let Kind::Container {
+            container,
+            cache,
+            index,
+            ..
+        } = &mut self.kind
+            && let Some(&(_, _, texture)) = index
+                .iter()
+                .find(|(o, l, _)| o == object && *l == layer.file_part())
+        {
+            let _ = cache.warm_ahead(container, texture, 0);
+        }
+    }
+
     /// Writes sample `sample` of `object`'s `layer` (a `resolution` map with
     /// its full MIP chain) into `out`: RGBA f16, alpha 1 for RGB maps.
     pub fn read(
@@ -216,11 +238,6 @@ impl MapSource {
                         )
                     })?;
                 cache.end_frame();
-                // The next samples' coarse levels, a few per read, so a new
-                // pyramid block costs no frame 3–4× the others. Only a head
-                // start: a block failing here fails again, with its error,
-                // when a frame reads it.
-                let _ = cache.warm_ahead(container, texture, 0);
             }
             Kind::Exr { dir } => {
                 let path = map_path(dir, sample, object, layer);
