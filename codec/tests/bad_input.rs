@@ -30,7 +30,8 @@ fn set_u32(b: &mut [u8], at: usize, v: u32) {
     b[at..at + 4].copy_from_slice(&v.to_le_bytes());
 }
 
-/// Opens and decodes everything; returns the first error.
+/// Opens and decodes everything, walking each texture's samples in order
+/// and warming ahead after each; returns the first error.
 fn open_and_decode(bytes: Vec<u8>) -> Result<(), CodecError> {
     let c = Container::from_bytes(bytes)?;
     let mut cache = DecodeCache::default();
@@ -39,6 +40,10 @@ fn open_and_decode(bytes: Vec<u8>) -> Result<(), CodecError> {
         let mut out = vec![0.0f32; t.layout.texels() * 4];
         for s in 0..t.grid.n0 {
             if let Err(e) = cache.decode_leaf_all(&c, t.id.object, t.id.layer, [s, 0], &mut out) {
+                first_err.get_or_insert(e);
+            }
+            // A steady walk: decoding ahead reads the next block too.
+            if let Err(e) = cache.warm_ahead(&c, t.id.object, t.id.layer) {
                 first_err.get_or_insert(e);
             }
         }
