@@ -11,12 +11,12 @@
 //! cache like any other.
 
 use super::{DecodeCache, ImageKey};
-use crate::container::{BlockView, Container, TextureInfo};
+use crate::container::{BLOCK_LOG2, BlockView, Container, TextureInfo};
 use crate::error::{CodecError, Result};
 
 /// Samples ahead of the eye that [`DecodeCache::warm_ahead`] looks at: one
 /// block along an axis, so a new block's levels are ready when it starts.
-pub const LOOKAHEAD: i64 = 8;
+pub const LOOKAHEAD: i64 = 1 << BLOCK_LOG2;
 
 /// A texture's last three distinct samples, newest last.
 #[derive(Clone, Copy, Debug, Default)]
