@@ -7,7 +7,7 @@
 use super::source::{MapLayer, MapSource};
 use crate::backend::Buffer;
 use half::f16;
-use std::sync::mpsc::{Receiver, Sender, channel};
+use std::sync::mpsc::{Receiver, Sender, TryRecvError, channel};
 use std::thread::JoinHandle;
 
 /// Which map of which reflector at which sample.
@@ -57,6 +57,48 @@ pub struct Prefetcher {
     spare: Vec<Buffer>,
 }
 
+/// The worker's loop: decode each request into its buffer and hand it
+/// back; when no request waits, warm the coarse levels of the next samples
+/// of the maps it handed over (`MapSource::warm_ahead`), one map per turn,
+/// so warming never delays a request.
+fn worker(source: &mut MapSource, inbox: &Receiver<(MapKey, Buffer)>, outbox: &Sender<Decoded>) {
+    let mut to_warm: Vec<(String, MapLayer)> = Vec::new();
+    loop {
+        let job = match to_warm.is_empty() {
+            true => inbox.recv().ok(),
+            false => match inbox.try_recv() {
+                Ok(job) => Some(job),
+                Err(TryRecvError::Empty) => {
+                    let (object, layer) = to_warm.remove(0);
+                    source.warm_ahead(&object, layer);
+                    continue;
+                }
+                Err(TryRecvError::Disconnected) => None,
+            },
+        };
+        let Some((key, mut buffer)) = job else { return };
+        // A failed prefetch is simply not used: the frame reads the map
+        // itself and reports the error there.
+        let ok = decode_into(source, &key, &mut buffer).is_ok();
+        let map = (key.object.clone(), key.layer);
+        if ok && !to_warm.contains(&map) {
+            to_warm.push(map);
+        }
+        let ms = source.last_read_ms;
+        if outbox
+            .send(Decoded {
+                key,
+                buffer,
+                ok,
+                ms,
+            })
+            .is_err()
+        {
+            return;
+        }
+    }
+}
+
 /// Decoded maps kept waiting at most (older ones are dropped).
 const READY_MAX: usize = 8;
 
@@ -66,29 +108,7 @@ impl Prefetcher {
         let (outbox, results) = channel();
         let worker = std::thread::Builder::new()
             .name("map-prefetch".into())
-            .spawn(move || {
-                for (key, mut buffer) in inbox {
-                    // A failed prefetch is simply not used: the frame reads
-                    // the map itself and reports the error there.
-                    let ok = decode_into(&mut source, &key, &mut buffer).is_ok();
-                    let ms = source.last_read_ms;
-                    let (object, layer) = (key.object.clone(), key.layer);
-                    if outbox
-                        .send(Decoded {
-                            key,
-                            buffer,
-                            ok,
-                            ms,
-                        })
-                        .is_err()
-                    {
-                        break;
-                    }
-                    // The map is handed over; the next samples' coarse
-                    // levels fill the time until the next request.
-                    source.warm_ahead(&object, layer);
-                }
-            })
+            .spawn(move || worker(&mut source, &inbox, &outbox))
             .ok();
         Self {
             jobs: worker.as_ref().map(|_| jobs),

@@ -1,0 +1,70 @@
+//! Decoding ahead on the worker (`pem::prefetch`): maps requested one
+//! after another along the orbit come back bit for bit what a read on this
+//! thread gives, while the worker warms the next samples' coarse levels in
+//! between (`MapSource::warm_ahead`); dropping the prefetcher ends the
+//! worker even while it has maps left to warm.
+
+mod common;
+
+use engine::backend::Buffer;
+use engine::pem::prefetch::{MapKey, Prefetcher};
+use engine::pem::source::{MapLayer, MapSource};
+use gpu_allocator::MemoryLocation;
+use half::f16;
+use inference::scene::Scene;
+use std::path::Path;
+
+#[test]
+fn maps_decoded_ahead_match_maps_read_in_line() {
+    let device = common::validated_device();
+    let scene = Scene::load("teapot").expect("the teapot scene");
+    let container =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/compiled/teapot/teapot.ptxc");
+    let mut here = MapSource::container(&scene, &container).expect("the shipped container");
+    let mut prefetch = Prefetcher::new(here.reopen().expect("a second handle"));
+    let resolution = 256;
+    let layers = [MapLayer::Distant, MapLayer::Local];
+    let halves = MapLayer::Local.layout(resolution).len() * 4;
+    let mut buffer = Some(
+        Buffer::new(
+            &device,
+            "prefetch test staging",
+            (halves * 2) as u64,
+            ash::vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::CpuToGpu,
+        )
+        .expect("a staging buffer"),
+    );
+    let mut expected = vec![f16::ZERO; halves];
+    // Twelve samples in order: a steady walk, so the worker warms across a
+    // pyramid block boundary between the requests.
+    for sample in 0..12 {
+        for layer in layers {
+            let key = MapKey {
+                object: "teapot".into(),
+                layer,
+                resolution,
+                sample,
+            };
+            let sent = buffer.take().expect("the buffer is back");
+            assert!(
+                prefetch.request(key.clone(), sent).is_none(),
+                "the worker runs"
+            );
+            let (got, _ms) = prefetch.take(&key).expect("the worker decoded it");
+            let n = layer.layout(resolution).len() * 4;
+            here.read("teapot", layer, resolution, sample, &mut expected[..n])
+                .expect("read in line");
+            let bytes = got.mapped().expect("mapped");
+            let want: &[u8] = bytemuck::cast_slice(&expected[..n]);
+            assert!(
+                bytes[..n * 2] == *want,
+                "sample {sample} {layer:?}: decoded ahead differs from the read in line"
+            );
+            buffer = Some(got);
+        }
+    }
+    // The worker still has the last maps to warm; dropping it must not hang.
+    drop(prefetch);
+    common::assert_no_validation_messages();
+}
