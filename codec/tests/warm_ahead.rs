@@ -12,14 +12,18 @@ fn container(grid: ParamGrid) -> Container {
     Container::from_bytes(bytes).unwrap()
 }
 
+/// A leaf's output buffer for the container's texture.
+fn leaf_out(c: &Container) -> Vec<f32> {
+    vec![0.0f32; c.textures()[0].layout.texels() * 4]
+}
+
 /// Decodes `path` in order (warming after each leaf when `warm`); returns
 /// every leaf's texels and the misses each leaf's own decode took.
 fn walk(c: &Container, path: &[[u32; 2]], warm: bool) -> (Vec<Vec<f32>>, Vec<u64>) {
-    let layout = c.textures()[0].layout;
     let mut cache = DecodeCache::default();
     let (mut leaves, mut misses) = (Vec::new(), Vec::new());
     for &s in path {
-        let mut out = vec![0.0f32; layout.texels() * 4];
+        let mut out = leaf_out(c);
         let before = cache.stats().misses;
         cache.decode_leaf_all(c, 0, 0, s, &mut out).unwrap();
         misses.push(cache.stats().misses - before);
@@ -69,9 +73,8 @@ fn warmed_leaves_match_cold_ones_and_never_wait_for_a_coarse_level() {
 #[test]
 fn a_blend_alternating_its_samples_warms_nothing() {
     let c = container(ParamGrid::two_d(8, 8));
-    let layout = c.textures()[0].layout;
     let mut cache = DecodeCache::default();
-    let mut out = vec![0.0f32; layout.texels() * 4];
+    let mut out = leaf_out(&c);
     for s in [[3, 2], [3, 3], [3, 2], [3, 3], [3, 2]] {
         cache.decode_leaf_all(&c, 0, 0, s, &mut out).unwrap();
         assert_eq!(cache.warm_ahead(&c, 0, 0).unwrap(), 0);
@@ -82,9 +85,8 @@ fn a_blend_alternating_its_samples_warms_nothing() {
 #[test]
 fn steady_motion_along_the_second_axis_warms_ahead() {
     let c = container(ParamGrid::two_d(4, 16));
-    let layout = c.textures()[0].layout;
     let mut cache = DecodeCache::default();
-    let mut out = vec![0.0f32; layout.texels() * 4];
+    let mut out = leaf_out(&c);
     let mut warmed = 0;
     for s1 in 0..16 {
         cache.decode_leaf_all(&c, 0, 0, [1, s1], &mut out).unwrap();

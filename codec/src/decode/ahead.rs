@@ -70,28 +70,35 @@ impl DecodeCache {
             let paths = (0..tex.layout.faces)
                 .map(|face| self.level_path(c, tex, block, local, face))
                 .collect::<Result<Vec<_>>>()?;
-            let coarse = |p: &Vec<ImageKey>| p.len().saturating_sub(1);
-            if paths
-                .iter()
-                .all(|p| p[..coarse(p)].iter().all(|k| self.images.contains_key(k)))
-            {
+            // Every level but the leaf, face by face, coarsest first.
+            let missing: Vec<(usize, usize)> = (paths.iter().enumerate())
+                .flat_map(|(f, p)| (0..p.len().saturating_sub(1)).map(move |l| (f, l)))
+                .filter(|&(f, l)| !self.images.contains_key(&paths[f][l]))
+                .collect();
+            if missing.is_empty() {
                 continue;
             }
             let sizes = self.stream_sizes(tex, block, &paths)?;
             let budget = *budget.get_or_insert(sizes.share * 5 / 4);
-            for (path, bytes) in paths.iter().zip(&sizes.paths) {
-                // Every level but the leaf, coarsest first.
-                for level in 0..coarse(path) {
-                    if budget > 0 && spent >= budget {
-                        return Ok(done);
-                    }
-                    if !self.images.contains_key(&path[level]) {
-                        self.decode_path_levels(tex, block, path, &[level])?;
-                        self.stats.warmed += 1;
-                        spent += bytes[level];
-                        done += 1;
-                    }
+            let mut levels = vec![Vec::new(); paths.len()];
+            let mut spent_all = false;
+            for (f, l) in missing {
+                if budget > 0 && spent >= budget {
+                    spent_all = true;
+                    break;
                 }
+                levels[f].push(l);
+                spent += sizes.paths[f][l];
+            }
+            for (path, levels) in paths.iter().zip(&levels) {
+                if !levels.is_empty() {
+                    self.decode_path_levels(tex, block, path, levels)?;
+                }
+                done += levels.len();
+                self.stats.warmed += levels.len() as u64;
+            }
+            if spent_all {
+                return Ok(done);
             }
         }
         Ok(done)
