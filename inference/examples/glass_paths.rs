@@ -1,6 +1,6 @@
 //! Per-frame CPU cost of hybrid glass: adaptive tessellation with vertex
 //! ray paths of the glass scene's teapot at one view, for several τ.
-//! `cargo run --release -p inference --example glass_paths -- [repeats]`
+//! `cargo run --release -p inference --example glass_paths -- [repeats] [scene]`
 
 use std::time::Instant;
 
@@ -9,7 +9,8 @@ use inference::scene::Scene;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let repeats: usize = std::env::args().nth(1).map_or(Ok(5), |s| s.parse())?;
-    let scene = Scene::load("glass")?;
+    let name = std::env::args().nth(2).unwrap_or_else(|| "glass".into());
+    let scene = Scene::load(&name)?;
     let lens = Lens::new(&scene, "teapot")?;
     let eye = scene.orbit.eye(30.5, 0.0);
     let (width, height) = (640, 480);
