@@ -36,6 +36,9 @@ pub struct CpuReport {
     pub maps_decoded: u64,
     /// Of those, decoded ahead on the worker while earlier frames drew.
     pub maps_prefetched: u64,
+    /// Frames waiting for the worker to finish a map it was decoding.
+    pub prefetch_wait_ms_median: f64,
+    pub prefetch_wait_ms_mean: f64,
     /// Reflector texgens computed during the previous frame (frames in
     /// flight), summed over the frames.
     pub texgen_ahead: u64,
@@ -131,6 +134,9 @@ impl PerfLog {
                     / self.cpu.len().max(1) as f64,
                 maps_decoded: self.cpu.iter().map(|c| u64::from(c.decoded_maps)).sum(),
                 maps_prefetched: self.cpu.iter().map(|c| u64::from(c.prefetched_maps)).sum(),
+                prefetch_wait_ms_median: cpu_median(|c| c.prefetch_wait_ms),
+                prefetch_wait_ms_mean: self.cpu.iter().map(|c| c.prefetch_wait_ms).sum::<f64>()
+                    / self.cpu.len().max(1) as f64,
                 texgen_ahead: self.cpu.iter().map(|c| u64::from(c.texgen_ahead)).sum(),
             },
         }

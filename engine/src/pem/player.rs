@@ -45,6 +45,8 @@ pub struct PemCpu {
     pub decoded_maps: u32,
     /// Maps the worker had decoded ahead, straight into staging.
     pub prefetched_maps: u32,
+    /// Waiting for the worker to finish a map it was decoding.
+    pub prefetch_wait_ms: f64,
     /// Reflectors whose texgen and bands were computed ahead, during the
     /// previous frame ([`super::ahead`]).
     pub texgen_ahead: u32,
@@ -244,8 +246,10 @@ impl PemPlayer {
                 resolution: r.resolution,
                 sample,
             };
+            let start = Instant::now();
             let buffer = match self.prefetch.as_mut().and_then(|p| p.take(&key)) {
                 Some((buffer, _)) => {
+                    cpu.prefetch_wait_ms += start.elapsed().as_secs_f64() * 1e3;
                     cpu.prefetched_maps += 1;
                     buffer
                 }

@@ -71,6 +71,8 @@ pub struct CpuTimes {
     pub decoded_maps: u32,
     /// Of those, maps decoded ahead on the worker thread.
     pub prefetched_maps: u32,
+    /// Waiting for the worker to finish a map it was still decoding.
+    pub prefetch_wait_ms: f64,
     /// PEM reflectors whose texgen was computed during the previous frame.
     pub texgen_ahead: u32,
 }
@@ -380,6 +382,7 @@ impl Renderer {
         cpu.decode_ms += prepared.decode_ms;
         cpu.decoded_maps += prepared.decoded_maps;
         cpu.prefetched_maps += prepared.prefetched_maps;
+        cpu.prefetch_wait_ms += prepared.prefetch_wait_ms;
         cpu.texgen_ahead += prepared.texgen_ahead;
         Ok(blend)
     }
