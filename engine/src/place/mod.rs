@@ -267,7 +267,10 @@ fn placed_scene(
         Placing::Grid => format!("azimuths_deg = {az:?} and ring_elevations_deg = {el:?}"),
     };
     let written = (|| -> Result<()> {
-        let (text, _) = Scene::text(scene_arg)?;
+        let (text, source) = Scene::text(scene_arg)?;
+        // Written under `out`: mesh files stay where the scene file named them.
+        let dir = source.parent().unwrap_or(std::path::Path::new("."));
+        let text = inference::scene::placed::with_mesh_paths_from(&text, dir);
         let rewritten = match report.axis {
             Placing::Azimuth => with_azimuths(&text, &name, az, &note),
             Placing::Rings => with_rings(&text, &name, el, &note),

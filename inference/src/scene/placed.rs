@@ -3,7 +3,10 @@
 //! `step_deg`, `samples`, or earlier `azimuths_deg`) become one
 //! `azimuths_deg` line, the name gains a suffix; every comment and other
 //! line is kept as written. EM tables that stack neighbouring views can
-//! be told to stack views a fixed offset away instead.
+//! be told to stack views a fixed offset away instead. Written to
+//! another folder, its relative mesh paths are made absolute first.
+
+use std::path::Path;
 
 /// Keys of `[orbit]` that say where its azimuth lines are.
 const LINE_KEYS: [&str; 4] = ["start_deg", "step_deg", "samples", "azimuths_deg"];
@@ -93,11 +96,87 @@ pub fn with_neighbour_deg(text: &str, deg: f32, note: &str) -> String {
     out.join("\n") + "\n"
 }
 
+/// Keys of a mesh spec that hold a path, relative to the scene file.
+const PATH_KEYS: [&str; 2] = ["obj", "file"];
+
+/// `text`, read from a scene file in folder `dir`, ready to be written
+/// anywhere: every relative mesh path (`obj = "…"`, `file = "…"`, basic or
+/// literal strings, inline tables or not) made absolute against `dir`, so
+/// it still names the same file. Everything else is kept as written.
+pub fn with_mesh_paths_from(text: &str, dir: &Path) -> String {
+    let dir = std::path::absolute(dir).unwrap_or_else(|_| dir.to_owned());
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some((value_at, quote)) = next_path_value(rest) {
+        let body = &rest[value_at + 1..];
+        let Some(len) = string_end(body, quote) else {
+            break;
+        };
+        out.push_str(&rest[..value_at]);
+        let raw = &body[..len];
+        let path = match quote {
+            '"' => toml::from_str::<toml::Table>(&format!("v = \"{raw}\""))
+                .ok()
+                .and_then(|t| t.get("v").and_then(|v| v.as_str()).map(str::to_owned)),
+            _ => Some(raw.to_owned()),
+        };
+        match path.filter(|p| Path::new(p).is_relative()) {
+            Some(p) => {
+                let joined = dir.join(p).to_string_lossy().into_owned();
+                out.push_str(&toml::Value::String(joined).to_string());
+            }
+            None => out.push_str(&rest[value_at..value_at + len + 2]),
+        }
+        rest = &body[len + 1..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// Where the next path key's string value starts in `text` (its opening
+/// quote) and which quote it is: a key of [`PATH_KEYS`] at a line's start
+/// or after `{` or `,`, then `=`; not in a comment.
+fn next_path_value(text: &str) -> Option<(usize, char)> {
+    let mut from = 0;
+    while from < text.len() {
+        let (at, key) = PATH_KEYS
+            .iter()
+            .filter_map(|k| text[from..].find(k).map(|i| (from + i, *k)))
+            .min_by_key(|(i, _)| *i)?;
+        let line = &text[text[..at].rfind('\n').map_or(0, |i| i + 1)..at];
+        let before = line.trim_end_matches([' ', '\t']);
+        let starts = !line.contains('#') && (before.is_empty() || before.ends_with(['{', ',']));
+        let after = text[at + key.len()..].trim_start_matches([' ', '\t']);
+        if let (true, Some(value)) = (starts, after.strip_prefix('=')) {
+            let value = value.trim_start_matches([' ', '\t']);
+            if let Some(q) = value.chars().next().filter(|c| *c == '"' || *c == '\'') {
+                return Some((text.len() - value.len(), q));
+            }
+        }
+        from = at + key.len();
+    }
+    None
+}
+
+/// The length of a string's body before its closing `quote` (a basic
+/// string's escaped quotes skipped); None when it does not close on its line.
+fn string_end(body: &str, quote: char) -> Option<usize> {
+    let mut escaped = false;
+    for (i, c) in body.char_indices() {
+        match c {
+            '\n' => return None,
+            '\\' if quote == '"' && !escaped => escaped = true,
+            c if c == quote && !escaped => return Some(i),
+            _ => escaped = false,
+        }
+    }
+    None
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::scene::Scene;
-    use std::path::Path;
 
     #[test]
     fn the_placed_teapot_loads_with_its_lines_and_keeps_its_comments() {
@@ -171,5 +250,56 @@ mod tests {
             with_azimuths("[orbit]\nsamples = 3\n", "y", &[0.0], "n"),
             None
         );
+    }
+
+    #[test]
+    fn relative_mesh_paths_become_absolute_and_nothing_else_moves() {
+        let text = "name = \"x\" # obj = \"c.obj\"\n\
+                    # mesh = { obj = \"c.obj\" }\n\
+                    mesh = { obj = \"m.obj\", segments = 3 }\n\
+                    mesh = {file='sub/q.glb'}\n\
+                    file = \"/abs/r.obj\"\n\
+                    material = \"file\"\n\
+                    objx = \"keep.obj\"\n";
+        let out = with_mesh_paths_from(text, Path::new("/scenes/here"));
+        assert_eq!(
+            out,
+            "name = \"x\" # obj = \"c.obj\"\n\
+             # mesh = { obj = \"c.obj\" }\n\
+             mesh = { obj = \"/scenes/here/m.obj\", segments = 3 }\n\
+             mesh = {file=\"/scenes/here/sub/q.glb\"}\n\
+             file = \"/abs/r.obj\"\n\
+             material = \"file\"\n\
+             objx = \"keep.obj\"\n"
+        );
+        // An unclosed string is left as it was.
+        assert_eq!(
+            with_mesh_paths_from("obj = \"m.obj\n", Path::new("/d")),
+            "obj = \"m.obj\n"
+        );
+    }
+
+    #[test]
+    fn a_scene_with_a_mesh_file_loads_from_another_folder_once_moved() {
+        let (here, there) = (
+            tempfile::tempdir().expect("dir"),
+            tempfile::tempdir().expect("dir"),
+        );
+        let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+        std::fs::write(here.path().join("tetra.obj"), obj).expect("write obj");
+        let teapot = crate::scene::shipped::shipped("teapot").expect("teapot");
+        let text = teapot.replace(
+            "mesh = { generator = \"newell_teapot\", segments = 25 }",
+            "mesh = { obj = \"tetra.obj\" }",
+        );
+        assert_ne!(text, teapot, "test bug: the teapot's mesh line changed");
+        let moved = there.path().join("x_placed.toml");
+        assert!(
+            Scene::from_toml(&text, &moved).is_err(),
+            "test bug: loads unmoved"
+        );
+        let text = with_mesh_paths_from(&text, here.path());
+        let s = Scene::from_toml(&text, &moved).expect("loads from the other folder");
+        assert_eq!(s.object("teapot").expect("teapot").mesh.triangle_count(), 4);
     }
 }
