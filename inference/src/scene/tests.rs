@@ -234,6 +234,16 @@ fn bad_numbers_name_their_field() {
         ),
         (
             "radius = 1.8",
+            "radius = 1.8\nring_step_deg = nan",
+            "orbit.ring_step_deg",
+        ),
+        (
+            "radius = 1.8",
+            "radius = 1.8\nrings = 1\nring_step_deg = inf",
+            "orbit.ring_step_deg",
+        ),
+        (
+            "radius = 1.8",
             "radius = 1.8\nstep_deg = inf",
             "orbit.step_deg",
         ),

@@ -227,7 +227,9 @@ impl Loader<'_> {
             }
             let step = o.ring_step_deg.unwrap_or(10.0);
             let top = (rings - 1) as f32 * step;
-            if rings > 1 && !(step > 0.0 && top <= MAX_RING_DEG) {
+            // A step given for one ring is unused, but still has to be a step.
+            let checked = rings > 1 || o.ring_step_deg.is_some();
+            if checked && !(step > 0.0 && top <= MAX_RING_DEG) {
                 return Err(self.err(
                     "orbit.ring_step_deg",
                     format!(
