@@ -271,6 +271,14 @@ fn bad_angles_and_tau_fail_before_any_work() {
             vec!["infer", "--sample", "0", "--eps-f", "nan", "--out", out_s],
             "a finite weight >= 0",
         ),
+        (
+            vec!["bench", "--frames", "268435456", "--out", out_s],
+            "1..=100000",
+        ),
+        (
+            vec!["bench", "--warmup", "4294967295", "--out", out_s],
+            "0..=100000",
+        ),
     ] {
         let o = engine(&args, &[]);
         assert!(!o.status.success(), "{args:?} succeeded");

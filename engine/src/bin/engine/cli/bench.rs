@@ -13,8 +13,8 @@ pub struct BenchArgs {
     /// A built-in scene's name (teapot) or the path of a .toml scene file.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
-    /// Timed frames per view and variant (8 views).
-    #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Timed frames per view and variant (8 views; at most 100,000).
+    #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     pub frames: u32,
     /// Frame size as WIDTHxHEIGHT.
     #[arg(long, default_value = "640x480", value_parser = parse_size)]
@@ -39,8 +39,8 @@ pub struct BenchArgs {
     #[arg(long, env = "ENGINE_DEVICE")]
     pub device: Option<String>,
     /// Untimed frames first per view and variant (lavapipe compiles
-    /// shaders at the first draw).
-    #[arg(long, default_value_t = 3)]
+    /// shaders at the first draw; at most 100,000).
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=100_000))]
     pub warmup: u32,
     /// Ignore the compiled scene shipped in assets/compiled/ and run the
     /// full pipeline (trace, infer, room light maps, encode) under --out.
