@@ -155,7 +155,12 @@ impl FrameBench {
         let first = &self.items[0];
         if self.load_map.is_none() {
             let mut decoded = vec![0.0f32; first.layout.len() * 4];
-            codec::decode_leaf_all(container, first.index, 0, [first.k, 0], &mut decoded)?;
+            let Some(texture) = container.textures().get(first.index as usize) else {
+                anyhow::bail!("the container holds no texture {}", first.index);
+            };
+            // Through the grid: on 2D blocks sample k is not [k, 0].
+            let at = texture.grid.sample_at(first.k);
+            codec::decode_leaf_all(container, first.index, 0, at, &mut decoded)?;
             self.load_map = Some(
                 decoded
                     .chunks_exact(4)
