@@ -86,7 +86,8 @@ pub fn load_input(scene: &Scene, infer_dir: &Path) -> Result<EncodeInput> {
                     *v = map[ch][i];
                 }
             }
-            rows += sample_rows(&sample_dir(infer_dir, k), &spec.name());
+            // Saturating: the reports are plain JSON a user may have edited.
+            rows = rows.saturating_add(sample_rows(&sample_dir(infer_dir, k), &spec.name()));
         }
         // Rate allocation weighs errors by screen area (thesis ch. 4).
         texture.screen_area = (rows as f32 / samples as f32).max(1.0);

@@ -105,7 +105,8 @@ impl SampleReport {
         layers.sort_by_key(|l| rank(l).unwrap_or(usize::MAX));
         SampleReport {
             sample,
-            probe_renders: layers.iter().map(|l| l.probe_renders).sum(),
+            // Saturating: kept layers come from JSON a user may have edited.
+            probe_renders: (layers.iter()).fold(0u32, |n, l| n.saturating_add(l.probe_renders)),
             a_vs_render_psnr_db: layers
                 .iter()
                 .map(|l| l.a_vs_render_psnr_db)
