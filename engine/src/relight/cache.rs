@@ -22,6 +22,13 @@ use crate::util::files;
 pub const RELIGHT_VERSION: u32 = 1;
 const MAGIC: &[u8; 8] = b"PEMSH001";
 
+/// Panorama texels at most: the SH maps hold [`BYTES_PER_TEXEL`] per
+/// texel (1.3 GB here), so an 8192² panorama (20 GB) is refused up front
+/// rather than failing to allocate.
+const MAX_TEXELS: u64 = 4096 * 1024;
+/// The maps' bytes per texel: [`MAX_K`] coefficients × RGB × f32.
+const BYTES_PER_TEXEL: u64 = MAX_K as u64 * 3 * 4;
+
 /// What the grid is traced and projected with.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GridSettings {
@@ -53,6 +60,14 @@ impl GridSettings {
                 "{what}: size {width}x{height}, grid {rings}x{azimuths}, {spp} spp, {bounces} \
                  bounces: expected a size up to 8192x8192, a grid up to 64x128, 1 to 1024 \
                  samples and at most 8 bounces"
+            );
+        }
+        let texels = u64::from(width) * u64::from(height);
+        if texels > MAX_TEXELS {
+            let gb = (texels * BYTES_PER_TEXEL) as f64 / 1e9;
+            bail!(
+                "{what}: size {width}x{height}: its SH maps would take {gb:.1} GB ({MAX_K} coefficients \
+                 × RGB × f32 per texel); expected at most {MAX_TEXELS} texels (e.g. 4096x1024)"
             );
         }
         Ok(Self {
@@ -221,4 +236,22 @@ fn decode(bytes: &[u8], expected: Panorama) -> Result<(ShMaps, Vec<Vec3>)> {
         },
         positions,
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::GridSettings;
+
+    #[test]
+    fn panoramas_too_large_for_memory_are_refused_with_their_size() {
+        let ok = GridSettings::new((4096, 1024), (8, 16), 2, 1, 0, "--size");
+        assert!(ok.is_ok(), "{:?}", ok.err());
+        let e = GridSettings::new((8192, 8192), (8, 16), 2, 1, 0, "--size")
+            .expect_err("20 GB of maps")
+            .to_string();
+        assert!(
+            e.contains("--size") && e.contains("20.1 GB") && e.contains("4194304"),
+            "{e}"
+        );
+    }
 }
