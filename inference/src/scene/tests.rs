@@ -357,6 +357,10 @@ fn bad_objects_are_rejected() {
             "objects[0].transform.translate",
         ),
         (
+            obj("transform = { translate = [3.0e38, 0.0, 0.0], scale = 3.0e38 }\n"),
+            "objects[0].transform: places the mesh beyond f32 range",
+        ),
+        (
             obj("[objects.em]\nresolution = 300\n"),
             "objects[0].em.resolution",
         ),

@@ -48,6 +48,15 @@ impl Loader<'_> {
         if let Some(m) = &mut trace_mesh {
             m.transform(&placement);
         }
+        // Each number is finite, but their product may not be.
+        let placed = std::iter::once(&mesh).chain(&trace_mesh);
+        if !placed.flat_map(|m| &m.positions).all(|p| p.is_finite()) {
+            return Err(self.err(
+                f("transform"),
+                "places the mesh beyond f32 range (expected a scale and translation \
+                 that keep every vertex finite)",
+            ));
+        }
 
         let em = match &o.em {
             Some(em) => Some(self.em(&f("em"), em)?),
