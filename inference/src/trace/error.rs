@@ -24,7 +24,7 @@ pub enum TraceError {
         path: PathBuf,
         cause: std::io::Error,
     },
-    #[error("{}: writing EXR: {cause}", path.display())]
+    #[error("{}: EXR: {cause}", path.display())]
     Exr {
         path: PathBuf,
         cause: exr::error::Error,

@@ -89,6 +89,7 @@ pub fn read_exr(path: &Path) -> Result<Vec<ExrLayer>, TraceError> {
 /// [`read_exr`] on the file's bytes, already read (and checked); `path`
 /// names the file in errors.
 pub fn parse_exr(bytes: &[u8], path: &Path) -> Result<Vec<ExrLayer>, TraceError> {
+    check_exr_size(bytes, path)?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -118,6 +119,35 @@ pub fn parse_exr(bytes: &[u8], path: &Path) -> Result<Vec<ExrLayer>, TraceError>
             (name, channels)
         })
         .collect())
+}
+
+/// Pixels an EXR read back may hold: the engine's largest frame. The
+/// decoder sizes its buffers from the header, so a damaged or foreign
+/// header declaring more is refused here, with its size (the `exr` crate
+/// catches some such headers itself, by their chunk count, but not all:
+/// a chunk table that matches a huge window passes).
+const MAX_EXR_PIXELS: usize = 8192 * 8192;
+
+/// Every part of the EXR `bytes` declares at most [`MAX_EXR_PIXELS`].
+fn check_exr_size(bytes: &[u8], path: &Path) -> Result<(), TraceError> {
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+        .map_err(|cause| TraceError::Exr {
+            path: path.to_owned(),
+            cause,
+        })?;
+    for header in &meta.headers {
+        let Vec2(w, h) = header.layer_size;
+        if w.checked_mul(h).is_none_or(|n| n > MAX_EXR_PIXELS) {
+            return Err(TraceError::Scene {
+                path: path.to_owned(),
+                field: "dataWindow".into(),
+                message: format!(
+                    "{w}x{h} pixels (expected at most {MAX_EXR_PIXELS}, an 8192x8192 frame)"
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Narkowicz's ACES fit, then the sRGB curve: keeps highlights from clipping hard.
@@ -155,6 +185,42 @@ pub fn write_png(path: &Path, image: &TraceImage) -> Result<(), TraceError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::trace::layers::Layer as TraceLayer;
+
+    #[test]
+    fn an_exr_declaring_a_huge_frame_is_refused_before_it_is_read() {
+        let image = TraceImage {
+            width: 4,
+            height: 3,
+            layers: vec![TraceLayer {
+                name: "beauty".into(),
+                channels: vec!["R", "G", "B"],
+                pixels: vec![0.5; 4 * 3 * 3],
+            }],
+            rays: 0,
+            elapsed: std::time::Duration::ZERO,
+        };
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("x.exr");
+        write_exr(&path, &image).expect("write");
+        let mut bytes = std::fs::read(&path).expect("read");
+        assert_eq!(parse_exr(&bytes, &path).expect("reads")[0].1.len(), 3);
+        // The data window: "dataWindow\0box2i\0", its size (16), then
+        // xMin, yMin, xMax, yMax as little-endian i32.
+        let tag = b"dataWindow\0box2i\0";
+        let at = bytes
+            .windows(tag.len())
+            .position(|w| w == tag)
+            .expect("tag");
+        let max = at + tag.len() + 4 + 8;
+        for k in [max, max + 4] {
+            bytes[k..k + 4].copy_from_slice(&199_999i32.to_le_bytes());
+        }
+        let e = parse_exr(&bytes, &path)
+            .expect_err("40 billion pixels")
+            .to_string();
+        assert!(e.contains("x.exr") && e.contains("200000x200000"), "{e}");
+    }
 
     #[test]
     fn tone_map_is_monotone_and_safe() {
