@@ -124,8 +124,8 @@ pub fn parse_exr(bytes: &[u8], path: &Path) -> Result<Vec<ExrLayer>, TraceError>
 /// Pixels an EXR read back may hold: the engine's largest frame. The
 /// decoder sizes its buffers from the header, so a damaged or foreign
 /// header declaring more is refused here, with its size (the `exr` crate
-/// catches some such headers itself, by their chunk count, but not all:
-/// a chunk table that matches a huge window passes).
+/// refuses the test's damaged file by its chunk count too; this check
+/// does not depend on that).
 const MAX_EXR_PIXELS: usize = 8192 * 8192;
 
 /// Every part of the EXR `bytes` declares at most [`MAX_EXR_PIXELS`].
