@@ -247,9 +247,11 @@ impl PemPlayer {
                 sample,
             };
             let start = Instant::now();
-            let buffer = match self.prefetch.as_mut().and_then(|p| p.take(&key)) {
+            let taken = self.prefetch.as_mut().and_then(|p| p.take(&key));
+            // Counted whether the worker's decode succeeded or not.
+            cpu.prefetch_wait_ms += start.elapsed().as_secs_f64() * 1e3;
+            let buffer = match taken {
                 Some((buffer, _)) => {
-                    cpu.prefetch_wait_ms += start.elapsed().as_secs_f64() * 1e3;
                     cpu.prefetched_maps += 1;
                     buffer
                 }

@@ -38,7 +38,8 @@ pub struct GridSettings {
 }
 
 impl GridSettings {
-    /// Checked settings: a `width × height` panorama (both 1 to 8192), a
+    /// Checked settings: a `width × height` panorama (both 1 to 8192, at
+    /// most [`MAX_TEXELS`] texels), a
     /// grid up to 64 × 128, 1 to 1024 samples per texel, at most 8 bounces;
     /// `what` names the flags in the message.
     pub fn new(
@@ -58,7 +59,7 @@ impl GridSettings {
         {
             bail!(
                 "{what}: size {width}x{height}, grid {rings}x{azimuths}, {spp} spp, {bounces} \
-                 bounces: expected a size up to 8192x8192, a grid up to 64x128, 1 to 1024 \
+                 bounces: expected a size up to 8192 a side, a grid up to 64x128, 1 to 1024 \
                  samples and at most 8 bounces"
             );
         }

@@ -113,6 +113,18 @@ pub fn parse_map(
             expected: "1 to 4 channels".into(),
         });
     }
+    use crate::trace::output::{ExrHeader, check_exr_size};
+    check_exr_size(bytes).map_err(|e| match e {
+        ExrHeader::Unreadable(cause) => MapError::Exr {
+            path: path.to_owned(),
+            cause,
+        },
+        ExrHeader::TooLarge(declared) => MapError::Shape {
+            path: path.to_owned(),
+            what: format!("its header declares {declared}"),
+            expected: format!("a map of {} texels", layout.len()),
+        },
+    })?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()

@@ -96,81 +96,58 @@ pub fn with_neighbour_deg(text: &str, deg: f32, note: &str) -> String {
     out.join("\n") + "\n"
 }
 
-/// Keys of a mesh spec that hold a path, relative to the scene file.
-const PATH_KEYS: [&str; 2] = ["obj", "file"];
+/// The mesh paths of a scene file, where they stand in its text.
+#[derive(serde::Deserialize)]
+struct MeshPaths {
+    #[serde(default)]
+    objects: Vec<ObjectPaths>,
+}
 
-/// `text`, read from a scene file in folder `dir`, ready to be written
-/// anywhere: every relative mesh path (`obj = "…"`, `file = "…"`, basic or
-/// literal strings, inline tables or not) made absolute against `dir`, so
-/// it still names the same file. Everything else is kept as written.
+#[derive(serde::Deserialize)]
+struct ObjectPaths {
+    mesh: Option<PathKeys>,
+}
+
+/// The keys of a mesh spec that hold a path, relative to the scene file.
+#[derive(serde::Deserialize)]
+struct PathKeys {
+    obj: Option<toml::Spanned<String>>,
+    file: Option<toml::Spanned<String>>,
+}
+
+/// `text`, read from a scene file in folder `dir` (`""` is the current
+/// folder), ready to be written anywhere: every relative mesh path
+/// (`objects[i].mesh.obj` or `.file`, whatever TOML form it is written
+/// in) made absolute against `dir`, so it still names the same file.
+/// Everything else is kept as written; text that does not parse, or a
+/// path that would not be UTF-8, is left as it is (loading it says why).
 pub fn with_mesh_paths_from(text: &str, dir: &Path) -> String {
+    let dir = match dir.as_os_str().is_empty() {
+        true => Path::new("."),
+        false => dir,
+    };
     let dir = std::path::absolute(dir).unwrap_or_else(|_| dir.to_owned());
-    let mut out = String::with_capacity(text.len());
-    let mut rest = text;
-    while let Some((value_at, quote)) = next_path_value(rest) {
-        let body = &rest[value_at + 1..];
-        let Some(len) = string_end(body, quote) else {
-            break;
+    let Ok(paths) = toml::from_str::<MeshPaths>(text) else {
+        return text.to_owned();
+    };
+    let mut values: Vec<&toml::Spanned<String>> = (paths.objects.iter())
+        .filter_map(|o| o.mesh.as_ref())
+        .flat_map(|m| [m.obj.as_ref(), m.file.as_ref()])
+        .flatten()
+        .filter(|v| Path::new(v.get_ref()).is_relative())
+        .collect();
+    // Last first, so the earlier spans stay where they are.
+    values.sort_by_key(|v| std::cmp::Reverse(v.span().start));
+    let mut out = text.to_owned();
+    for v in values {
+        let Some(joined) = dir.join(v.get_ref()).to_str().map(str::to_owned) else {
+            continue;
         };
-        out.push_str(&rest[..value_at]);
-        let raw = &body[..len];
-        let path = match quote {
-            '"' => toml::from_str::<toml::Table>(&format!("v = \"{raw}\""))
-                .ok()
-                .and_then(|t| t.get("v").and_then(|v| v.as_str()).map(str::to_owned)),
-            _ => Some(raw.to_owned()),
-        };
-        match path.filter(|p| Path::new(p).is_relative()) {
-            Some(p) => {
-                let joined = dir.join(p).to_string_lossy().into_owned();
-                out.push_str(&toml::Value::String(joined).to_string());
-            }
-            None => out.push_str(&rest[value_at..value_at + len + 2]),
+        if out.get(v.span()).is_some() {
+            out.replace_range(v.span(), &toml::Value::String(joined).to_string());
         }
-        rest = &body[len + 1..];
     }
-    out.push_str(rest);
     out
-}
-
-/// Where the next path key's string value starts in `text` (its opening
-/// quote) and which quote it is: a key of [`PATH_KEYS`] at a line's start
-/// or after `{` or `,`, then `=`; not in a comment.
-fn next_path_value(text: &str) -> Option<(usize, char)> {
-    let mut from = 0;
-    while from < text.len() {
-        let (at, key) = PATH_KEYS
-            .iter()
-            .filter_map(|k| text[from..].find(k).map(|i| (from + i, *k)))
-            .min_by_key(|(i, _)| *i)?;
-        let line = &text[text[..at].rfind('\n').map_or(0, |i| i + 1)..at];
-        let before = line.trim_end_matches([' ', '\t']);
-        let starts = !line.contains('#') && (before.is_empty() || before.ends_with(['{', ',']));
-        let after = text[at + key.len()..].trim_start_matches([' ', '\t']);
-        if let (true, Some(value)) = (starts, after.strip_prefix('=')) {
-            let value = value.trim_start_matches([' ', '\t']);
-            if let Some(q) = value.chars().next().filter(|c| *c == '"' || *c == '\'') {
-                return Some((text.len() - value.len(), q));
-            }
-        }
-        from = at + key.len();
-    }
-    None
-}
-
-/// The length of a string's body before its closing `quote` (a basic
-/// string's escaped quotes skipped); None when it does not close on its line.
-fn string_end(body: &str, quote: char) -> Option<usize> {
-    let mut escaped = false;
-    for (i, c) in body.char_indices() {
-        match c {
-            '\n' => return None,
-            '\\' if quote == '"' && !escaped => escaped = true,
-            c if c == quote && !escaped => return Some(i),
-            _ => escaped = false,
-        }
-    }
-    None
 }
 
 #[cfg(test)]
@@ -254,25 +231,46 @@ mod tests {
 
     #[test]
     fn relative_mesh_paths_become_absolute_and_nothing_else_moves() {
-        let text = "name = \"x\" # obj = \"c.obj\"\n\
-                    # mesh = { obj = \"c.obj\" }\n\
-                    mesh = { obj = \"m.obj\", segments = 3 }\n\
-                    mesh = {file='sub/q.glb'}\n\
-                    file = \"/abs/r.obj\"\n\
-                    material = \"file\"\n\
-                    objx = \"keep.obj\"\n";
+        let text = r#"name = "x" # obj = "c.obj"
+# mesh = { obj = "c.obj" }
+material = "file"
+[[objects]]
+mesh = { obj = "m.obj", segments = 3 } # obj = "d.obj"
+[[objects]]
+mesh = {file='sub/q.glb'}
+[[objects]]
+mesh.file = """
+multi.obj"""
+[[objects]]
+mesh = { file = "/abs/r.obj" }
+[[objects]]
+objx = "keep.obj"
+"#;
         let out = with_mesh_paths_from(text, Path::new("/scenes/here"));
-        assert_eq!(
-            out,
-            "name = \"x\" # obj = \"c.obj\"\n\
-             # mesh = { obj = \"c.obj\" }\n\
-             mesh = { obj = \"/scenes/here/m.obj\", segments = 3 }\n\
-             mesh = {file=\"/scenes/here/sub/q.glb\"}\n\
-             file = \"/abs/r.obj\"\n\
-             material = \"file\"\n\
-             objx = \"keep.obj\"\n"
+        let expected = r#"name = "x" # obj = "c.obj"
+# mesh = { obj = "c.obj" }
+material = "file"
+[[objects]]
+mesh = { obj = "/scenes/here/m.obj", segments = 3 } # obj = "d.obj"
+[[objects]]
+mesh = {file="/scenes/here/sub/q.glb"}
+[[objects]]
+mesh.file = "/scenes/here/multi.obj"
+[[objects]]
+mesh = { file = "/abs/r.obj" }
+[[objects]]
+objx = "keep.obj"
+"#;
+        assert_eq!(out, expected);
+        // A scene named by a bare file name lives in the current folder.
+        let here = std::env::current_dir().expect("cwd").join("m.obj");
+        let out = with_mesh_paths_from("[[objects]]\nmesh = { obj = \"m.obj\" }\n", Path::new(""));
+        let expected = format!(
+            "[[objects]]\nmesh = {{ obj = {:?} }}\n",
+            here.to_str().expect("utf-8")
         );
-        // An unclosed string is left as it was.
+        assert_eq!(out, expected);
+        // Text that is not TOML is left for the loader to refuse.
         assert_eq!(
             with_mesh_paths_from("obj = \"m.obj\n", Path::new("/d")),
             "obj = \"m.obj\n"

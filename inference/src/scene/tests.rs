@@ -358,7 +358,11 @@ fn bad_objects_are_rejected() {
         ),
         (
             obj("transform = { translate = [3.0e38, 0.0, 0.0], scale = 3.0e38 }\n"),
-            "objects[0].transform: places the mesh beyond f32 range",
+            "objects[0].transform: places a vertex beyond ±1e9 m",
+        ),
+        (
+            obj("transform = { scale = 2.0e9 }\n"),
+            "objects[0].transform: places a vertex beyond ±1e9 m",
         ),
         (
             obj("[objects.em]\nresolution = 300\n"),

@@ -29,6 +29,9 @@ pub enum TraceError {
         path: PathBuf,
         cause: exr::error::Error,
     },
+    /// An EXR whose header declares more than any the engine writes.
+    #[error("{}: EXR header: {declared}", path.display())]
+    ExrSize { path: PathBuf, declared: String },
     #[error("{}: writing PNG: {cause}", path.display())]
     Png {
         path: PathBuf,

@@ -89,7 +89,16 @@ pub fn read_exr(path: &Path) -> Result<Vec<ExrLayer>, TraceError> {
 /// [`read_exr`] on the file's bytes, already read (and checked); `path`
 /// names the file in errors.
 pub fn parse_exr(bytes: &[u8], path: &Path) -> Result<Vec<ExrLayer>, TraceError> {
-    check_exr_size(bytes, path)?;
+    check_exr_size(bytes).map_err(|e| match e {
+        ExrHeader::Unreadable(cause) => TraceError::Exr {
+            path: path.to_owned(),
+            cause,
+        },
+        ExrHeader::TooLarge(declared) => TraceError::ExrSize {
+            path: path.to_owned(),
+            declared,
+        },
+    })?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -121,31 +130,42 @@ pub fn parse_exr(bytes: &[u8], path: &Path) -> Result<Vec<ExrLayer>, TraceError>
         .collect())
 }
 
-/// Pixels an EXR read back may hold: the engine's largest frame. The
-/// decoder sizes its buffers from the header, so a damaged or foreign
-/// header declaring more is refused here, with its size (the `exr` crate
-/// refuses the test's damaged file by its chunk count too; this check
-/// does not depend on that).
-const MAX_EXR_PIXELS: usize = 8192 * 8192;
+/// Samples (pixels × channels, over every part) an EXR read back may
+/// declare: more than any file the engine writes (an 8192 × 8192 frame
+/// with 32 channels). The decoder sizes its buffers from the header, so a
+/// damaged or foreign header declaring more is refused with its size (the
+/// `exr` crate refuses the test's damaged file by its chunk count too;
+/// this check does not depend on that).
+const MAX_EXR_SAMPLES: u64 = 8192 * 8192 * 32;
 
-/// Every part of the EXR `bytes` declares at most [`MAX_EXR_PIXELS`].
-fn check_exr_size(bytes: &[u8], path: &Path) -> Result<(), TraceError> {
+/// Why an EXR's header is not read further.
+pub(crate) enum ExrHeader {
+    Unreadable(exr::error::Error),
+    /// What it declares, for the message.
+    TooLarge(String),
+}
+
+/// The EXR `bytes` declare at most [`MAX_EXR_SAMPLES`].
+pub(crate) fn check_exr_size(bytes: &[u8]) -> Result<(), ExrHeader> {
     let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
-        .map_err(|cause| TraceError::Exr {
-            path: path.to_owned(),
-            cause,
-        })?;
+        .map_err(ExrHeader::Unreadable)?;
+    let mut samples = 0u64;
     for header in &meta.headers {
         let Vec2(w, h) = header.layer_size;
-        if w.checked_mul(h).is_none_or(|n| n > MAX_EXR_PIXELS) {
-            return Err(TraceError::Scene {
-                path: path.to_owned(),
-                field: "dataWindow".into(),
-                message: format!(
-                    "{w}x{h} pixels (expected at most {MAX_EXR_PIXELS}, an 8192x8192 frame)"
-                ),
-            });
-        }
+        let channels = header.channels.list.len();
+        let part = (w as u64)
+            .checked_mul(h as u64)
+            .and_then(|n| n.checked_mul(channels as u64));
+        samples = match part.and_then(|n| samples.checked_add(n)) {
+            Some(n) if n <= MAX_EXR_SAMPLES => n,
+            _ => {
+                return Err(ExrHeader::TooLarge(format!(
+                    "a part of {w}x{h} pixels × {channels} channels, {} parts: more than \
+                     {MAX_EXR_SAMPLES} samples (an 8192x8192 frame with 32 channels)",
+                    meta.headers.len()
+                )));
+            }
+        };
     }
     Ok(())
 }

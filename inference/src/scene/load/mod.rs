@@ -233,7 +233,7 @@ impl Loader<'_> {
                 return Err(self.err(
                     "orbit.ring_step_deg",
                     format!(
-                        "{step} (expected above 0, the top ring at most {MAX_RING_DEG}° above the orbit)"
+                        "{step} (expected a finite step above 0, the top ring at most {MAX_RING_DEG}° above the orbit)"
                     ),
                 ));
             }

@@ -19,6 +19,10 @@ use crate::scene::material::{
     NEIGHBOUR_ABOVE_SPACINGS, NEIGHBOUR_ABOVE_WEIGHTS, NEIGHBOUR_DEGS, NEIGHBOUR_WEIGHTS,
 };
 
+/// The largest vertex coordinate a scene may place (metres): squares of
+/// coordinates, as areas and cross products make, stay far inside f32.
+const MAX_COORDINATE: f32 = 1e9;
+
 impl Loader<'_> {
     pub(super) fn object(
         &self,
@@ -48,13 +52,17 @@ impl Loader<'_> {
         if let Some(m) = &mut trace_mesh {
             m.transform(&placement);
         }
-        // Each number is finite, but their product may not be.
+        // Each number is finite, but their product may not be, nor the
+        // edges, normals and areas built from it later.
         let placed = std::iter::once(&mesh).chain(&trace_mesh);
-        if !placed.flat_map(|m| &m.positions).all(|p| p.is_finite()) {
+        let within = |p: &Vec3| p.is_finite() && p.abs().max_element() <= MAX_COORDINATE;
+        if !placed.flat_map(|m| &m.positions).all(within) {
             return Err(self.err(
                 f("transform"),
-                "places the mesh beyond f32 range (expected a scale and translation \
-                 that keep every vertex finite)",
+                format!(
+                    "places a vertex beyond ±{MAX_COORDINATE:e} m (expected a scale and \
+                     translation that keep every coordinate within it)"
+                ),
             ));
         }
 
