@@ -24,6 +24,8 @@ mod em_tests;
 #[cfg(test)]
 mod glass_tests;
 #[cfg(test)]
+mod object_tests;
+#[cfg(test)]
 mod orbit_tests;
 #[cfg(test)]
 mod tests;
