@@ -3,6 +3,7 @@
 //! (+X, −X, +Y, −Y, +Z, −Z), f32 channels R, G, B (and A). Written to a
 //! temporary name and renamed, so a file is either whole or absent.
 
+use crate::files::{ExrHeader, check_exr_size};
 use crate::solve::layout::TextureLayout;
 use exr::prelude::{
     AnyChannel, AnyChannels, FlatSamples, Image, ImageAttributes, IntegerBounds, Layer,
@@ -113,7 +114,6 @@ pub fn parse_map(
             expected: "1 to 4 channels".into(),
         });
     }
-    use crate::trace::output::{ExrHeader, check_exr_size};
     check_exr_size(bytes).map_err(|e| match e {
         ExrHeader::Unreadable(cause) => MapError::Exr {
             path: path.to_owned(),

@@ -11,6 +11,7 @@ use exr::prelude::{
 
 use super::TraceImage;
 use super::error::TraceError;
+use crate::files::ExrHeader;
 
 /// Writes `<stem>.exr` and `<stem>.png`; returns their paths.
 pub fn write_image(stem: &Path, image: &TraceImage) -> Result<(PathBuf, PathBuf), TraceError> {
@@ -89,7 +90,7 @@ pub fn read_exr(path: &Path) -> Result<Vec<ExrLayer>, TraceError> {
 /// [`read_exr`] on the file's bytes, already read (and checked); `path`
 /// names the file in errors.
 pub fn parse_exr(bytes: &[u8], path: &Path) -> Result<Vec<ExrLayer>, TraceError> {
-    check_exr_size(bytes).map_err(|e| match e {
+    crate::files::check_exr_size(bytes).map_err(|e| match e {
         ExrHeader::Unreadable(cause) => TraceError::Exr {
             path: path.to_owned(),
             cause,
@@ -128,46 +129,6 @@ pub fn parse_exr(bytes: &[u8], path: &Path) -> Result<Vec<ExrLayer>, TraceError>
             (name, channels)
         })
         .collect())
-}
-
-/// Samples (pixels × channels, over every part) an EXR read back may
-/// declare: more than any file the engine writes (an 8192 × 8192 frame
-/// with 32 channels). The decoder sizes its buffers from the header, so a
-/// damaged or foreign header declaring more is refused with its size (the
-/// `exr` crate refuses the test's damaged file by its chunk count too;
-/// this check does not depend on that).
-const MAX_EXR_SAMPLES: u64 = 8192 * 8192 * 32;
-
-/// Why an EXR's header is not read further.
-pub(crate) enum ExrHeader {
-    Unreadable(exr::error::Error),
-    /// What it declares, for the message.
-    TooLarge(String),
-}
-
-/// The EXR `bytes` declare at most [`MAX_EXR_SAMPLES`].
-pub(crate) fn check_exr_size(bytes: &[u8]) -> Result<(), ExrHeader> {
-    let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
-        .map_err(ExrHeader::Unreadable)?;
-    let mut samples = 0u64;
-    for header in &meta.headers {
-        let Vec2(w, h) = header.layer_size;
-        let channels = header.channels.list.len();
-        let part = (w as u64)
-            .checked_mul(h as u64)
-            .and_then(|n| n.checked_mul(channels as u64));
-        samples = match part.and_then(|n| samples.checked_add(n)) {
-            Some(n) if n <= MAX_EXR_SAMPLES => n,
-            _ => {
-                return Err(ExrHeader::TooLarge(format!(
-                    "a part of {w}x{h} pixels × {channels} channels, {} parts: more than \
-                     {MAX_EXR_SAMPLES} samples (an 8192x8192 frame with 32 channels)",
-                    meta.headers.len()
-                )));
-            }
-        };
-    }
-    Ok(())
 }
 
 /// Narkowicz's ACES fit, then the sRGB curve: keeps highlights from clipping hard.
