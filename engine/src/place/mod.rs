@@ -269,8 +269,7 @@ fn placed_scene(
     let written = (|| -> Result<()> {
         let (text, source) = Scene::text(scene_arg)?;
         // Written under `out`: mesh files stay where the scene file named them.
-        let dir = source.parent().unwrap_or(std::path::Path::new("."));
-        let text = inference::scene::placed::with_mesh_paths_from(&text, dir);
+        let text = inference::scene::placed::with_mesh_paths_from(&text, &source);
         let rewritten = match report.axis {
             Placing::Azimuth => with_azimuths(&text, &name, az, &note),
             Placing::Rings => with_rings(&text, &name, el, &note),

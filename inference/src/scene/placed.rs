@@ -115,17 +115,16 @@ struct PathKeys {
     file: Option<toml::Spanned<String>>,
 }
 
-/// `text`, read from a scene file in folder `dir` (`""` is the current
-/// folder), ready to be written anywhere: every relative mesh path
-/// (`objects[i].mesh.obj` or `.file`, whatever TOML form it is written
-/// in) made absolute against `dir`, so it still names the same file.
-/// Everything else is kept as written; text that does not parse, or a
-/// path that would not be UTF-8, is left as it is (loading it says why).
-pub fn with_mesh_paths_from(text: &str, dir: &Path) -> String {
-    let dir = match dir.as_os_str().is_empty() {
-        true => Path::new("."),
-        false => dir,
-    };
+/// `text`, read from the scene file `source`, ready to be written
+/// anywhere: every relative mesh path (`objects[i].mesh.obj` or `.file`,
+/// whatever TOML form it is written in) made absolute against `source`'s
+/// folder (the current one for a bare file name), so it still names the
+/// same file. Everything else is kept as written; text that does not
+/// parse, or a path that would not be UTF-8, is left as it is (loading it
+/// says why).
+pub fn with_mesh_paths_from(text: &str, source: &Path) -> String {
+    let dir = source.parent().filter(|d| !d.as_os_str().is_empty());
+    let dir = dir.unwrap_or(Path::new("."));
     let dir = std::path::absolute(dir).unwrap_or_else(|_| dir.to_owned());
     let Ok(paths) = toml::from_str::<MeshPaths>(text) else {
         return text.to_owned();
@@ -246,7 +245,7 @@ mesh = { file = "/abs/r.obj" }
 [[objects]]
 objx = "keep.obj"
 "#;
-        let out = with_mesh_paths_from(text, Path::new("/scenes/here"));
+        let out = with_mesh_paths_from(text, Path::new("/scenes/here/x.toml"));
         let expected = r#"name = "x" # obj = "c.obj"
 # mesh = { obj = "c.obj" }
 material = "file"
@@ -264,7 +263,10 @@ objx = "keep.obj"
         assert_eq!(out, expected);
         // A scene named by a bare file name lives in the current folder.
         let here = std::env::current_dir().expect("cwd").join("m.obj");
-        let out = with_mesh_paths_from("[[objects]]\nmesh = { obj = \"m.obj\" }\n", Path::new(""));
+        let out = with_mesh_paths_from(
+            "[[objects]]\nmesh = { obj = \"m.obj\" }\n",
+            Path::new("x.toml"),
+        );
         let expected = format!(
             "[[objects]]\nmesh = {{ obj = {:?} }}\n",
             here.to_str().expect("utf-8")
@@ -272,7 +274,7 @@ objx = "keep.obj"
         assert_eq!(out, expected);
         // Text that is not TOML is left for the loader to refuse.
         assert_eq!(
-            with_mesh_paths_from("obj = \"m.obj\n", Path::new("/d")),
+            with_mesh_paths_from("obj = \"m.obj\n", Path::new("/d/x.toml")),
             "obj = \"m.obj\n"
         );
     }
@@ -296,7 +298,7 @@ objx = "keep.obj"
             Scene::from_toml(&text, &moved).is_err(),
             "test bug: loads unmoved"
         );
-        let text = with_mesh_paths_from(&text, here.path());
+        let text = with_mesh_paths_from(&text, &here.path().join("teapot.toml"));
         let s = Scene::from_toml(&text, &moved).expect("loads from the other folder");
         assert_eq!(s.object("teapot").expect("teapot").mesh.triangle_count(), 4);
     }
