@@ -87,6 +87,9 @@ impl PerfLog {
     ) -> PerfReport {
         let cpu_median =
             |f: fn(&CpuTimes) -> f64| median(&self.cpu.iter().map(f).collect::<Vec<_>>());
+        let cpu_mean = |f: fn(&CpuTimes) -> f64| {
+            self.cpu.iter().map(f).sum::<f64>() / self.cpu.len().max(1) as f64
+        };
         PerfReport {
             device: device.into(),
             scene: scene.into(),
@@ -130,13 +133,11 @@ impl PerfLog {
                 upload_ms_median: cpu_median(|c| c.upload_ms),
                 submit_to_fence_ms_median: cpu_median(|c| c.submit_ms),
                 decode_ms_median: cpu_median(|c| c.decode_ms),
-                decode_ms_mean: self.cpu.iter().map(|c| c.decode_ms).sum::<f64>()
-                    / self.cpu.len().max(1) as f64,
+                decode_ms_mean: cpu_mean(|c| c.decode_ms),
                 maps_decoded: self.cpu.iter().map(|c| u64::from(c.decoded_maps)).sum(),
                 maps_prefetched: self.cpu.iter().map(|c| u64::from(c.prefetched_maps)).sum(),
                 prefetch_wait_ms_median: cpu_median(|c| c.prefetch_wait_ms),
-                prefetch_wait_ms_mean: self.cpu.iter().map(|c| c.prefetch_wait_ms).sum::<f64>()
-                    / self.cpu.len().max(1) as f64,
+                prefetch_wait_ms_mean: cpu_mean(|c| c.prefetch_wait_ms),
                 texgen_ahead: self.cpu.iter().map(|c| u64::from(c.texgen_ahead)).sum(),
             },
         }
