@@ -312,6 +312,8 @@ pub mod spirv {
     pub const GLASS_VERT: &[u8] = shader!("glass.vert");
     pub const GLASS_FRAG: &[u8] = shader!("glass.frag");
     pub const GLASS_BLEND_FRAG: &[u8] = shader!("glass_blend.frag");
+    pub const GLASS_GBUFFER_FRAG: &[u8] = shader!("glass_gbuffer.frag");
+    pub const GLASS_COMPOSITE_FRAG: &[u8] = shader!("glass_composite.frag");
     pub const GLASS_LAYERS_VERT: &[u8] = shader!("glass_layers.vert");
     pub const GLASS_LAYERS_FRAG: &[u8] = shader!("glass_layers.frag");
     pub const GLASS_LAYER_FRAG: &[u8] = shader!("glass_layer.frag");

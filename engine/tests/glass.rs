@@ -385,3 +385,79 @@ fn only_triangles_an_inner_layer_reaches_read_it_and_the_frame_stays() {
         differ.len()
     );
 }
+
+/// A shell map of `size`² per face whose colour says where a lookup
+/// landed: red the MIP level, green and blue the texel's place on its face
+/// (`swap` exchanges them, for a second sample).
+fn level_coded_map(size: u32, swap: bool) -> Vec<u8> {
+    let levels = size.ilog2();
+    let mut bytes = Vec::new();
+    for level in 0..=levels {
+        let n = size >> level;
+        for _face in 0..6 {
+            for y in 0..n {
+                for x in 0..n {
+                    let (u, v) = ((x as f32 + 0.5) / n as f32, (y as f32 + 0.5) / n as f32);
+                    let (g, b) = if swap { (v, u) } else { (u, v) };
+                    let texel = [level as f32 / levels as f32, g, b, 1.0];
+                    bytes.extend(
+                        texel
+                            .map(half::f16::from_f32)
+                            .iter()
+                            .flat_map(|h| h.to_le_bytes()),
+                    );
+                }
+            }
+        }
+    }
+    bytes
+}
+
+#[test]
+fn deferred_glass_draws_the_forward_frame() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = glass_scene(
+        dir.path(),
+        "glass",
+        &[("resolution = 256", "resolution = 32")],
+    );
+    let device = validated_device();
+    let render = |maps: Vec<Vec<u8>>, deferred: bool| {
+        let mut renderer = Renderer::new(&device, &scene, W, H).expect("renderer");
+        let shells = engine::glass::samples::SampleShells {
+            azimuths: vec![10.0, 30.0],
+            maps,
+        };
+        renderer.load_glass_samples(&shells).expect("samples");
+        let g = renderer.glass.as_mut().expect("glass player");
+        g.deferred = deferred;
+        let eye = scene.orbit.eye(15.0, 5.0);
+        renderer
+            .frame(FrameMode::Hybrid, eye, scene.orbit.view(eye))
+            .expect("frame");
+        renderer.pixels().expect("pixels")
+    };
+    let coded = || vec![level_coded_map(32, false), level_coded_map(32, true)];
+    let forward = render(coded(), false);
+    let deferred = render(coded(), true);
+    // The lens's pixels: where black maps darken the frame.
+    let black = render(vec![constant_map(32, [0.0; 3]); 2], true);
+    let mask: Vec<bool> = (forward.iter().zip(&black))
+        .map(|(f, b)| (0..3).any(|c| (f[c] - b[c]).abs() > 1e-3))
+        .collect();
+    let lens = mask.iter().filter(|m| **m).count();
+    assert!(
+        lens > (W * H / 20) as usize,
+        "the lens covers {lens} pixels"
+    );
+    // Same lookups, same levels of detail, same weights: a level off or
+    // a lookup a texel off would show in red, green or blue.
+    let db = masked_psnr(&forward, &deferred, &mask);
+    assert!(
+        db > 50.0,
+        "deferred against forward over the lens: {db:.2} dB"
+    );
+    let room: Vec<bool> = mask.iter().map(|m| !m).collect();
+    assert!(masked_psnr(&forward, &deferred, &room).is_infinite());
+    assert_no_validation_messages();
+}

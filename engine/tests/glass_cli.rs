@@ -97,17 +97,12 @@ fn glass_compiles_its_shell_once_and_plays_hybrid() {
                 .is_file()
         );
     }
-    let perf: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("perf.json")).expect("perf.json"))
-            .expect("valid JSON");
-    assert_eq!(perf["mode"], "Hybrid");
-    let names: Vec<&str> = perf["passes"]
-        .as_array()
-        .expect("passes")
-        .iter()
-        .filter_map(|p| p["name"].as_str())
-        .collect();
-    assert_eq!(names, ["room", "glass", "readback"]);
+    // Per-sample maps composite deferred: the lens into its G-buffer,
+    // then each of its pixels once.
+    assert_eq!(
+        pass_names(&out),
+        ["room", "glass_gbuffer", "glass", "readback"]
+    );
 
     // Cached: nothing traced again; the baseline plays from the same map.
     let stderr = run_clean(&scene, &out, &["--mode", "static-em", "--tau", "10"]);
@@ -118,11 +113,13 @@ fn glass_compiles_its_shell_once_and_plays_hybrid() {
     // map, played as solved (`--maps exr`), is solved again (that one
     // only); the traced shell alone plays without them.
     std::fs::write(out.join("glass/room_shells.ptxc"), b"not a container").expect("damage");
-    let stderr = run_clean(&scene, &out, &[]);
+    let stderr = run_clean(&scene, &out, &["--compositing", "multipass"]);
     assert!(
         stderr.contains("compressed 3 per-sample shell maps"),
         "{stderr}"
     );
+    // The forward pass, as the papers draw it.
+    assert_eq!(pass_names(&out), ["room", "glass", "readback"]);
     assert!(!stderr.contains("solved"), "{stderr}");
     let damaged = out.join("glass/room_shell_line0050.bin");
     std::fs::write(&damaged, b"not a map").expect("damage a map");
@@ -149,6 +146,17 @@ fn glass_compiles_its_shell_once_and_plays_hybrid() {
             .any(|l| l.starts_with("error:") && l.contains("'0' for '--tau")),
         "{stderr}"
     );
+}
+
+/// The passes `out/perf.json` times, in order (a hybrid run's).
+fn pass_names(out: &Path) -> Vec<String> {
+    let perf: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("perf.json")).expect("perf.json"))
+            .expect("valid JSON");
+    assert_eq!(perf["mode"], "Hybrid");
+    (perf["passes"].as_array().expect("passes").iter())
+        .filter_map(|p| p["name"].as_str().map(String::from))
+        .collect()
 }
 
 /// `engine compile` on a glass scene solves its per-sample shell maps

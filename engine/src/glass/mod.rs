@@ -19,8 +19,9 @@ pub mod samples;
 pub mod shell;
 
 use crate::backend::{Device, GpuError, GpuResult, Image};
+use crate::graph::Pass;
 use crate::passes::em_capture::CubeTarget;
-use crate::passes::glass::{GlassGeometry, GlassPass, ShellSource};
+use crate::passes::glass::{GlassGeometry, ShellSource};
 use crate::passes::target::Target;
 use ahead::{Ahead, PathRequest};
 use ash::vk;
@@ -65,6 +66,9 @@ pub struct GlassPlayer {
     infinity: ShellSet,
     /// Tessellation threshold, subpixels.
     pub tau: f32,
+    /// Per-sample maps composited deferred (G-buffer, then each lens pixel
+    /// once) rather than in one forward pass (`--compositing multipass`).
+    pub deferred: bool,
     bounds: (Vec3, Vec3),
     /// The per-sample maps (a cube-map array) and their azimuths.
     samples: Option<(Image, Vec<f32>)>,
@@ -79,6 +83,10 @@ pub struct GlassPlayer {
     /// and how many of its indices lead with triangles that need them.
     layered_frame: Option<u32>,
     split: Vec<u32>,
+    /// The deferred composite's scissor bands for this frame (empty: the
+    /// lens's bounding rectangle) and their scratch.
+    bands: Vec<vk::Rect2D>,
+    band_pixels: Vec<glam::Vec2>,
     orbit: inference::scene::Orbit,
     stream: Vec<f32>,
     /// The next frame's paths, being traced (see [`GlassPlayer::prepare`]).
@@ -118,11 +126,14 @@ impl GlassPlayer {
             cones: Vec::new(),
             layered_frame: None,
             split: Vec::new(),
+            bands: Vec::new(),
+            band_pixels: Vec::new(),
             orbit: scene.orbit.clone(),
             lens: Arc::new(lens),
             cube,
             geometry,
             tau: settings.tau,
+            deferred: true,
             stream: Vec::new(),
             ahead: None,
             last: GlassFrameStats::default(),
@@ -213,6 +224,18 @@ impl GlassPlayer {
                 &tess.indices
             }
         };
+        // Deferred per-sample frames composite band by band.
+        self.bands = match (self.deferred, self.blend, layered) {
+            (true, Some(_), false) => crate::pem::bands::screen_bands(
+                request.view_proj,
+                &tess.positions,
+                &tess.indices,
+                request.size,
+                &mut self.band_pixels,
+            )
+            .unwrap_or_default(),
+            _ => Vec::new(),
+        };
         let streamed = Instant::now();
         self.geometry.upload(&self.stream, indices)?;
         self.last = GlassFrameStats {
@@ -229,8 +252,8 @@ impl GlassPlayer {
         ))
     }
 
-    /// The pass drawing what [`GlassPlayer::prepare`] uploaded.
-    pub fn pass<'a>(&'a self, target: Target<'a>, view_proj: Mat4) -> GlassPass<'a> {
+    /// The passes drawing what [`GlassPlayer::prepare`] uploaded.
+    pub fn passes<'a>(&'a self, target: Target<'a>, view_proj: Mat4) -> Vec<Box<dyn Pass + 'a>> {
         let source = match (&self.samples, self.blend, &self.layers, self.layered_frame) {
             (_, _, Some((image, set)), Some(first)) => {
                 ShellSource::Layers(image, set.shells.len() as u32, first)
@@ -238,7 +261,8 @@ impl GlassPlayer {
             (Some((image, _)), Some(blend), ..) => ShellSource::Samples(image, blend),
             _ => ShellSource::One(&self.cube.color),
         };
-        self.geometry.pass(source, target, view_proj)
+        let deferred = self.deferred.then_some(self.bands.as_slice());
+        (self.geometry).passes(source, target, view_proj, deferred)
     }
 
     /// Plays hybrid frames from layered shells: `image` holds `set`'s maps
@@ -279,10 +303,15 @@ impl GlassPlayer {
             .map_or(1, |(_, set)| set.shells.len() as u32)
     }
 
-    /// Plays hybrid frames from `image` (the per-sample maps at
+    /// Plays hybrid frames of `size` from `image` (the per-sample maps at
     /// `azimuths`, uploaded and ready for sampling) instead of the one map.
-    pub fn set_samples(&mut self, image: Image, azimuths: Vec<f32>) -> GpuResult<()> {
-        self.geometry.set_samples(&image)?;
+    pub fn set_samples(
+        &mut self,
+        image: Image,
+        azimuths: Vec<f32>,
+        size: (u32, u32),
+    ) -> GpuResult<()> {
+        self.geometry.set_samples(&image, size)?;
         self.samples = Some((image, azimuths));
         Ok(())
     }
@@ -338,15 +367,17 @@ pub fn prepare_frame(
     Ok(())
 }
 
-/// Sets `renderer` up for hybrid frames with `tau` (the scene's when
-/// None), the room shell map compiled under `out` when missing, and no
-/// per-sample maps (`compile::glass_shells::load` adds them).
+/// Sets `renderer` up for hybrid frames with `pem`'s τ (the scene's when
+/// None) and compositing, the room shell map compiled under `out` when
+/// missing, and no per-sample maps (`compile::glass_shells::load` adds
+/// them).
 pub fn setup(
     renderer: &mut crate::renderer::Renderer,
     scene: &Scene,
     out: &std::path::Path,
-    tau: Option<f32>,
+    pem: &crate::options::PemOptions,
 ) -> anyhow::Result<()> {
+    let tau = pem.tau;
     load_shell(renderer, scene, out)?;
     let Some(glass) = renderer.glass.as_mut() else {
         anyhow::bail!(
@@ -355,6 +386,7 @@ pub fn setup(
         );
     };
     glass.clear_samples();
+    glass.deferred = pem.compositing == crate::pem::settings::Compositing::Deferred;
     if let Some(tau) = tau {
         let range = inference::scene::glass::GLASS_TAU;
         if !range.contains(&tau) {

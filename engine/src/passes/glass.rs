@@ -4,6 +4,7 @@
 //! per-sample shell maps of a cube-map array, or composited from layered
 //! shells (one array element per layer, nearest first).
 
+use super::glass_deferred::{DeferredGlass, DeferredLens};
 use super::target::Target;
 use crate::backend::{Binding, Buffer, Device, GpuResult, Pipeline, PipelineDesc, Sampler};
 use crate::graph::{Access, Pass};
@@ -79,6 +80,8 @@ pub struct GlassGeometry {
     set: vk::DescriptorSet,
     /// The blending pipeline and its set over the per-sample maps.
     blend: Option<(Pipeline, vk::DescriptorSet)>,
+    /// The deferred passes over the per-sample maps.
+    deferred: Option<DeferredGlass>,
     /// Over the layer maps: the pipeline reading every layer, the one
     /// reading the outermost, and their sets.
     layers: Option<[(Pipeline, vk::DescriptorSet); 2]>,
@@ -105,6 +108,7 @@ impl GlassGeometry {
             sampler,
             set,
             blend: None,
+            deferred: None,
             layers: None,
             vertices: None,
             indices: None,
@@ -112,12 +116,20 @@ impl GlassGeometry {
         })
     }
 
-    /// Makes the blending pipeline, reading the cube-map array `samples`.
-    pub fn set_samples(&mut self, samples: &crate::backend::Image) -> GpuResult<()> {
+    /// Makes the blending pipelines, forward and deferred (a `size`
+    /// G-buffer), reading the cube-map array `samples`.
+    pub fn set_samples(
+        &mut self,
+        samples: &crate::backend::Image,
+        size: (u32, u32),
+    ) -> GpuResult<()> {
         let names = ("glass blend", spirv::GLASS_BLEND_FRAG);
         let pipeline = glass_pipeline(&self.device, names, Stream::OneShell, self.formats)?;
         let set = pipeline.descriptor_set(&[Binding::Image(samples.view, self.sampler.raw)])?;
         self.blend = Some((pipeline, set));
+        let deferred =
+            DeferredGlass::new(&self.device, samples, &self.sampler, self.formats, size)?;
+        self.deferred = Some(deferred);
         Ok(())
     }
 
@@ -159,20 +171,35 @@ impl GlassGeometry {
         Ok(())
     }
 
-    /// The pass reading `source`'s maps (the arrays given to
-    /// [`GlassGeometry::set_samples`] or [`GlassGeometry::set_layers`]).
-    pub fn pass<'a>(
+    /// The passes reading `source`'s maps (the arrays given to
+    /// [`GlassGeometry::set_samples`] or [`GlassGeometry::set_layers`]):
+    /// per-sample maps `deferred` (with the composite's scissor bands) as a
+    /// G-buffer and a composite, anything else as one forward pass.
+    pub fn passes<'a>(
         &'a self,
         source: ShellSource<'a>,
         target: Target<'a>,
         view_proj: Mat4,
-    ) -> GlassPass<'a> {
-        GlassPass {
+        deferred: Option<&'a [vk::Rect2D]>,
+    ) -> Vec<Box<dyn Pass + 'a>> {
+        if let (Some(bands), ShellSource::Samples(samples, blend), Some(glass)) =
+            (deferred, source, &self.deferred)
+            && let (Some(vertices), Some(indices)) = (&self.vertices, &self.indices)
+        {
+            let lens = DeferredLens {
+                vertices,
+                indices,
+                index_count: self.index_count,
+                bands,
+            };
+            return glass.passes(lens, target, view_proj, blend, samples).into();
+        }
+        vec![Box::new(GlassPass {
             geometry: self,
             source,
             target,
             view_proj,
-        }
+        })]
     }
 
     /// Each draw of `source`: pipeline, set, push `blend`, first index and

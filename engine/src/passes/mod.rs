@@ -2,6 +2,7 @@
 
 pub mod em_capture;
 pub mod glass;
+pub mod glass_deferred;
 pub mod interior;
 pub mod mirror;
 pub mod panorama_cube;

@@ -120,7 +120,7 @@ fn lit_passes<'a>(
         .filter(|_| !matches!(mode, FrameMode::Pem | FrameMode::Rem))
     {
         let area = area_of(view_proj, [g.bounds()], parts.width, parts.height);
-        passes.push(Box::new(g.pass(Target { area, ..later }, view_proj)));
+        passes.extend(g.passes(Target { area, ..later }, view_proj));
     }
     Ok(passes)
 }

@@ -27,10 +27,11 @@ impl Renderer {
         shells: &crate::glass::samples::SampleShells,
     ) -> GpuResult<()> {
         let image = self.glass_cube_array("glass per-sample shell maps", &shells.maps)?;
+        let size = (self.width, self.height);
         let Some(g) = self.glass.as_mut() else {
             return Err(GpuError::Invalid("no glass object".into()));
         };
-        g.set_samples(image, shells.azimuths.clone())
+        g.set_samples(image, shells.azimuths.clone(), size)
     }
 
     /// Uploads the layer maps of `set` (nearest first) into one cube-map

@@ -336,8 +336,9 @@ pub struct PemArgs {
     #[arg(long, value_enum, default_value_t = Filtering::Trilinear)]
     pub filtering: Filtering,
     /// How blended samples and layers are composited: `deferred` shades
-    /// each covered pixel once; `multipass` is the papers' one pass per
-    /// sample, blended.
+    /// each covered pixel once (reflectors, and glass blending per-sample
+    /// shell maps); `multipass` is the papers' one pass per sample,
+    /// blended (glass: one forward pass over the lens).
     #[arg(long, value_enum, default_value_t = Compositing::Deferred)]
     pub compositing: Compositing,
     /// Hybrid glass: split triangles whose vertex ray paths differ until
