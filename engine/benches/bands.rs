@@ -1,10 +1,10 @@
 //! CPU cost per frame of the compositing pass's scissor bands
-//! (`engine::pem::bands::screen_bands`) on the teapot at 640×480.
+//! (`engine::passes::bands::screen_bands`) on the teapot at 640×480.
 //!
 //! `cargo bench -p engine --bench bands`
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use engine::pem::bands::screen_bands;
+use engine::passes::bands::screen_bands;
 use inference::scene::Scene;
 use std::hint::black_box;
 

@@ -119,7 +119,8 @@ pub fn setup_mode<'s>(
             FrameSource::Trace(Box::new(Tracer::new(ctx.scene)?), settings)
         }
         Mode::Hybrid => {
-            crate::glass::setup(renderer, ctx.scene, ctx.out, pem)?;
+            let deferred = pem.compositing == crate::pem::settings::Compositing::Deferred;
+            crate::glass::setup(renderer, ctx.scene, ctx.out, (pem.tau, deferred))?;
             // Layered scenes play their traced layers; one-shell scenes
             // their per-sample maps, if any.
             if !pem.traced_shell && crate::glass::layers::load(renderer, ctx.scene, ctx.out)? == 1 {

@@ -67,7 +67,8 @@ pub struct GlassPlayer {
     /// Tessellation threshold, subpixels.
     pub tau: f32,
     /// Per-sample maps composited deferred (G-buffer, then each lens pixel
-    /// once) rather than in one forward pass (`--compositing multipass`).
+    /// once) rather than in one forward pass (`--compositing multipass`);
+    /// read when the maps are set ([`GlassPlayer::set_samples`]).
     pub deferred: bool,
     bounds: (Vec3, Vec3),
     /// The per-sample maps (a cube-map array) and their azimuths.
@@ -226,7 +227,7 @@ impl GlassPlayer {
         };
         // Deferred per-sample frames composite band by band.
         self.bands = match (self.deferred, self.blend, layered) {
-            (true, Some(_), false) => crate::pem::bands::screen_bands(
+            (true, Some(_), false) => crate::passes::bands::screen_bands(
                 request.view_proj,
                 &tess.positions,
                 &tess.indices,
@@ -311,7 +312,8 @@ impl GlassPlayer {
         azimuths: Vec<f32>,
         size: (u32, u32),
     ) -> GpuResult<()> {
-        self.geometry.set_samples(&image, size)?;
+        let deferred = self.deferred.then_some(size);
+        self.geometry.set_samples(&image, deferred)?;
         self.samples = Some((image, azimuths));
         Ok(())
     }
@@ -367,17 +369,16 @@ pub fn prepare_frame(
     Ok(())
 }
 
-/// Sets `renderer` up for hybrid frames with `pem`'s τ (the scene's when
-/// None) and compositing, the room shell map compiled under `out` when
-/// missing, and no per-sample maps (`compile::glass_shells::load` adds
-/// them).
+/// Sets `renderer` up for hybrid frames with `tau` (the scene's when
+/// None), per-sample maps composited `deferred` or forward, the room shell
+/// map compiled under `out` when missing, and no per-sample maps
+/// (`compile::glass_shells::load` adds them).
 pub fn setup(
     renderer: &mut crate::renderer::Renderer,
     scene: &Scene,
     out: &std::path::Path,
-    pem: &crate::options::PemOptions,
+    (tau, deferred): (Option<f32>, bool),
 ) -> anyhow::Result<()> {
-    let tau = pem.tau;
     load_shell(renderer, scene, out)?;
     let Some(glass) = renderer.glass.as_mut() else {
         anyhow::bail!(
@@ -386,7 +387,7 @@ pub fn setup(
         );
     };
     glass.clear_samples();
-    glass.deferred = pem.compositing == crate::pem::settings::Compositing::Deferred;
+    glass.deferred = deferred;
     if let Some(tau) = tau {
         let range = inference::scene::glass::GLASS_TAU;
         if !range.contains(&tau) {

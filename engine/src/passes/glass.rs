@@ -116,20 +116,22 @@ impl GlassGeometry {
         })
     }
 
-    /// Makes the blending pipelines, forward and deferred (a `size`
-    /// G-buffer), reading the cube-map array `samples`.
+    /// Makes the blending pipeline reading the cube-map array `samples`,
+    /// and with a frame size the deferred passes (their G-buffer at that
+    /// size); both or, on an error, neither.
     pub fn set_samples(
         &mut self,
         samples: &crate::backend::Image,
-        size: (u32, u32),
+        deferred: Option<(u32, u32)>,
     ) -> GpuResult<()> {
         let names = ("glass blend", spirv::GLASS_BLEND_FRAG);
         let pipeline = glass_pipeline(&self.device, names, Stream::OneShell, self.formats)?;
         let set = pipeline.descriptor_set(&[Binding::Image(samples.view, self.sampler.raw)])?;
+        let make =
+            |size| DeferredGlass::new(&self.device, samples, &self.sampler, self.formats, size);
+        let deferred = deferred.map(make).transpose()?;
         self.blend = Some((pipeline, set));
-        let deferred =
-            DeferredGlass::new(&self.device, samples, &self.sampler, self.formats, size)?;
-        self.deferred = Some(deferred);
+        self.deferred = deferred;
         Ok(())
     }
 
@@ -186,6 +188,11 @@ impl GlassGeometry {
             (deferred, source, &self.deferred)
             && let (Some(vertices), Some(indices)) = (&self.vertices, &self.indices)
         {
+            // No lens this frame: no G-buffer, and no composite over the
+            // whole area for a stencil that marks nothing.
+            if self.index_count == 0 {
+                return Vec::new();
+            }
             let lens = DeferredLens {
                 vertices,
                 indices,

@@ -135,6 +135,13 @@ impl DeferredGlass {
         blend: Vec4,
         samples: &'a Image,
     ) -> [Box<dyn Pass + 'a>; 2] {
+        // `Attachments` renders level 0, layer 0, counter-clockwise fronts:
+        // the frame's own target, as glass frames give it.
+        debug_assert!(
+            target.level == 0
+                && target.layer == 0
+                && target.front_face == vk::FrontFace::COUNTER_CLOCKWISE
+        );
         let push = GlassPush { view_proj, blend };
         [
             Box::new(LensGBufferPass {
@@ -156,7 +163,7 @@ impl DeferredGlass {
 }
 
 /// The lens's uploaded stream (one-shell layout) and indices, and the
-/// scissor bands covering its pixels (`pem::bands`; empty: the render
+/// scissor bands covering its pixels (`passes::bands`; empty: the render
 /// area).
 #[derive(Clone, Copy)]
 pub struct DeferredLens<'a> {
@@ -261,7 +268,7 @@ impl Pass for LensCompositePass<'_> {
             offset: vk::Offset2D::default(),
             extent: self.target.extent(),
         });
-        let scissors = match crate::pem::bands::clipped(self.bands, area) {
+        let scissors = match super::bands::clipped(self.bands, area) {
             bands if bands.is_empty() => vec![area],
             bands => bands,
         };

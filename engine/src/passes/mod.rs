@@ -1,5 +1,6 @@
 //! One module per pass.
 
+pub mod bands;
 pub mod em_capture;
 pub mod glass;
 pub mod glass_deferred;

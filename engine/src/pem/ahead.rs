@@ -72,7 +72,7 @@ impl TexgenInputs<'_> {
             .settings
             .deferred()
             .then(|| {
-                super::bands::screen_bands(
+                crate::passes::bands::screen_bands(
                     request.view_proj,
                     self.positions,
                     self.triangles,

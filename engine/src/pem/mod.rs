@@ -4,7 +4,6 @@
 //! the default path through the viewpoints.
 
 pub mod ahead;
-pub mod bands;
 mod frame_passes;
 pub mod frame_sets;
 pub mod path;

@@ -139,7 +139,7 @@ impl PemReflector {
     /// as scissor bands inside `within` ([`super::bands`]); empty where no
     /// bound holds (a vertex behind the eye: draw `within`).
     pub fn bands(&self, within: vk::Rect2D) -> Vec<vk::Rect2D> {
-        super::bands::clipped(&self.bands, within)
+        crate::passes::bands::clipped(&self.bands, within)
     }
 
     /// The array element holding `sample`, if it is resident.

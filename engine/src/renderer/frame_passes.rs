@@ -120,7 +120,11 @@ fn lit_passes<'a>(
         .filter(|_| !matches!(mode, FrameMode::Pem | FrameMode::Rem))
     {
         let area = area_of(view_proj, [g.bounds()], parts.width, parts.height);
-        passes.extend(g.passes(Target { area, ..later }, view_proj));
+        // Off the frame the area is empty, and an empty render area is
+        // invalid: the lens draws nothing then.
+        if area.is_none_or(|a| a.extent.width > 0 && a.extent.height > 0) {
+            passes.extend(g.passes(Target { area, ..later }, view_proj));
+        }
     }
     Ok(passes)
 }

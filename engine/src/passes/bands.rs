@@ -10,7 +10,7 @@
 //! bounds, half a pixel wider, to the bands it reaches. Per frame that
 //! is one projection per vertex and a min/max per triangle.
 
-use crate::passes::target::intersect;
+use super::target::intersect;
 use ash::vk;
 use glam::{Mat4, Vec2, Vec3};
 
