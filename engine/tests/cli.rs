@@ -287,3 +287,32 @@ fn bad_angles_and_tau_fail_before_any_work() {
         assert!(!out.exists(), "{args:?} wrote {}", out.display());
     }
 }
+
+/// A scene with neither a reflector's maps nor glass has nothing to bench:
+/// said before anything is compiled.
+#[test]
+fn bench_without_reflectors_or_glass_says_so_first() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/scenes/glass.toml");
+    let text = std::fs::read_to_string(source).expect("glass.toml");
+    let plain = text
+        .split("[objects.glass]")
+        .next()
+        .expect("text")
+        .replace("material = \"glass\"", "material = \"walls\"");
+    let scene = dir.path().join("plain.toml");
+    std::fs::write(&scene, plain).expect("write scene");
+    let out = dir.path().join("out");
+    let o = engine(
+        &[
+            "bench",
+            "--scene",
+            scene.to_str().expect("utf-8 path"),
+            "--out",
+            out.to_str().expect("utf-8 path"),
+        ],
+        &[],
+    );
+    assert_clean_failure(&o, &["plain.toml", "nothing to bench"]);
+    assert!(!stderr(&o).contains("light map"), "{}", stderr(&o));
+}

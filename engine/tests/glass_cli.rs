@@ -128,6 +128,7 @@ fn glass_compiles_its_shell_once_and_plays_hybrid() {
         stderr.contains("solved 1 per-sample shell maps"),
         "{stderr}"
     );
+    assert_glass_bench(&scene, &out);
     let traced = run(&scene, &out, &["--traced-shell"]);
     let stderr = String::from_utf8_lossy(&traced.stderr);
     assert!(traced.status.success(), "stderr:\n{stderr}");
@@ -146,6 +147,68 @@ fn glass_compiles_its_shell_once_and_plays_hybrid() {
             .any(|l| l.starts_with("error:") && l.contains("'0' for '--tau")),
         "{stderr}"
     );
+}
+
+/// `engine bench` on a glass scene (its maps compiled under `out`) times
+/// the glass rows, validation-clean, each hybrid row with its glass passes.
+fn assert_glass_bench(scene: &str, out: &Path) {
+    let o = engine(&[
+        "bench",
+        "--scene",
+        scene,
+        "--size",
+        "96x64",
+        "--frames",
+        "1",
+        "--warmup",
+        "1",
+        "--out",
+        out.to_str().expect("utf-8 path"),
+        "--validate",
+    ]);
+    let log = String::from_utf8_lossy(&o.stderr).into_owned() + &String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{log}");
+    assert!(!log.contains("solved"), "{log}");
+    let bench: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("bench.json")).expect("bench.json"))
+            .expect("valid JSON");
+    assert_eq!(bench["kind"], "glass", "{bench}");
+    let rows = bench["rows"].as_array().expect("rows");
+    let names: Vec<&str> = rows.iter().filter_map(|r| r["name"].as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "bare",
+            "static-em",
+            "hybrid, tau 3",
+            "hybrid, tau 5",
+            "hybrid, tau 10",
+            "hybrid, tau 10, multipass",
+            "hybrid, tau 10, traced shell"
+        ]
+    );
+    for r in rows {
+        assert!(
+            r["frame_ms_median"].as_f64().is_some_and(|v| v > 0.0),
+            "{r}"
+        );
+        let glass = r["glass_ms_median"].as_f64();
+        assert_eq!(glass.is_some(), r["name"] != "bare", "{r}");
+    }
+    // Each row drew what it says: the deferred rows a G-buffer, the
+    // forward and traced-shell rows none.
+    let passes = |i: usize| -> Vec<&str> {
+        (rows[i]["report"]["passes"]
+            .as_array()
+            .expect("passes")
+            .iter())
+        .filter_map(|p| p["name"].as_str())
+        .collect()
+    };
+    assert!(passes(4).contains(&"glass_gbuffer"), "{:?}", passes(4));
+    assert!(!passes(5).contains(&"glass_gbuffer"), "{:?}", passes(5));
+    assert!(!passes(6).contains(&"glass_gbuffer"), "{:?}", passes(6));
+    assert!(log.contains("glass ms"), "{log}");
 }
 
 /// The passes `out/perf.json` times, in order (a hybrid run's).

@@ -10,7 +10,8 @@ use std::path::PathBuf;
 /// offered here to be silently ignored).
 #[derive(Args, Debug, Clone)]
 pub struct BenchArgs {
-    /// A built-in scene's name (teapot) or the path of a .toml scene file.
+    /// A built-in scene's name (teapot, glass) or the path of a .toml scene
+    /// file.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
     /// Timed frames per view and variant (8 views; at most 100,000).

@@ -44,7 +44,9 @@ pub struct Cli {
 pub enum Command {
     /// Measure the bare, static-EM and layered-PEM frames, the PEM built up
     /// pass by pass, at the same views between samples, interleaved in one
-    /// run (--frames = frames per view); writes bench.json.
+    /// run (--frames = frames per view); on a glass scene the hybrid frame
+    /// at τ = 3, 5 and 10, forward and from the traced shell; writes
+    /// bench.json.
     Bench(BenchArgs),
     /// Infer each reflector's layered environment maps for orbit samples by
     /// least squares against the traced layers (tracing them if missing),

@@ -12,7 +12,14 @@
 //! light maps by default); "default, analytic room" is the default frame
 //! with the analytic room, so the two room passes are timed side by side.
 //! "rem" is reflection-space IBR (its source maps traced first when
-//! missing), lit like the PEM variants.
+//! missing), lit like the PEM variants. A scene with a glass object is
+//! benched as glass ([`glass`]).
+
+mod glass;
+mod report;
+
+use report::rows;
+pub use report::{BenchKind, BenchReport, BenchRow, RoomPass, room_pass};
 
 use crate::options::{PemOptions, RunPlace};
 use crate::pem::player::{Compositing, PemKind, PemSettings};
@@ -21,7 +28,6 @@ use crate::play::{Session, compile_context};
 use crate::renderer::{FrameMode, Renderer};
 use crate::util::stats::median;
 use anyhow::Result;
-use serde::Serialize;
 use std::time::Instant;
 
 /// How a variant draws.
@@ -66,108 +72,6 @@ fn variants() -> Vec<(&'static str, Draws)> {
     ]
 }
 
-/// Passes whose fragment invocations count as compositing the reflectors.
-const COMPOSITING: [&str; 3] = ["pem_composite", "pem", "pem_blend"];
-
-#[derive(Serialize)]
-pub struct BenchRow {
-    pub name: String,
-    pub frame_ms_median: f64,
-    pub fps: f64,
-    pub submit_to_fence_ms_median: f64,
-    pub texgen_ms_median: f64,
-    /// Median frame over the bare frame's median.
-    pub ratio_to_bare: f64,
-    /// Median frame over the static-EM frame's median.
-    pub ratio_to_static_em: f64,
-    /// Fragment-shader invocations of the compositing passes (`pem_composite`,
-    /// or `pem` + `pem_blend` multipass) per covered reflector pixel.
-    pub compositing_invocations_per_pixel: Option<f64>,
-    pub report: PerfReport,
-}
-
-#[derive(Serialize)]
-pub struct BenchReport {
-    pub views: u32,
-    /// The views' elevation above the orbit plane, degrees.
-    pub elevation_deg: f32,
-    pub frames_per_view: u32,
-    /// Reflector pixels covered at the views (median over the views).
-    pub covered_pixels: u64,
-    /// The same at the last row's views (it moves along the samples).
-    pub moving_covered_pixels: u64,
-    pub rows: Vec<BenchRow>,
-    /// The inferred room pass against the analytic one, from the default
-    /// rows with each room (the whole-frame issue's cost goal).
-    pub room_pass: Option<RoomPass>,
-}
-
-/// One run's room passes, median GPU times.
-#[derive(Serialize, Debug, PartialEq)]
-pub struct RoomPass {
-    pub inferred_ms: f64,
-    pub analytic_ms: f64,
-    /// Inferred over analytic.
-    pub ratio: f64,
-}
-
-/// The `room` pass of the rows named `default` and `default, analytic
-/// room`, when both ran it.
-pub fn room_pass(rows: &[(&str, &[PassReport])]) -> Option<RoomPass> {
-    let room = |name: &str| {
-        let (_, passes) = rows.iter().find(|(n, _)| *n == name)?;
-        let p = passes.iter().find(|p| p.name == "room")?;
-        Some(p.gpu_ms_median)
-    };
-    let (inferred_ms, analytic_ms) = (room("default")?, room("default, analytic room")?);
-    (analytic_ms > 0.0).then(|| RoomPass {
-        inferred_ms,
-        analytic_ms,
-        ratio: inferred_ms / analytic_ms,
-    })
-}
-
-impl BenchReport {
-    pub fn table(&self) -> String {
-        let mut out = format!(
-            "{} views between samples at {:+.1}° x {} frames; maps resident but in the last row; {} reflector pixels\n{:<28} {:>9} {:>7} {:>9} {:>8} {:>7} {:>9} {:>10}\n",
-            self.views,
-            self.elevation_deg,
-            self.frames_per_view,
-            self.covered_pixels,
-            "variant",
-            "frame ms",
-            "fps",
-            "GPU ms",
-            "texgen",
-            "x bare",
-            "x static",
-            "inv./pixel"
-        );
-        for r in &self.rows {
-            out += &format!(
-                "{:<28} {:>9.2} {:>7.1} {:>9.2} {:>8.3} {:>7.2} {:>9.2} {:>10}\n",
-                r.name,
-                r.frame_ms_median,
-                r.fps,
-                r.submit_to_fence_ms_median,
-                r.texgen_ms_median,
-                r.ratio_to_bare,
-                r.ratio_to_static_em,
-                r.compositing_invocations_per_pixel
-                    .map_or("-".into(), |v| format!("{v:.2}"))
-            );
-        }
-        if let Some(r) = &self.room_pass {
-            out += &format!(
-                "room pass: inferred {:.2} ms, analytic {:.2} ms ({:.3}x the analytic)\n",
-                r.inferred_ms, r.analytic_ms, r.ratio
-            );
-        }
-        out
-    }
-}
-
 /// How long to measure, and where the maps come from.
 #[derive(Clone, Debug)]
 pub struct BenchOptions {
@@ -191,6 +95,21 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
         ..
     } = Session::open(place)?;
     let ctx = compile_context(place, &scene, &out);
+    let elevation = opts
+        .elevation_deg
+        .unwrap_or_else(|| between_rings(&scene.orbit));
+    if scene.objects.iter().any(|o| o.glass.is_some()) {
+        let report = glass::bench(&ctx, &device, opts, renderer, elevation)?;
+        crate::util::files::write_json(&out.join("bench.json"), &report)?;
+        return Ok(report);
+    }
+    // Before any compiling: the variants draw reflectors' maps.
+    if !scene.objects.iter().any(|o| o.em.is_some()) {
+        anyhow::bail!(
+            "{}: nothing to bench: no reflective object has [objects.em] settings and no object is glass",
+            scene.source.display()
+        );
+    }
     let (width, height) = place.size;
     let variants = variants();
     let (mut renderers, which) = renderers_for(&ctx, &device, opts, &variants, renderer)?;
@@ -198,9 +117,6 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
     let per_view = opts.frames_per_view.max(1);
     let mut logs: Vec<PerfLog> = variants.iter().map(|_| PerfLog::default()).collect();
     let progress = indicatif::ProgressBar::new(u64::from(2 * views * per_view));
-    let elevation = opts
-        .elevation_deg
-        .unwrap_or_else(|| between_rings(&scene.orbit));
     let run = Run {
         orbit: &scene.orbit,
         elevation,
@@ -226,6 +142,7 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
         .collect();
     let room_pass = room_pass(&passes);
     let report = BenchReport {
+        kind: BenchKind::Reflectors,
         views,
         elevation_deg: elevation,
         frames_per_view: per_view,
@@ -393,85 +310,5 @@ fn mode(d: &Draws) -> FrameMode {
         Draws::StaticEm => FrameMode::StaticEm,
         Draws::Pem(_) => FrameMode::Pem,
         Draws::Rem => FrameMode::Rem,
-    }
-}
-
-/// The table's rows: ratios to the bare and static-EM frames (rows 0, 1),
-/// compositing invocations per covered pixel (the last row's at its own
-/// views).
-fn rows(reports: Vec<PerfReport>, covered: f64, moving_covered: f64) -> Vec<BenchRow> {
-    let bare_ms = reports[0].frame_ms_median;
-    let static_ms = reports[1].frame_ms_median;
-    let last = reports.len().saturating_sub(1);
-    reports
-        .into_iter()
-        .enumerate()
-        .map(|(i, r)| {
-            let covered = if i == last { moving_covered } else { covered };
-            let invocations: u64 = r
-                .passes
-                .iter()
-                .filter(|p| COMPOSITING.contains(&p.name.as_str()))
-                .map(|p| p.fragment_invocations)
-                .sum();
-            BenchRow {
-                name: r.mode.clone(),
-                frame_ms_median: r.frame_ms_median,
-                fps: 1e3 / r.frame_ms_median,
-                submit_to_fence_ms_median: r.cpu.submit_to_fence_ms_median,
-                texgen_ms_median: r.cpu.texgen_ms_median,
-                ratio_to_bare: r.frame_ms_median / bare_ms,
-                ratio_to_static_em: r.frame_ms_median / static_ms,
-                compositing_invocations_per_pixel: (invocations > 0 && covered > 0.0)
-                    .then(|| invocations as f64 / covered),
-                report: r,
-            }
-        })
-        .collect()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn pass(name: &str, ms: f64) -> PassReport {
-        PassReport {
-            name: name.into(),
-            gpu_ms_median: ms,
-            gpu_ms_max: ms,
-            fragment_invocations: 0,
-        }
-    }
-
-    #[test]
-    fn the_room_pass_compares_the_two_default_rows() {
-        let inferred = [pass("pem_gbuffer", 7.0), pass("room", 9.0)];
-        let analytic = [pass("room", 10.0), pass("pem_composite", 9.0)];
-        let other = [pass("room", 1.0)];
-        let rows: Vec<(&str, &[PassReport])> = vec![
-            ("static-em", &other),
-            ("default, analytic room", &analytic),
-            ("default", &inferred),
-        ];
-        assert_eq!(
-            room_pass(&rows),
-            Some(RoomPass {
-                inferred_ms: 9.0,
-                analytic_ms: 10.0,
-                ratio: 0.9
-            })
-        );
-        // A missing row or pass, or a zero analytic time: nothing to compare.
-        assert_eq!(room_pass(&rows[..2]), None);
-        let no_room = [pass("bare", 3.0)];
-        assert_eq!(
-            room_pass(&[("default", &inferred), ("default, analytic room", &no_room)]),
-            None
-        );
-        let zero = [pass("room", 0.0)];
-        assert_eq!(
-            room_pass(&[("default", &inferred), ("default, analytic room", &zero)]),
-            None
-        );
     }
 }

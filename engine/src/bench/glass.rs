@@ -1,0 +1,166 @@
+//! `engine bench` on a scene with a glass object: the hybrid frame at
+//! τ = 3, 5 and 10 as the main job draws it (per-sample shell maps where
+//! the scene has them, composited deferred), τ = 10 drawn forward
+//! (`--compositing multipass`) and from the one traced shell, beside the
+//! bare frame and the static refraction EM — interleaved view by view in
+//! one process, so the machine's drift hits every row alike. Glass frames
+//! are bound by the CPU's vertex ray paths as much as by the device, so
+//! each row reports the wait for the paths (traced ahead while the
+//! previous frame renders) beside the glass passes' device time.
+//!
+//! Each view draws one row's frames in a run, not one frame of every row
+//! in turn: a row's next frame's paths run on a worker while its frame
+//! renders, and would otherwise run on into the other rows' frames. A
+//! run's last frame announces no next view, so no worker outlives it (the
+//! next run's first frame traces its paths in line: a warm-up frame).
+
+use super::{BenchKind, BenchOptions, BenchReport, rows};
+use crate::compile::CompileContext;
+use crate::options::{Mode, PemOptions, TraceFrames};
+use crate::pem::settings::Compositing;
+use crate::perf::{PerfLog, PerfReport};
+use crate::renderer::{FrameMode, Renderer};
+use anyhow::Result;
+use std::time::Instant;
+
+/// The rows, in table order: name, mode, τ, compositing, traced shell.
+const ROWS: [(&str, Mode, f32, Compositing, bool); 7] = [
+    ("bare", Mode::Bare, 0.0, Compositing::Deferred, false),
+    (
+        "static-em",
+        Mode::StaticEm,
+        0.0,
+        Compositing::Deferred,
+        false,
+    ),
+    (
+        "hybrid, tau 3",
+        Mode::Hybrid,
+        3.0,
+        Compositing::Deferred,
+        false,
+    ),
+    (
+        "hybrid, tau 5",
+        Mode::Hybrid,
+        5.0,
+        Compositing::Deferred,
+        false,
+    ),
+    (
+        "hybrid, tau 10",
+        Mode::Hybrid,
+        10.0,
+        Compositing::Deferred,
+        false,
+    ),
+    (
+        "hybrid, tau 10, multipass",
+        Mode::Hybrid,
+        10.0,
+        Compositing::Multipass,
+        false,
+    ),
+    (
+        "hybrid, tau 10, traced shell",
+        Mode::Hybrid,
+        10.0,
+        Compositing::Deferred,
+        true,
+    ),
+];
+
+/// Every row at `views` views between orbit samples at `elevation`
+/// degrees; `first` draws the bare and static-EM rows.
+pub fn bench(
+    ctx: &CompileContext,
+    device: &crate::backend::Device,
+    opts: &BenchOptions,
+    first: Renderer,
+    elevation: f32,
+) -> Result<BenchReport> {
+    let scene = ctx.scene;
+    let mut renderers = renderers(ctx, device, opts, first)?;
+    let views = 8u32;
+    let per_view = opts.frames_per_view.max(1);
+    let mut logs: Vec<PerfLog> = ROWS.iter().map(|_| PerfLog::default()).collect();
+    let progress = indicatif::ProgressBar::new(u64::from(views * per_view) * ROWS.len() as u64);
+    let o = &scene.orbit;
+    let view_eye = |v: u32| {
+        let k = ((v as f32 + 0.5) / views as f32 * o.samples.saturating_sub(1) as f32) as u32;
+        o.eye(o.between_deg(k, 0.5), elevation)
+    };
+    let frames = opts.warmup + per_view;
+    for v in 0..views {
+        let eye = view_eye(v);
+        for (index, row) in ROWS.iter().enumerate() {
+            let r = &mut renderers[index.saturating_sub(1)];
+            for i in 0..frames {
+                let start = Instant::now();
+                // Frames in flight, as in playback, within the run.
+                if i + 1 < frames {
+                    r.set_next_view(eye, o.view(eye));
+                }
+                let stats = r.frame(frame_mode(row.1), eye, o.view(eye))?;
+                if i >= opts.warmup {
+                    let ms = start.elapsed().as_secs_f64() * 1e3;
+                    logs[index].record(ms, &stats.passes, stats.cpu);
+                    progress.inc(1);
+                }
+            }
+        }
+    }
+    progress.finish_and_clear();
+    let reports: Vec<PerfReport> = (logs.into_iter().zip(ROWS))
+        .map(|(log, row)| log.report(&device.name, &scene.name, row.0, ctx.size.into(), &[]))
+        .collect();
+    Ok(BenchReport {
+        kind: BenchKind::Glass,
+        views,
+        elevation_deg: elevation,
+        frames_per_view: per_view,
+        covered_pixels: 0,
+        moving_covered_pixels: 0,
+        rows: rows(reports, 0.0, 0.0),
+        room_pass: None,
+    })
+}
+
+/// Row `i` draws with renderer `i − 1` (the bare and static-EM rows share
+/// the first): each hybrid row has its own τ, compositing and shells.
+fn renderers(
+    ctx: &CompileContext,
+    device: &crate::backend::Device,
+    opts: &BenchOptions,
+    mut first: Renderer,
+) -> Result<Vec<Renderer>> {
+    let (width, height) = ctx.size;
+    let setup = |r: &mut Renderer, (mode, tau, compositing, traced_shell)| {
+        let pem = PemOptions {
+            tau: (tau > 0.0).then_some(tau),
+            compositing,
+            traced_shell,
+            ..opts.pem.clone()
+        };
+        crate::play::setup_mode(ctx, r, mode, &pem, TraceFrames::default()).map(|_| ())
+    };
+    setup(
+        &mut first,
+        (Mode::StaticEm, 0.0, Compositing::Deferred, false),
+    )?;
+    let mut renderers = vec![first];
+    for &(_, mode, tau, compositing, traced_shell) in &ROWS[2..] {
+        let mut r = Renderer::new(device, ctx.scene, width, height)?;
+        setup(&mut r, (mode, tau, compositing, traced_shell))?;
+        renderers.push(r);
+    }
+    Ok(renderers)
+}
+
+fn frame_mode(mode: Mode) -> FrameMode {
+    match mode {
+        Mode::Bare => FrameMode::Bare,
+        Mode::StaticEm => FrameMode::StaticEm,
+        _ => FrameMode::Hybrid,
+    }
+}

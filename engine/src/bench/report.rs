@@ -1,0 +1,222 @@
+//! What `engine bench` reports: one row per variant (frame time, the
+//! ratios to the bare and static-EM frames, the compositing overdraw or
+//! the glass passes' time), the room passes compared, and the table.
+
+use crate::perf::{PassReport, PerfReport};
+use serde::Serialize;
+
+/// Passes whose fragment invocations count as compositing the reflectors.
+const COMPOSITING: [&str; 3] = ["pem_composite", "pem", "pem_blend"];
+
+#[derive(Serialize)]
+pub struct BenchRow {
+    pub name: String,
+    pub frame_ms_median: f64,
+    pub fps: f64,
+    pub submit_to_fence_ms_median: f64,
+    pub texgen_ms_median: f64,
+    /// Median frame over the bare frame's median.
+    pub ratio_to_bare: f64,
+    /// Median frame over the static-EM frame's median.
+    pub ratio_to_static_em: f64,
+    /// Fragment-shader invocations of the compositing passes (`pem_composite`,
+    /// or `pem` + `pem_blend` multipass) per covered reflector pixel.
+    pub compositing_invocations_per_pixel: Option<f64>,
+    /// Device time of the glass passes (`glass_gbuffer` + `glass`), median
+    /// of each summed per pass; glass scenes only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub glass_ms_median: Option<f64>,
+    pub report: PerfReport,
+}
+
+/// What a bench measured: reflectors (PEM and the other methods) or glass.
+#[derive(Serialize, Clone, Copy, Debug, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum BenchKind {
+    Reflectors,
+    Glass,
+}
+
+#[derive(Serialize)]
+pub struct BenchReport {
+    pub kind: BenchKind,
+    pub views: u32,
+    /// The views' elevation above the orbit plane, degrees.
+    pub elevation_deg: f32,
+    pub frames_per_view: u32,
+    /// Reflector pixels covered at the views (median over the views).
+    pub covered_pixels: u64,
+    /// The same at the last row's views (it moves along the samples).
+    pub moving_covered_pixels: u64,
+    pub rows: Vec<BenchRow>,
+    /// The inferred room pass against the analytic one, from the default
+    /// rows with each room (the whole-frame issue's cost goal).
+    pub room_pass: Option<RoomPass>,
+}
+
+/// One run's room passes, median GPU times.
+#[derive(Serialize, Debug, PartialEq)]
+pub struct RoomPass {
+    pub inferred_ms: f64,
+    pub analytic_ms: f64,
+    /// Inferred over analytic.
+    pub ratio: f64,
+}
+
+/// The `room` pass of the rows named `default` and `default, analytic
+/// room`, when both ran it.
+pub fn room_pass(rows: &[(&str, &[PassReport])]) -> Option<RoomPass> {
+    let room = |name: &str| {
+        let (_, passes) = rows.iter().find(|(n, _)| *n == name)?;
+        let p = passes.iter().find(|p| p.name == "room")?;
+        Some(p.gpu_ms_median)
+    };
+    let (inferred_ms, analytic_ms) = (room("default")?, room("default, analytic room")?);
+    (analytic_ms > 0.0).then(|| RoomPass {
+        inferred_ms,
+        analytic_ms,
+        ratio: inferred_ms / analytic_ms,
+    })
+}
+
+impl BenchReport {
+    pub fn table(&self) -> String {
+        let (what, cpu, last) = match self.kind {
+            BenchKind::Reflectors => (
+                format!(
+                    "maps resident but in the last row; {} reflector pixels",
+                    self.covered_pixels
+                ),
+                "texgen",
+                "inv./pixel",
+            ),
+            // The CPU column: the wait for the next frame's ray paths.
+            BenchKind::Glass => ("CPU paths traced ahead".into(), "paths", "glass ms"),
+        };
+        let mut out = format!(
+            "{} views between samples at {:+.1}° x {} frames; {what}\n{:<28} {:>9} {:>7} {:>9} {:>8} {:>7} {:>9} {:>10}\n",
+            self.views,
+            self.elevation_deg,
+            self.frames_per_view,
+            "variant",
+            "frame ms",
+            "fps",
+            "GPU ms",
+            cpu,
+            "x bare",
+            "x static",
+            last
+        );
+        for r in &self.rows {
+            let last = match self.kind {
+                BenchKind::Reflectors => r.compositing_invocations_per_pixel,
+                BenchKind::Glass => r.glass_ms_median,
+            };
+            out += &format!(
+                "{:<28} {:>9.2} {:>7.1} {:>9.2} {:>8.3} {:>7.2} {:>9.2} {:>10}\n",
+                r.name,
+                r.frame_ms_median,
+                r.fps,
+                r.submit_to_fence_ms_median,
+                r.texgen_ms_median,
+                r.ratio_to_bare,
+                r.ratio_to_static_em,
+                last.map_or("-".into(), |v| format!("{v:.2}"))
+            );
+        }
+        if let Some(r) = &self.room_pass {
+            out += &format!(
+                "room pass: inferred {:.2} ms, analytic {:.2} ms ({:.3}x the analytic)\n",
+                r.inferred_ms, r.analytic_ms, r.ratio
+            );
+        }
+        out
+    }
+}
+
+/// The glass passes' summed median device time, if the frame drew any.
+fn glass_ms(passes: &[PassReport]) -> Option<f64> {
+    let glass = passes.iter().filter(|p| p.name.starts_with("glass"));
+    glass.map(|p| p.gpu_ms_median).reduce(|a, b| a + b)
+}
+
+/// The table's rows: ratios to the bare and static-EM frames (rows 0, 1),
+/// compositing invocations per covered pixel (the last row's at its own
+/// views).
+pub(super) fn rows(reports: Vec<PerfReport>, covered: f64, moving_covered: f64) -> Vec<BenchRow> {
+    let bare_ms = reports[0].frame_ms_median;
+    let static_ms = reports[1].frame_ms_median;
+    let last = reports.len().saturating_sub(1);
+    reports
+        .into_iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let covered = if i == last { moving_covered } else { covered };
+            let invocations: u64 = r
+                .passes
+                .iter()
+                .filter(|p| COMPOSITING.contains(&p.name.as_str()))
+                .map(|p| p.fragment_invocations)
+                .sum();
+            BenchRow {
+                name: r.mode.clone(),
+                frame_ms_median: r.frame_ms_median,
+                fps: 1e3 / r.frame_ms_median,
+                submit_to_fence_ms_median: r.cpu.submit_to_fence_ms_median,
+                texgen_ms_median: r.cpu.texgen_ms_median,
+                ratio_to_bare: r.frame_ms_median / bare_ms,
+                ratio_to_static_em: r.frame_ms_median / static_ms,
+                compositing_invocations_per_pixel: (invocations > 0 && covered > 0.0)
+                    .then(|| invocations as f64 / covered),
+                glass_ms_median: glass_ms(&r.passes),
+                report: r,
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pass(name: &str, ms: f64) -> PassReport {
+        PassReport {
+            name: name.into(),
+            gpu_ms_median: ms,
+            gpu_ms_max: ms,
+            fragment_invocations: 0,
+        }
+    }
+
+    #[test]
+    fn the_room_pass_compares_the_two_default_rows() {
+        let inferred = [pass("pem_gbuffer", 7.0), pass("room", 9.0)];
+        let analytic = [pass("room", 10.0), pass("pem_composite", 9.0)];
+        let other = [pass("room", 1.0)];
+        let rows: Vec<(&str, &[PassReport])> = vec![
+            ("static-em", &other),
+            ("default, analytic room", &analytic),
+            ("default", &inferred),
+        ];
+        assert_eq!(
+            room_pass(&rows),
+            Some(RoomPass {
+                inferred_ms: 9.0,
+                analytic_ms: 10.0,
+                ratio: 0.9
+            })
+        );
+        // A missing row or pass, or a zero analytic time: nothing to compare.
+        assert_eq!(room_pass(&rows[..2]), None);
+        let no_room = [pass("bare", 3.0)];
+        assert_eq!(
+            room_pass(&[("default", &inferred), ("default, analytic room", &no_room)]),
+            None
+        );
+        let zero = [pass("room", 0.0)];
+        assert_eq!(
+            room_pass(&[("default", &inferred), ("default, analytic room", &zero)]),
+            None
+        );
+    }
+}
