@@ -387,7 +387,7 @@ fn measure(
         1
     } else {
         renderer.set_next_view(eye, scene.orbit.view(eye));
-        source.frame(renderer, scene, eye)?; // maps resident, shaders warm
+        source.draw(renderer, scene, eye)?; // maps resident, shaders warm
         renderer.settle(); // no decoding ahead while timing
         repeats
     };

@@ -365,7 +365,7 @@ impl Probe<'_, '_> {
         let reference = self.references.get_all(view, self.reflectors)?;
         let eye = view.eye(self.scene);
         // The first frame brings the samples' maps in; the second is scored.
-        self.source.frame(self.renderer, self.scene, eye)?;
+        self.source.draw(self.renderer, self.scene, eye)?;
         self.renderer.settle();
         let pixels = self.source.frame(self.renderer, self.scene, eye)?.1;
         let (width, height) = self.renderer.size();
