@@ -212,17 +212,9 @@ pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<Played> {
             // Frames in flight: the next view's CPU work overlaps this frame.
             renderer.set_next_view(eye_of(i + 1), scene.orbit.view(eye_of(i + 1)));
         }
-        let (stats, pixels) = match opts.capture {
-            true => source
-                .frame(renderer, scene, eye_of(i))
-                .map(|(s, p)| (s, Some(p)))?,
-            false => (source.draw(renderer, scene, eye_of(i))?, None),
-        };
-        log.record(
-            start.elapsed().as_secs_f64() * 1e3,
-            &stats.passes,
-            stats.cpu,
-        );
+        let (stats, pixels) = source.frame_if(renderer, scene, eye_of(i), opts.capture)?;
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        log.record(ms, &stats.passes, stats.cpu);
         if let Some(pixels) = pixels
             && !writer.send(i, pixels)
         {
@@ -358,6 +350,21 @@ impl FrameSource<'_> {
         match self {
             FrameSource::Raster(mode) => Ok(renderer.frame(*mode, eye, scene.orbit.view(eye))?),
             FrameSource::Trace(..) => Ok(self.frame(renderer, scene, eye)?.0),
+        }
+    }
+
+    /// [`FrameSource::frame`] when the pixels are kept (`keep`), else
+    /// [`FrameSource::draw`].
+    pub fn frame_if(
+        &mut self,
+        renderer: &mut Renderer,
+        scene: &Scene,
+        eye: glam::Vec3,
+        keep: bool,
+    ) -> Result<(FrameStats, Option<Vec<[f32; 4]>>)> {
+        match keep {
+            true => (self.frame(renderer, scene, eye)).map(|(s, p)| (s, Some(p))),
+            false => Ok((self.draw(renderer, scene, eye)?, None)),
         }
     }
 

@@ -209,6 +209,25 @@ fn assert_glass_bench(scene: &str, out: &Path) {
     assert!(!passes(5).contains(&"glass_gbuffer"), "{:?}", passes(5));
     assert!(!passes(6).contains(&"glass_gbuffer"), "{:?}", passes(6));
     assert!(log.contains("glass ms"), "{log}");
+    assert!(bench.get("covered_pixels").is_none(), "{bench}");
+    // The rows set τ and the shells themselves: flags that would are refused.
+    let flagged = engine(&[
+        "bench",
+        "--scene",
+        scene,
+        "--tau",
+        "5",
+        "--traced-shell",
+        "--out",
+        out.to_str().expect("utf-8 path"),
+    ]);
+    let stderr = String::from_utf8_lossy(&flagged.stderr);
+    assert!(!flagged.status.success() && !stderr.contains("panicked"), "{stderr}");
+    assert!(
+        stderr.lines().any(|l| l.starts_with("error:")
+            && l.contains("--tau, --traced-shell")),
+        "{stderr}"
+    );
 }
 
 /// The passes `out/perf.json` times, in order (a hybrid run's).

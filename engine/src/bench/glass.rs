@@ -10,9 +10,11 @@
 //!
 //! Each view draws one row's frames in a run, not one frame of every row
 //! in turn: a row's next frame's paths run on a worker while its frame
-//! renders, and would otherwise run on into the other rows' frames. A
-//! run's last frame announces no next view, so no worker outlives it (the
-//! next run's first frame traces its paths in line: a warm-up frame).
+//! renders, and would otherwise run on into the other rows' frames. Every
+//! frame of a run announces the next (the same view), as playback does,
+//! so its last frame too shares the cores with a worker; after the run,
+//! untimed, that worker is waited for and its paths dropped (the next
+//! run's first frame traces in line: a warm-up frame).
 
 use super::{BenchKind, BenchOptions, BenchReport, rows};
 use crate::compile::CompileContext;
@@ -80,50 +82,97 @@ pub fn bench(
     elevation: f32,
 ) -> Result<BenchReport> {
     let scene = ctx.scene;
+    check_flags(&opts.pem)?;
+    if scene.objects.iter().any(|o| o.em.is_some()) {
+        eprintln!(
+            "{}: benching the glass; its reflectors draw static EMs in every row (a scene without glass benches reflectors)",
+            scene.name
+        );
+    }
     let mut renderers = renderers(ctx, device, opts, first)?;
+    let rows_drawn = drawn_rows(&renderers);
     let views = 8u32;
     let per_view = opts.frames_per_view.max(1);
-    let mut logs: Vec<PerfLog> = ROWS.iter().map(|_| PerfLog::default()).collect();
-    let progress = indicatif::ProgressBar::new(u64::from(views * per_view) * ROWS.len() as u64);
+    let mut logs: Vec<PerfLog> = rows_drawn.iter().map(|_| PerfLog::default()).collect();
+    let progress =
+        indicatif::ProgressBar::new(u64::from(views * per_view) * rows_drawn.len() as u64);
     let o = &scene.orbit;
     let view_eye = |v: u32| {
         let k = ((v as f32 + 0.5) / views as f32 * o.samples.saturating_sub(1) as f32) as u32;
         o.eye(o.between_deg(k, 0.5), elevation)
     };
-    let frames = opts.warmup + per_view;
+    // At least one warm-up frame: a run's first frame traces its paths in
+    // line, which playback never does.
+    let warmup = opts.warmup.max(1);
     for v in 0..views {
         let eye = view_eye(v);
-        for (index, row) in ROWS.iter().enumerate() {
+        for (log, &index) in logs.iter_mut().zip(&rows_drawn) {
             let r = &mut renderers[index.saturating_sub(1)];
-            for i in 0..frames {
+            for i in 0..warmup + per_view {
                 let start = Instant::now();
-                // Frames in flight, as in playback, within the run.
-                if i + 1 < frames {
-                    r.set_next_view(eye, o.view(eye));
-                }
-                let stats = r.frame(frame_mode(row.1), eye, o.view(eye))?;
-                if i >= opts.warmup {
-                    let ms = start.elapsed().as_secs_f64() * 1e3;
-                    logs[index].record(ms, &stats.passes, stats.cpu);
+                r.set_next_view(eye, o.view(eye));
+                let stats = r.frame(frame_mode(ROWS[index].1), eye, o.view(eye))?;
+                if i >= warmup {
+                    log.record(
+                        start.elapsed().as_secs_f64() * 1e3,
+                        &stats.passes,
+                        stats.cpu,
+                    );
                     progress.inc(1);
                 }
             }
+            r.drop_glass_ahead();
         }
     }
     progress.finish_and_clear();
-    let reports: Vec<PerfReport> = (logs.into_iter().zip(ROWS))
-        .map(|(log, row)| log.report(&device.name, &scene.name, row.0, ctx.size.into(), &[]))
+    let reports: Vec<PerfReport> = (logs.into_iter().zip(rows_drawn))
+        .map(|(log, i)| log.report(&device.name, &scene.name, ROWS[i].0, ctx.size.into(), &[]))
         .collect();
     Ok(BenchReport {
         kind: BenchKind::Glass,
         views,
         elevation_deg: elevation,
         frames_per_view: per_view,
-        covered_pixels: 0,
-        moving_covered_pixels: 0,
+        covered_pixels: None,
+        moving_covered_pixels: None,
         rows: rows(reports, 0.0, 0.0),
         room_pass: None,
     })
+}
+
+/// The rows a bench draws: all, but the forward row only where per-sample
+/// maps blend (elsewhere the hybrid frame is drawn forward anyway, and
+/// the row would repeat the τ = 10 one).
+fn drawn_rows(renderers: &[Renderer]) -> Vec<usize> {
+    let blends = |i: usize| {
+        (renderers
+            .get(i.saturating_sub(1))
+            .and_then(|r| r.glass.as_ref()))
+        .is_some_and(|g| g.sample_count() > 0)
+    };
+    (0..ROWS.len())
+        .filter(|&i| ROWS[i].3 == Compositing::Deferred || blends(i))
+        .collect()
+}
+
+/// The glass bench sets τ, compositing and the shell maps per row itself:
+/// flags that would set them are refused, not silently overridden.
+fn check_flags(pem: &PemOptions) -> Result<()> {
+    let set: Vec<&str> = [
+        (pem.tau.is_some(), "--tau"),
+        (pem.compositing != Compositing::Deferred, "--compositing"),
+        (pem.traced_shell, "--traced-shell"),
+    ]
+    .into_iter()
+    .filter_map(|(given, flag)| given.then_some(flag))
+    .collect();
+    if !set.is_empty() {
+        anyhow::bail!(
+            "{}: engine bench on a glass scene measures its own rows (τ = 3, 5, 10, forward, traced shell); drop it",
+            set.join(", ")
+        );
+    }
+    Ok(())
 }
 
 /// Row `i` draws with renderer `i − 1` (the bare and static-EM rows share

@@ -146,8 +146,8 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
         views,
         elevation_deg: elevation,
         frames_per_view: per_view,
-        covered_pixels: covered as u64,
-        moving_covered_pixels: moving_covered as u64,
+        covered_pixels: Some(covered as u64),
+        moving_covered_pixels: Some(moving_covered as u64),
         rows,
         room_pass,
     };

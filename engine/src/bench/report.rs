@@ -44,10 +44,13 @@ pub struct BenchReport {
     /// The views' elevation above the orbit plane, degrees.
     pub elevation_deg: f32,
     pub frames_per_view: u32,
-    /// Reflector pixels covered at the views (median over the views).
-    pub covered_pixels: u64,
+    /// Reflector pixels covered at the views (median over the views);
+    /// reflector benches only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub covered_pixels: Option<u64>,
     /// The same at the last row's views (it moves along the samples).
-    pub moving_covered_pixels: u64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub moving_covered_pixels: Option<u64>,
     pub rows: Vec<BenchRow>,
     /// The inferred room pass against the analytic one, from the default
     /// rows with each room (the whole-frame issue's cost goal).
@@ -85,7 +88,7 @@ impl BenchReport {
             BenchKind::Reflectors => (
                 format!(
                     "maps resident but in the last row; {} reflector pixels",
-                    self.covered_pixels
+                    self.covered_pixels.unwrap_or(0)
                 ),
                 "texgen",
                 "inv./pixel",

@@ -58,6 +58,12 @@ impl Ahead {
         Some(Ahead { request, handle })
     }
 
+    /// Waits for the worker and drops what it traced (the view it was
+    /// traced for will not be drawn).
+    pub fn finish(self) {
+        let _ = self.handle.join();
+    }
+
     /// The traced geometry if it was asked for `request`; otherwise (a view
     /// the playback did not predict) waits for the worker and drops it.
     pub fn take(self, request: &PathRequest) -> Option<Tessellation> {

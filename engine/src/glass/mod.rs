@@ -253,6 +253,14 @@ impl GlassPlayer {
         ))
     }
 
+    /// Waits for the next frame's paths, if any are being traced, and
+    /// drops them: no worker outlives the frames that asked for it.
+    pub fn settle(&mut self) {
+        if let Some(ahead) = self.ahead.take() {
+            ahead.finish();
+        }
+    }
+
     /// The passes drawing what [`GlassPlayer::prepare`] uploaded.
     pub fn passes<'a>(&'a self, target: Target<'a>, view_proj: Mat4) -> Vec<Box<dyn Pass + 'a>> {
         let source = match (&self.samples, self.blend, &self.layers, self.layered_frame) {
@@ -320,6 +328,7 @@ impl GlassPlayer {
 
     /// Back to the one map for every view (no per-sample maps, no layers).
     pub fn clear_samples(&mut self) {
+        self.geometry.clear_samples();
         self.samples = None;
         self.blend = None;
         self.layers = None;

@@ -135,6 +135,14 @@ impl GlassGeometry {
         Ok(())
     }
 
+    /// Drops the pipelines, sets and G-buffer over per-sample maps and
+    /// layers (their images are being let go).
+    pub fn clear_samples(&mut self) {
+        self.blend = None;
+        self.deferred = None;
+        self.layers = None;
+    }
+
     /// Makes the layered pipelines, reading the cube-map array `layers`.
     pub fn set_layers(&mut self, layers: &crate::backend::Image) -> GpuResult<()> {
         let make = |names, stream| -> GpuResult<(Pipeline, vk::DescriptorSet)> {

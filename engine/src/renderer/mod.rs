@@ -238,6 +238,15 @@ impl Renderer {
         }
     }
 
+    /// Waits for the glass's paths traced for an announced next view and
+    /// drops them (that view will not be drawn next): `engine bench` ends
+    /// each row's run with it, so no worker runs into another row.
+    pub fn drop_glass_ahead(&mut self) {
+        if let Some(g) = self.glass.as_mut() {
+            g.settle();
+        }
+    }
+
     /// The samples a PEM frame from `eye` draws (None without PEM set-up).
     pub fn pem_blend(&self, eye: Vec3) -> Option<SampleBlend> {
         Some(self.pem.as_ref()?.blend(eye))
