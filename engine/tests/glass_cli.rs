@@ -222,10 +222,14 @@ fn assert_glass_bench(scene: &str, out: &Path) {
         out.to_str().expect("utf-8 path"),
     ]);
     let stderr = String::from_utf8_lossy(&flagged.stderr);
-    assert!(!flagged.status.success() && !stderr.contains("panicked"), "{stderr}");
     assert!(
-        stderr.lines().any(|l| l.starts_with("error:")
-            && l.contains("--tau, --traced-shell")),
+        !flagged.status.success() && !stderr.contains("panicked"),
+        "{stderr}"
+    );
+    assert!(
+        stderr
+            .lines()
+            .any(|l| l.starts_with("error:") && l.contains("--tau, --traced-shell")),
         "{stderr}"
     );
 }

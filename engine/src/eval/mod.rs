@@ -10,6 +10,7 @@ pub mod pictures;
 pub mod plot;
 pub mod reference;
 pub mod relight;
+mod row_scores;
 pub mod rows;
 pub mod run;
 pub mod table;

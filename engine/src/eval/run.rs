@@ -7,13 +7,14 @@ use super::metrics;
 use super::pictures::side_by_side;
 use super::reference::{ReferenceImage, References, View as RefView};
 use super::relight::{RELIGHT_ROW, RelightOptions, RelightReport};
+use super::row_scores::{table_row, with_facts};
 use super::rows::{Row, rows_for};
-use super::table::{AboveScore, EvalRow, EvalTable, ViewCounts};
+use super::table::EvalTable;
 use super::views::{Category, View, views};
-use crate::options::{Mode, RunPlace};
+use crate::options::RunPlace;
 use crate::play::{FrameSource, Session, compile_context, setup_mode};
 use crate::relight::GridSettings;
-use crate::util::stats::{mean, median, percentile};
+use crate::util::stats::median;
 use anyhow::{Result, bail};
 use inference::trace::TraceSettings;
 use std::path::PathBuf;
@@ -42,14 +43,14 @@ pub struct EvalOptions {
 }
 
 /// What one row measured on one view.
-struct ViewResult {
-    category: Category,
-    elevation_deg: f32,
-    psnr_db: f64,
-    flip: f64,
+pub(super) struct ViewResult {
+    pub(super) category: Category,
+    pub(super) elevation_deg: f32,
+    pub(super) psnr_db: f64,
+    pub(super) flip: f64,
     /// Every pixel, as the PNG shows it.
-    frame: metrics::FrameScores,
-    frame_ms: f64,
+    pub(super) frame: metrics::FrameScores,
+    pub(super) frame_ms: f64,
 }
 
 /// Runs the rows of `opts` in `place` (whose output folder holds the
@@ -100,38 +101,12 @@ pub fn eval(place: &RunPlace, opts: &EvalOptions) -> Result<String> {
                 continue;
             }
         };
-        // Glass: the per-sample shell maps' bytes where it plays them.
-        let glass_samples = (row.mode == Mode::Hybrid)
-            .then(|| {
-                renderer
-                    .glass
-                    .as_ref()
-                    .map_or(0, |g| g.sample_count() as u32)
-            })
-            .filter(|&n| n > 0);
-        let map_bytes = match row.mode {
-            Mode::Rem | Mode::LayeredPem | Mode::SpherePem | Mode::Ptm => renderer.map_bytes,
-            Mode::Hybrid => glass_samples.and(renderer.map_bytes),
-            _ => None,
-        };
         let (results, frames) = run.measure_row(&mut source, &mut renderer, &scene, &progress)?;
         if !row.label.contains(' ') {
             pictures.push((row.label.clone(), frames));
         }
-        let samples = matches!(row.mode, Mode::LayeredPem | Mode::SpherePem | Mode::Ptm)
-            .then(|| scene.orbit.sample_count())
-            .or(glass_samples);
-        let compile_minutes = samples.and(renderer.map_compile_minutes);
-        let shell_layers = (row.mode == Mode::Hybrid)
-            .then(|| renderer.glass.as_ref().map(|g| g.layer_count()))
-            .flatten();
-        table_rows.push(EvalRow {
-            map_bytes,
-            samples,
-            shell_layers,
-            compile_minutes,
-            ..table_row(row, &results, opts.views)
-        });
+        let line = table_row(row, &results, opts.views);
+        table_rows.push(with_facts(line, row, &renderer, &scene));
     }
     progress.finish_and_clear();
     super::noise::attach(&mut table_rows);
@@ -421,80 +396,4 @@ fn measure(
         frame_ms: median(&times),
     };
     Ok((result, pixels))
-}
-
-/// A row of the table: each kind of view's mean scores, the frame times.
-fn table_row(row: &Row, results: &[ViewResult], views: u32) -> EvalRow {
-    let kind = |c: Category, f: fn(&ViewResult) -> f64| {
-        mean(
-            &results
-                .iter()
-                .filter(|r| r.category == c)
-                .map(f)
-                .collect::<Vec<_>>(),
-        )
-    };
-    let times: Vec<f64> = results.iter().map(|r| r.frame_ms).collect();
-    let mut elevations: Vec<f32> = results
-        .iter()
-        .filter(|r| r.category == Category::Above)
-        .map(|r| r.elevation_deg)
-        .collect();
-    elevations.dedup();
-    let at = |e: f32, f: fn(&ViewResult) -> f64| {
-        mean(
-            &results
-                .iter()
-                .filter(|r| r.category == Category::Above && r.elevation_deg == e)
-                .map(f)
-                .collect::<Vec<_>>(),
-        )
-    };
-    let above: Vec<AboveScore> = elevations
-        .iter()
-        .map(|&e| AboveScore {
-            elevation_deg: e,
-            psnr_db: at(e, |r| r.psnr_db),
-            flip: at(e, |r| r.flip),
-            psnr_frame_db: Some(at(e, |r| r.frame.psnr_db)),
-            flip_frame: Some(at(e, |r| r.frame.flip)),
-        })
-        .collect();
-    let first = |f: fn(&AboveScore) -> f64| above.first().map_or(f64::NAN, f);
-    // Whole-frame scores above the plane: the first elevation, as *_above.
-    let frame_above = |f: fn(&ViewResult) -> f64| elevations.first().map(|&e| at(e, f));
-    EvalRow {
-        mode: row
-            .label
-            .split(' ')
-            .next()
-            .unwrap_or(&row.label)
-            .to_string(),
-        settings: row.settings(),
-        psnr_on_db: kind(Category::On, |r| r.psnr_db),
-        psnr_between_db: kind(Category::Between, |r| r.psnr_db),
-        psnr_above_db: first(|a| a.psnr_db),
-        flip_on: kind(Category::On, |r| r.flip),
-        flip_between: kind(Category::Between, |r| r.flip),
-        flip_above: first(|a| a.flip),
-        psnr_frame_on_db: Some(kind(Category::On, |r| r.frame.psnr_db)),
-        psnr_frame_between_db: Some(kind(Category::Between, |r| r.frame.psnr_db)),
-        psnr_frame_above_db: frame_above(|r| r.frame.psnr_db),
-        flip_frame_on: Some(kind(Category::On, |r| r.frame.flip)),
-        flip_frame_between: Some(kind(Category::Between, |r| r.frame.flip)),
-        flip_frame_above: frame_above(|r| r.frame.flip),
-        frame_ms: median(&times),
-        frame_ms_p95: Some(percentile(&times, 0.95)),
-        views: Some(ViewCounts {
-            on: views,
-            between: views,
-            above: views,
-        }),
-        map_bytes: None,
-        samples: None,
-        shell_layers: None,
-        compile_minutes: None,
-        above,
-        noise_free: None,
-    }
 }

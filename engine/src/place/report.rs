@@ -230,37 +230,7 @@ impl PlaceReport {
                 placed.samples,
                 scene.orbit.sample_count()
             ),
-            Stop::Budget => {
-                let binding = bytes
-                    .iter()
-                    .chain(&minutes)
-                    .filter(|b| b.samples <= opts.max_samples)
-                    .min_by_key(|b| b.samples);
-                let cost = binding.map_or(String::new(), |b| match b.cost {
-                    Cost::Bytes => format!(
-                        " ({} B at {:.0} B a sample in the dense container)",
-                        b.max, b.per_sample
-                    ),
-                    Cost::Minutes => format!(
-                        " ({} min at {:.2} min a sample in the dense compile)",
-                        b.max, b.per_sample
-                    ),
-                });
-                // A grid's next line may cost more samples than are left.
-                let budget = binding.map_or(opts.max_samples, |b| b.samples);
-                let spent = if opts.placing == Placing::Grid && placed.samples < budget {
-                    format!(
-                        "no further split fits the budget of {budget} samples{cost} ({} placed)",
-                        placed.samples
-                    )
-                } else {
-                    format!("the budget of {} samples{cost} is spent", placed.samples)
-                };
-                format!(
-                    "{spent}; the worst interval ({:.2} dB) is below {} dB",
-                    placed.worst_db, opts.target_db
-                )
-            }
+            Stop::Budget => budget_reason(opts, &[bytes, minutes], &placed),
         };
         let estimated_bytes = bytes.map(|b| b.estimate(placed.samples).round() as u64);
         let estimated_minutes = minutes.map(|b| b.estimate(placed.samples));
@@ -427,4 +397,38 @@ impl PlaceReport {
             out.join("placement.png").display(),
         )
     }
+}
+
+/// Why placing stopped at the budget: the binding budget (the fewest
+/// samples of `budgets`, within `--max-samples`) and what it cost.
+fn budget_reason(opts: &PlaceOptions, budgets: &[Option<Budget>; 2], placed: &Placement) -> String {
+    let binding = budgets
+        .iter()
+        .flatten()
+        .filter(|b| b.samples <= opts.max_samples)
+        .min_by_key(|b| b.samples);
+    let cost = binding.map_or(String::new(), |b| match b.cost {
+        Cost::Bytes => format!(
+            " ({} B at {:.0} B a sample in the dense container)",
+            b.max, b.per_sample
+        ),
+        Cost::Minutes => format!(
+            " ({} min at {:.2} min a sample in the dense compile)",
+            b.max, b.per_sample
+        ),
+    });
+    // A grid's next line may cost more samples than are left.
+    let budget = binding.map_or(opts.max_samples, |b| b.samples);
+    let spent = if opts.placing == Placing::Grid && placed.samples < budget {
+        format!(
+            "no further split fits the budget of {budget} samples{cost} ({} placed)",
+            placed.samples
+        )
+    } else {
+        format!("the budget of {} samples{cost} is spent", placed.samples)
+    };
+    format!(
+        "{spent}; the worst interval ({:.2} dB) is below {} dB",
+        placed.worst_db, opts.target_db
+    )
 }

@@ -45,7 +45,6 @@ pub fn scene_key(scene: &Scene) -> Key {
 
 fn content_key(scene: &Scene) -> Key {
     let c = &scene.camera;
-    let o = &scene.orbit;
     Key::new()
         .with(
             "camera",
@@ -55,38 +54,7 @@ fn content_key(scene: &Scene) -> Key {
                     .for_each(|x| h.f32(x))
             }),
         )
-        .with(
-            "orbit",
-            hash(|h| {
-                h.v3(o.center);
-                [o.radius, o.height, o.start_deg, o.step_deg]
-                    .into_iter()
-                    .for_each(|x| h.f32(x));
-                // With rings, sample k's eye depends on the ring layout
-                // (1D orbits keep their keys).
-                if o.rings > 1 {
-                    h.write_u32(o.samples);
-                    h.write_u32(o.rings);
-                    h.f32(o.ring_step_deg);
-                    // Sparse upper rings renumber their samples.
-                    if o.ring_line_every > 1 {
-                        h.str("ring line every");
-                        h.write_u32(o.ring_line_every);
-                    }
-                }
-                // Explicit lines: every one (even orbits keep their keys).
-                if let Some(lines) = &o.azimuths {
-                    h.str("azimuths");
-                    lines.iter().for_each(|&a| h.f32(a));
-                }
-                // Explicit rings likewise (even rings keep their keys;
-                // one ring at 0° is the 1D orbit).
-                if let (Some(rings), true) = (&o.elevations, o.rings > 1) {
-                    h.str("elevations");
-                    rings.iter().for_each(|&e| h.f32(e));
-                }
-            }),
-        )
+        .with("orbit", hash(|h| orbit(h, &scene.orbit)))
         .with(
             "lights",
             hash(|h| {
@@ -127,6 +95,37 @@ fn content_key(scene: &Scene) -> Key {
                 }
             }),
         )
+}
+
+/// Where the samples' eyes are: the orbit and its ring and line layout.
+fn orbit(h: &mut Fnv, o: &crate::scene::Orbit) {
+    h.v3(o.center);
+    [o.radius, o.height, o.start_deg, o.step_deg]
+        .into_iter()
+        .for_each(|x| h.f32(x));
+    // With rings, sample k's eye depends on the ring layout
+    // (1D orbits keep their keys).
+    if o.rings > 1 {
+        h.write_u32(o.samples);
+        h.write_u32(o.rings);
+        h.f32(o.ring_step_deg);
+        // Sparse upper rings renumber their samples.
+        if o.ring_line_every > 1 {
+            h.str("ring line every");
+            h.write_u32(o.ring_line_every);
+        }
+    }
+    // Explicit lines: every one (even orbits keep their keys).
+    if let Some(lines) = &o.azimuths {
+        h.str("azimuths");
+        lines.iter().for_each(|&a| h.f32(a));
+    }
+    // Explicit rings likewise (even rings keep their keys;
+    // one ring at 0° is the 1D orbit).
+    if let (Some(rings), true) = (&o.elevations, o.rings > 1) {
+        h.str("elevations");
+        rings.iter().for_each(|&e| h.f32(e));
+    }
 }
 
 fn materials(h: &mut Fnv, scene: &Scene) {
