@@ -4,6 +4,7 @@
 
 mod common;
 
+use common::glass::*;
 use common::*;
 use engine::options::Mode;
 use engine::renderer::{FrameMode, Renderer};
@@ -15,38 +16,6 @@ const H: u32 = 120;
 /// Above this PSNR against the room, over the glass's pixels, the glass
 /// has vanished; below it, it shows.
 const VANISHED_DB: f64 = 35.0;
-
-/// The glass scene with `edits` applied, written into `dir` as `name`.
-fn glass_scene(dir: &Path, name: &str, edits: &[(&str, &str)]) -> Scene {
-    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/scenes/glass.toml");
-    let mut text = std::fs::read_to_string(source).expect("glass.toml");
-    for (from, to) in edits {
-        assert!(text.contains(from), "glass.toml lacks {from:?}");
-        text = text.replacen(from, to, 1);
-    }
-    // Plain colours instead of textures: a rasterised cube capture blurs
-    // textures seen at grazing angles (no anisotropic filtering), which is
-    // the capture's limit, not the lookups' this test is about.
-    let colours = ["[0.7, 0.3, 0.2]", "[0.2, 0.6, 0.3]", "[0.3, 0.4, 0.8]"];
-    let mut albedos = colours.iter();
-    text = text
-        .lines()
-        .filter(|l| !l.starts_with("texture ="))
-        .map(
-            |l| match (l.starts_with("albedo ="), albedos.clone().next()) {
-                (true, Some(c)) => {
-                    albedos.next();
-                    format!("albedo = {c}")
-                }
-                _ => l.to_string(),
-            },
-        )
-        .collect::<Vec<_>>()
-        .join("\n");
-    let path = dir.join(format!("{name}.toml"));
-    std::fs::write(&path, text).expect("write scene");
-    Scene::load(path.to_str().expect("utf-8 path")).expect("scene")
-}
 
 /// One frame of `scene` in `mode` from orbit azimuth 20°, 5° up.
 fn frame(scene: &Scene, mode: FrameMode, tau: Option<f32>) -> Vec<[f32; 4]> {
@@ -65,18 +34,6 @@ fn frame(scene: &Scene, mode: FrameMode, tau: Option<f32>) -> Vec<[f32; 4]> {
         assert!(g.last.triangles > 0 && g.last.rays > 0, "{:?}", g.last);
     }
     pixels
-}
-
-/// PSNR over the pixels of `mask`.
-fn masked_psnr(a: &[[f32; 4]], b: &[[f32; 4]], mask: &[bool]) -> f64 {
-    let pick = |x: &[[f32; 4]]| -> Vec<[f32; 4]> {
-        x.iter()
-            .zip(mask)
-            .filter(|(_, m)| **m)
-            .map(|(p, _)| *p)
-            .collect()
-    };
-    engine::compare::psnr(&pick(a), &pick(b))
 }
 
 #[test]
@@ -147,22 +104,6 @@ fn ior_one_glass_vanishes_and_real_glass_shows() {
         "the baseline draws the glass: {drawn:.1} dB"
     );
     assert_no_validation_messages();
-}
-
-/// A shell map of `size`² per face, every texel of every level `rgb`
-/// (f16 RGBA bytes, as the per-sample maps are stored).
-fn constant_map(size: u32, rgb: [f32; 3]) -> Vec<u8> {
-    constant_rgba(size, [rgb[0], rgb[1], rgb[2], 1.0])
-}
-
-/// [`constant_map`] with alpha (premultiplied, as inner layers are stored).
-fn constant_rgba(size: u32, rgba: [f32; 4]) -> Vec<u8> {
-    let texels: u32 = (0..=size.ilog2()).map(|l| 6 * (size >> l).pow(2)).sum();
-    let texel = rgba.map(half::f16::from_f32);
-    (0..texels)
-        .flat_map(|_| texel)
-        .flat_map(half::f16::to_le_bytes)
-        .collect()
 }
 
 #[test]
@@ -384,110 +325,4 @@ fn only_triangles_an_inner_layer_reaches_read_it_and_the_frame_stays() {
         "{} pixels differ (largest {largest}), {red} show the inner layer",
         differ.len()
     );
-}
-
-/// A shell map of `size`² per face whose colour says where a lookup
-/// landed: red the MIP level, green and blue the texel's place on its face
-/// (`swap` exchanges them, for a second sample).
-fn level_coded_map(size: u32, swap: bool) -> Vec<u8> {
-    let levels = size.ilog2();
-    let mut bytes = Vec::new();
-    for level in 0..=levels {
-        let n = size >> level;
-        for _face in 0..6 {
-            for y in 0..n {
-                for x in 0..n {
-                    let (u, v) = ((x as f32 + 0.5) / n as f32, (y as f32 + 0.5) / n as f32);
-                    let (g, b) = if swap { (v, u) } else { (u, v) };
-                    let texel = [level as f32 / levels as f32, g, b, 1.0];
-                    bytes.extend(
-                        texel
-                            .map(half::f16::from_f32)
-                            .iter()
-                            .flat_map(|h| h.to_le_bytes()),
-                    );
-                }
-            }
-        }
-    }
-    bytes
-}
-
-#[test]
-fn deferred_glass_draws_the_forward_frame() {
-    let dir = tempfile::tempdir().expect("temp dir");
-    let scene = glass_scene(
-        dir.path(),
-        "glass",
-        &[("resolution = 256", "resolution = 32")],
-    );
-    let device = validated_device();
-    let render = |maps: Vec<Vec<u8>>, deferred: bool| {
-        let mut renderer = Renderer::new(&device, &scene, W, H).expect("renderer");
-        let shells = engine::glass::samples::SampleShells {
-            azimuths: vec![10.0, 30.0],
-            maps,
-        };
-        // Read when the maps are set.
-        renderer.glass.as_mut().expect("glass player").deferred = deferred;
-        renderer.load_glass_samples(&shells).expect("samples");
-        let eye = scene.orbit.eye(15.0, 5.0);
-        let stats = renderer
-            .frame(FrameMode::Hybrid, eye, scene.orbit.view(eye))
-            .expect("frame");
-        // The path asked for is the path drawn.
-        let gbuffer = stats.passes.iter().any(|p| p.name == "glass_gbuffer");
-        assert_eq!(gbuffer, deferred, "{:?}", stats.passes);
-        renderer.pixels().expect("pixels")
-    };
-    let coded = || vec![level_coded_map(32, false), level_coded_map(32, true)];
-    let forward = render(coded(), false);
-    let deferred = render(coded(), true);
-    // The lens's pixels: wherever black maps change the frame (the rest,
-    // the room, must then match bit for bit).
-    let black = render(vec![constant_map(32, [0.0; 3]); 2], true);
-    let mask: Vec<bool> = (forward.iter().zip(&black)).map(|(f, b)| f != b).collect();
-    let lens = mask.iter().filter(|m| **m).count();
-    assert!(
-        lens > (W * H / 20) as usize,
-        "the lens covers {lens} pixels"
-    );
-    // Same lookups, same levels of detail, same weights: a level off or
-    // a lookup a texel off would show in red, green or blue.
-    let db = masked_psnr(&forward, &deferred, &mask);
-    assert!(
-        db > 50.0,
-        "deferred against forward over the lens: {db:.2} dB"
-    );
-    let room: Vec<bool> = mask.iter().map(|m| !m).collect();
-    assert!(masked_psnr(&forward, &deferred, &room).is_infinite());
-    assert_no_validation_messages();
-}
-
-#[test]
-fn a_lens_beside_the_frame_draws_no_glass_passes() {
-    let dir = tempfile::tempdir().expect("temp dir");
-    let scene = glass_scene(
-        dir.path(),
-        "glass",
-        &[("resolution = 256", "resolution = 16")],
-    );
-    let device = validated_device();
-    let mut renderer = Renderer::new(&device, &scene, W, H).expect("renderer");
-    let shells = engine::glass::samples::SampleShells {
-        azimuths: vec![10.0, 30.0],
-        maps: vec![constant_map(16, [1.0, 0.0, 0.0]); 2],
-    };
-    renderer.load_glass_samples(&shells).expect("samples");
-    let (lo, hi) = renderer.glass.as_ref().expect("glass player").bounds();
-    let eye = scene.orbit.eye(15.0, 5.0);
-    // Looking 60° to the side of the lens: in front of the eye, off the
-    // frame, so its render area is empty (an invalid render area).
-    let towards = ((lo + hi) * 0.5 - eye).normalize();
-    let aside = glam::Quat::from_rotation_y(60f32.to_radians()) * towards;
-    let view = glam::camera::rh::view::look_to_mat4(eye, aside, glam::Vec3::Y);
-    let stats = renderer.frame(FrameMode::Hybrid, eye, view).expect("frame");
-    let names: Vec<&str> = stats.passes.iter().map(|p| p.name.as_str()).collect();
-    assert_eq!(names, ["room", "readback"]);
-    assert_no_validation_messages();
 }

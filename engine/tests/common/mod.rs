@@ -131,3 +131,4 @@ pub fn traced_views(out: &Path) -> Vec<String> {
     views.sort();
     views
 }
+pub mod glass;

@@ -1,0 +1,118 @@
+//! Deferred glass on the device: per-sample shell maps composited from a
+//! G-buffer draw the forward frame, and a lens off the frame draws no
+//! glass pass.
+
+mod common;
+
+use common::glass::*;
+use common::*;
+use engine::renderer::{FrameMode, Renderer};
+
+const W: u32 = 160;
+const H: u32 = 120;
+
+/// A shell map of `size`² per face whose colour says where a lookup
+/// landed: red the MIP level, green and blue the texel's place on its face
+/// (`swap` exchanges them, for a second sample).
+fn level_coded_map(size: u32, swap: bool) -> Vec<u8> {
+    let levels = size.ilog2();
+    let mut bytes = Vec::new();
+    for level in 0..=levels {
+        let n = size >> level;
+        for _face in 0..6 {
+            for y in 0..n {
+                for x in 0..n {
+                    let (u, v) = ((x as f32 + 0.5) / n as f32, (y as f32 + 0.5) / n as f32);
+                    let (g, b) = if swap { (v, u) } else { (u, v) };
+                    let texel = [level as f32 / levels as f32, g, b, 1.0];
+                    bytes.extend(
+                        texel
+                            .map(half::f16::from_f32)
+                            .iter()
+                            .flat_map(|h| h.to_le_bytes()),
+                    );
+                }
+            }
+        }
+    }
+    bytes
+}
+
+#[test]
+fn deferred_glass_draws_the_forward_frame() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = glass_scene(
+        dir.path(),
+        "glass",
+        &[("resolution = 256", "resolution = 32")],
+    );
+    let device = validated_device();
+    let render = |maps: Vec<Vec<u8>>, deferred: bool| {
+        let mut renderer = Renderer::new(&device, &scene, W, H).expect("renderer");
+        let shells = engine::glass::samples::SampleShells {
+            azimuths: vec![10.0, 30.0],
+            maps,
+        };
+        // Read when the maps are set.
+        renderer.glass.as_mut().expect("glass player").deferred = deferred;
+        renderer.load_glass_samples(&shells).expect("samples");
+        let eye = scene.orbit.eye(15.0, 5.0);
+        let stats = renderer
+            .frame(FrameMode::Hybrid, eye, scene.orbit.view(eye))
+            .expect("frame");
+        // The path asked for is the path drawn.
+        let gbuffer = stats.passes.iter().any(|p| p.name == "glass_gbuffer");
+        assert_eq!(gbuffer, deferred, "{:?}", stats.passes);
+        renderer.pixels().expect("pixels")
+    };
+    let coded = || vec![level_coded_map(32, false), level_coded_map(32, true)];
+    let forward = render(coded(), false);
+    let deferred = render(coded(), true);
+    // The lens's pixels: wherever black maps change the frame (the rest,
+    // the room, must then match bit for bit).
+    let black = render(vec![constant_map(32, [0.0; 3]); 2], true);
+    let mask: Vec<bool> = (forward.iter().zip(&black)).map(|(f, b)| f != b).collect();
+    let lens = mask.iter().filter(|m| **m).count();
+    assert!(
+        lens > (W * H / 20) as usize,
+        "the lens covers {lens} pixels"
+    );
+    // Same lookups, same levels of detail, same weights: a level off or
+    // a lookup a texel off would show in red, green or blue.
+    let db = masked_psnr(&forward, &deferred, &mask);
+    assert!(
+        db > 50.0,
+        "deferred against forward over the lens: {db:.2} dB"
+    );
+    let room: Vec<bool> = mask.iter().map(|m| !m).collect();
+    assert!(masked_psnr(&forward, &deferred, &room).is_infinite());
+    assert_no_validation_messages();
+}
+
+#[test]
+fn a_lens_beside_the_frame_draws_no_glass_passes() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = glass_scene(
+        dir.path(),
+        "glass",
+        &[("resolution = 256", "resolution = 16")],
+    );
+    let device = validated_device();
+    let mut renderer = Renderer::new(&device, &scene, W, H).expect("renderer");
+    let shells = engine::glass::samples::SampleShells {
+        azimuths: vec![10.0, 30.0],
+        maps: vec![constant_map(16, [1.0, 0.0, 0.0]); 2],
+    };
+    renderer.load_glass_samples(&shells).expect("samples");
+    let (lo, hi) = renderer.glass.as_ref().expect("glass player").bounds();
+    let eye = scene.orbit.eye(15.0, 5.0);
+    // Looking 60° to the side of the lens: in front of the eye, off the
+    // frame, so its render area is empty (an invalid render area).
+    let towards = ((lo + hi) * 0.5 - eye).normalize();
+    let aside = glam::Quat::from_rotation_y(60f32.to_radians()) * towards;
+    let view = glam::camera::rh::view::look_to_mat4(eye, aside, glam::Vec3::Y);
+    let stats = renderer.frame(FrameMode::Hybrid, eye, view).expect("frame");
+    let names: Vec<&str> = stats.passes.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(names, ["room", "readback"]);
+    assert_no_validation_messages();
+}
