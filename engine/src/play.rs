@@ -376,8 +376,8 @@ impl FrameSource<'_> {
         eye: glam::Vec3,
     ) -> Result<(FrameStats, Vec<[f32; 4]>)> {
         match self {
-            FrameSource::Raster(mode) => {
-                let stats = renderer.frame(*mode, eye, scene.orbit.view(eye))?;
+            FrameSource::Raster(_) => {
+                let stats = self.draw(renderer, scene, eye)?;
                 Ok((stats, renderer.pixels()?))
             }
             FrameSource::Trace(tracer, settings) => {

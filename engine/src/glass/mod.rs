@@ -226,7 +226,7 @@ impl GlassPlayer {
             }
         };
         // Deferred per-sample frames composite band by band.
-        self.bands = match (self.deferred, self.blend, layered) {
+        self.bands = match (self.geometry.deferred(), self.blend, layered) {
             (true, Some(_), false) => crate::passes::bands::screen_bands(
                 request.view_proj,
                 &tess.positions,
@@ -255,7 +255,7 @@ impl GlassPlayer {
 
     /// Waits for the next frame's paths, if any are being traced, and
     /// drops them: no worker outlives the frames that asked for it.
-    pub fn settle(&mut self) {
+    pub fn drop_ahead(&mut self) {
         if let Some(ahead) = self.ahead.take() {
             ahead.finish();
         }
@@ -270,8 +270,7 @@ impl GlassPlayer {
             (Some((image, _)), Some(blend), ..) => ShellSource::Samples(image, blend),
             _ => ShellSource::One(&self.cube.color),
         };
-        let deferred = self.deferred.then_some(self.bands.as_slice());
-        (self.geometry).passes(source, target, view_proj, deferred)
+        (self.geometry).passes(source, target, view_proj, &self.bands)
     }
 
     /// Plays hybrid frames from layered shells: `image` holds `set`'s maps

@@ -135,6 +135,12 @@ impl GlassGeometry {
         Ok(())
     }
 
+    /// Whether per-sample maps draw deferred (they were set with a frame
+    /// size).
+    pub fn deferred(&self) -> bool {
+        self.deferred.is_some()
+    }
+
     /// Drops the pipelines, sets and G-buffer over per-sample maps and
     /// layers (their images are being let go).
     pub fn clear_samples(&mut self) {
@@ -183,17 +189,17 @@ impl GlassGeometry {
 
     /// The passes reading `source`'s maps (the arrays given to
     /// [`GlassGeometry::set_samples`] or [`GlassGeometry::set_layers`]):
-    /// per-sample maps `deferred` (with the composite's scissor bands) as a
-    /// G-buffer and a composite, anything else as one forward pass.
+    /// per-sample maps, where they were set deferred, as a G-buffer and a
+    /// composite inside `bands` (the composite's scissors; empty: the
+    /// render area), anything else as one forward pass.
     pub fn passes<'a>(
         &'a self,
         source: ShellSource<'a>,
         target: Target<'a>,
         view_proj: Mat4,
-        deferred: Option<&'a [vk::Rect2D]>,
+        bands: &'a [vk::Rect2D],
     ) -> Vec<Box<dyn Pass + 'a>> {
-        if let (Some(bands), ShellSource::Samples(samples, blend), Some(glass)) =
-            (deferred, source, &self.deferred)
+        if let (ShellSource::Samples(samples, blend), Some(glass)) = (source, &self.deferred)
             && let (Some(vertices), Some(indices)) = (&self.vertices, &self.indices)
         {
             // No lens this frame: no G-buffer, and no composite over the

@@ -243,7 +243,7 @@ impl Renderer {
     /// each row's run with it, so no worker runs into another row.
     pub fn drop_glass_ahead(&mut self) {
         if let Some(g) = self.glass.as_mut() {
-            g.settle();
+            g.drop_ahead();
         }
     }
 
