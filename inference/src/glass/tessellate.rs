@@ -167,9 +167,17 @@ pub fn tessellate(lens: &Lens, eye: Vec3, screen: Screen, settings: TessSettings
     work.add_vertices(&fresh);
     work.out.stats.base_vertices = fresh.len();
     let leaves = work.refine(active);
-    for [a, b, c] in leaves {
-        work.emit(a, b, c, 0);
-    }
+    let emitted: Vec<Vec<u32>> = leaves
+        .par_chunks(1024)
+        .map(|chunk| {
+            let mut indices = Vec::with_capacity(chunk.len() * 3);
+            for &[a, b, c] in chunk {
+                work.emit([a, b, c], 0, &mut indices);
+            }
+            indices
+        })
+        .collect();
+    work.out.indices = emitted.concat();
     work.out
 }
 
@@ -198,8 +206,9 @@ impl Work<'_> {
             let mut splitting: Vec<([u32; 3], u8)> = Vec::new();
             let mut queued: Vec<(u32, u32)> = Vec::new();
             let mut seen = EdgeMap::default();
-            for tri in active.drain(..) {
-                let mask = self.split_mask(tri);
+            // The masks only read the mesh: in parallel, in order.
+            let masks: Vec<u8> = active.par_iter().map(|&t| self.split_mask(t)).collect();
+            for (tri, mask) in active.drain(..).zip(masks) {
                 if mask == 0 {
                     leaves.push(tri);
                     continue;
@@ -242,9 +251,11 @@ impl Work<'_> {
             }
             self.out.stats.added_vertices += fresh.len();
             self.add_vertices(&fresh);
-            for (tri, mask) in splitting {
-                active.extend(self.children(tri, mask));
-            }
+            let children: Vec<Vec<[u32; 3]>> = splitting
+                .par_iter()
+                .map(|&(tri, mask)| self.children(tri, mask))
+                .collect();
+            active.extend(children.into_iter().flatten());
         }
         leaves.extend(active);
         leaves
@@ -291,11 +302,10 @@ impl Work<'_> {
         split_pattern(tri, m)
     }
 
-    /// Writes `(a, b, c)` re-triangulated against every midpoint on its
+    /// Appends `tri` re-triangulated against every midpoint on its
     /// edges (recursively), so neighbours that were split further meet it
     /// without T-junctions.
-    fn emit(&mut self, a: u32, b: u32, c: u32, depth: u32) {
-        let tri = [a, b, c];
+    fn emit(&self, tri: [u32; 3], depth: u32, indices: &mut Vec<u32>) {
         let m = [0, 1, 2].map(|e| {
             self.midpoints
                 .get(&edge_key(tri[e], tri[(e + 1) % 3]))
@@ -303,11 +313,11 @@ impl Work<'_> {
         });
         // Every split adds a level; the hash cannot hold deeper ones.
         if m.iter().all(Option::is_none) || depth > 2 * self.settings.max_depth + 2 {
-            self.out.indices.extend_from_slice(&tri);
+            indices.extend_from_slice(&tri);
             return;
         }
-        for [x, y, z] in split_pattern(tri, m) {
-            self.emit(x, y, z, depth + 1);
+        for child in split_pattern(tri, m) {
+            self.emit(child, depth + 1, indices);
         }
     }
 }

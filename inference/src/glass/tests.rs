@@ -275,6 +275,29 @@ fn tessellation_splits_where_paths_differ_without_t_junctions() {
 }
 
 #[test]
+fn tessellation_is_the_same_on_any_number_of_threads() {
+    // Masks, children and the re-triangulated leaves run in parallel; the
+    // mesh (order included: it is the index buffer) must not depend on it.
+    let lens = glass(sphere(Vec3::ZERO, 1.0, 8, 16), 1.5, Vec3::ZERO);
+    let eye = Vec3::new(0.5, 1.0, 4.0);
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("a thread pool");
+        pool.install(|| tessellate(&lens, eye, view(eye), TessSettings::new(6.0)))
+    };
+    let one = run(1);
+    assert!(one.stats.depth >= 2, "{:?}", one.stats);
+    for threads in [2, 3] {
+        let many = run(threads);
+        assert_eq!(many.indices, one.indices, "{threads} threads");
+        assert_eq!(many.positions, one.positions, "{threads} threads");
+        assert_eq!(many.paths, one.paths, "{threads} threads");
+    }
+}
+
+#[test]
 fn agreeing_paths_are_not_split() {
     // A flat slab far away: every vertex's paths agree within 3°.
     let lens = glass(
