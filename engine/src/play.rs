@@ -362,9 +362,11 @@ impl FrameSource<'_> {
         eye: glam::Vec3,
         keep: bool,
     ) -> Result<(FrameStats, Option<Vec<[f32; 4]>>)> {
-        match keep {
-            true => (self.frame(renderer, scene, eye)).map(|(s, p)| (s, Some(p))),
-            false => Ok((self.draw(renderer, scene, eye)?, None)),
+        if keep {
+            let (stats, pixels) = self.frame(renderer, scene, eye)?;
+            Ok((stats, Some(pixels)))
+        } else {
+            Ok((self.draw(renderer, scene, eye)?, None))
         }
     }
 

@@ -13,15 +13,17 @@ use inference::scene::Scene;
 
 /// A row of the table: each kind of view's mean scores, the frame times.
 pub(super) fn table_row(row: &Row, results: &[ViewResult], views: u32) -> EvalRow {
-    let kind = |c: Category, f: fn(&ViewResult) -> f64| {
+    // The mean of `f` over the views `keep` accepts.
+    let mean_of = |keep: &dyn Fn(&ViewResult) -> bool, f: fn(&ViewResult) -> f64| {
         mean(
             &results
                 .iter()
-                .filter(|r| r.category == c)
+                .filter(|r| keep(r))
                 .map(f)
                 .collect::<Vec<_>>(),
         )
     };
+    let kind = |c: Category, f| mean_of(&|r| r.category == c, f);
     let times: Vec<f64> = results.iter().map(|r| r.frame_ms).collect();
     let mut elevations: Vec<f32> = results
         .iter()
@@ -29,13 +31,10 @@ pub(super) fn table_row(row: &Row, results: &[ViewResult], views: u32) -> EvalRo
         .map(|r| r.elevation_deg)
         .collect();
     elevations.dedup();
-    let at = |e: f32, f: fn(&ViewResult) -> f64| {
-        mean(
-            &results
-                .iter()
-                .filter(|r| r.category == Category::Above && r.elevation_deg == e)
-                .map(f)
-                .collect::<Vec<_>>(),
+    let at = |e: f32, f| {
+        mean_of(
+            &|r| r.category == Category::Above && r.elevation_deg == e,
+            f,
         )
     };
     let above: Vec<AboveScore> = elevations
