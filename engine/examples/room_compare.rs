@@ -9,19 +9,22 @@
 //! ```sh
 //! cargo run --release -p engine --example room_compare -- \
 //!     SCENE DATA_DIR AZIMUTH ELEVATION REF.exr [OUT.png] \
-//!     [--infer-dir DIR] [--distant-only] [--full]
+//!     [--infer-dir DIR] [--distant-only] [--full] [--bilinear-views]
 //! ```
 //! DATA_DIR holds the compiled maps (the main job's `--out`); REF.exr is a
 //! traced view at the same azimuth, elevation and size (e.g. one of
 //! `engine eval`'s `reference/` files). `--infer-dir` plays the inferred
 //! EXR maps of DIR instead of the container (the codec's share of the
 //! error), `--distant-only` drops the local layer (its share), `--full`
-//! also writes OUT_engine.png and OUT_trace.png at full size.
+//! also writes OUT_engine.png and OUT_trace.png at full size;
+//! `--bilinear-views` blends a view between rings from its cell's four
+//! corners (`--view-blend bilinear`).
 
 use anyhow::{Context, Result, bail};
 use engine::eval::metrics::{display_psnr_masked, frame_scores};
 use engine::options::{Maps, Mode, PemOptions, RoomShading, RunPlace};
 use engine::play::{Session, compile_context, setup_mode};
+use inference::scene::ViewBlend;
 use inference::trace::output::read_exr;
 use std::path::{Path, PathBuf};
 
@@ -32,7 +35,7 @@ fn main() -> Result<()> {
     let [scene, data, az, el, reference, rest @ ..] = args.as_slice() else {
         bail!(
             "usage: room_compare SCENE DATA_DIR AZIMUTH ELEVATION REF.exr [OUT.png] \
-             [--infer-dir DIR] [--distant-only] [--full]"
+             [--infer-dir DIR] [--distant-only] [--full] [--bilinear-views]"
         );
     };
     let flags = Flags::parse(rest)?;
@@ -116,6 +119,7 @@ struct Flags {
     infer_dir: Option<PathBuf>,
     distant_only: bool,
     full: bool,
+    bilinear_views: bool,
 }
 
 impl Flags {
@@ -130,6 +134,7 @@ impl Flags {
                 }
                 "--distant-only" => flags.distant_only = true,
                 "--full" => flags.full = true,
+                "--bilinear-views" => flags.bilinear_views = true,
                 flag if flag.starts_with("--") => bail!("unknown option {flag}"),
                 out if flags.out.is_none() => flags.out = Some(PathBuf::from(out)),
                 extra => bail!("unexpected argument {extra}"),
@@ -150,6 +155,11 @@ impl Flags {
             maps,
             infer_dir: self.infer_dir.clone(),
             local_layer: !self.distant_only,
+            view_blend: if self.bilinear_views {
+                ViewBlend::Bilinear
+            } else {
+                ViewBlend::Triangles
+            },
             ..PemOptions::default()
         }
     }

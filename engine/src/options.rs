@@ -4,6 +4,7 @@
 
 use crate::backend::{DeviceOptions, Filtering};
 use crate::pem::settings::Compositing;
+use inference::scene::ViewBlend;
 use std::path::PathBuf;
 
 /// What each frame draws.
@@ -94,6 +95,8 @@ pub struct PemOptions {
     pub local_layer: bool,
     /// Use every Nth viewpoint sample only (1: all).
     pub spacing: u32,
+    /// How a view between rings weighs the samples around it.
+    pub view_blend: ViewBlend,
     /// EM resolution to play (a power of two up to the inferred one).
     pub em_size: Option<u32>,
     pub filtering: Filtering,
@@ -121,6 +124,7 @@ impl Default for PemOptions {
             blend: true,
             local_layer: true,
             spacing: 1,
+            view_blend: ViewBlend::default(),
             em_size: None,
             filtering: Filtering::Trilinear,
             compositing: Compositing::Deferred,
@@ -150,6 +154,9 @@ impl PemOptions {
         }
         if self.spacing != d.spacing {
             f.push(("spacing".into(), Some(self.spacing.to_string())));
+        }
+        if self.view_blend != d.view_blend {
+            f.push(("view-blend".into(), Some(self.view_blend.name().into())));
         }
         if let Some(s) = self.em_size {
             f.push(("em-size".into(), Some(s.to_string())));

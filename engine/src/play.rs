@@ -414,6 +414,7 @@ pub fn pem_settings(mode: Mode, pem: &PemOptions, scene: &Scene) -> Result<PemSe
     settings.blend = pem.blend;
     settings.local_layer = pem.local_layer;
     settings.spacing = pem.spacing;
+    settings.view_blend = pem.view_blend;
     settings.filtering = pem.filtering;
     settings.compositing = pem.compositing;
     if let Some(size) = pem.em_size {

@@ -14,7 +14,7 @@ use engine::pem::player::{Compositing, PemKind, PemSettings};
 use engine::pem::samples::sample_blend;
 use engine::pem::source::MapSource;
 use engine::renderer::{FrameMode, Renderer};
-use inference::scene::Scene;
+use inference::scene::{Scene, ViewBlend};
 use std::process::Command;
 
 #[test]
@@ -111,7 +111,9 @@ fn every_composite_variant_draws_what_multipass_draws() {
         (start + 0.5 * step, 7.5),
     ] {
         let eye = orbit.eye(azimuth, elevation);
-        let samples = sample_blend(&grid, &orbit, eye, 1, true).samples.len();
+        let samples = sample_blend(&grid, &orbit, eye, 1, true, ViewBlend::Bilinear)
+            .samples
+            .len();
         counts.push(samples);
         let db = psnr(
             &frame(Compositing::Multipass, eye),
@@ -137,6 +139,8 @@ fn draw(
     let mut r = Renderer::new(device, scene, 96, 72).expect("renderer");
     let settings = PemSettings {
         compositing,
+        // Bilinear, so a view between rings blends four samples.
+        view_blend: ViewBlend::Bilinear,
         ..PemSettings::new(PemKind::Layered)
     };
     let source = MapSource::container(scene, &out.join("teapot.ptxc")).expect("container");

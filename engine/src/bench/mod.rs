@@ -6,6 +6,8 @@
 //! The last row then runs alone with its eye one sample further every
 //! frame, so each frame needs a new sample's maps decoded (ahead, on the
 //! worker) and uploaded: decoding on against resident maps, in one run.
+//! "default, bilinear views" blends a view between rings from its grid
+//! cell's four corners instead of the triangle of three that holds it.
 //! Each row also reports the compositing passes' fragment-shader
 //! invocations per covered reflector pixel (the overdraw the deferred
 //! design removes). PEM variants light the room as `--room` says (inferred
@@ -28,6 +30,7 @@ use crate::play::{Session, compile_context};
 use crate::renderer::{FrameMode, Renderer};
 use crate::util::stats::median;
 use anyhow::Result;
+use inference::scene::ViewBlend;
 use std::time::Instant;
 
 /// How a variant draws.
@@ -55,6 +58,13 @@ fn variants() -> Vec<(&'static str, Draws)> {
             "default, nearest sample",
             Draws::Pem(PemSettings {
                 blend: false,
+                ..default
+            }),
+        ),
+        (
+            "default, bilinear views",
+            Draws::Pem(PemSettings {
+                view_blend: ViewBlend::Bilinear,
                 ..default
             }),
         ),

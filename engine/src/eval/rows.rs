@@ -5,6 +5,7 @@
 use crate::backend::Filtering;
 use crate::options::{Maps, Mode, PemOptions, RoomShading, TraceFrames};
 use crate::pem::settings::Compositing;
+use inference::scene::ViewBlend;
 use std::collections::BTreeMap;
 
 /// One row: a label, the mode and its knobs.
@@ -104,6 +105,7 @@ pub fn all_rows() -> Vec<Row> {
         labelled("layered-pem multipass").with(|p| p.compositing = Compositing::Multipass),
         labelled("layered-pem analytic-room").with(|p| p.room = RoomShading::Analytic),
         labelled("layered-pem nearest-sample").with(|p| p.blend = false),
+        labelled("layered-pem bilinear-views").with(|p| p.view_blend = ViewBlend::Bilinear),
         labelled("layered-pem distant-only").with(|p| p.local_layer = false),
         labelled("layered-pem em128").with(|p| p.em_size = Some(128)),
         labelled("layered-pem em64").with(|p| p.em_size = Some(64)),

@@ -154,7 +154,14 @@ impl PemPlayer {
     /// The samples a frame from `eye` draws.
     pub fn blend(&self, eye: Vec3) -> SampleBlend {
         let s = &self.settings;
-        super::samples::sample_blend(&self.grid, &self.orbit, eye, s.spacing, s.blend)
+        super::samples::sample_blend(
+            &self.grid,
+            &self.orbit,
+            eye,
+            s.spacing,
+            s.blend,
+            s.view_blend,
+        )
     }
 
     /// CPU work before recording a frame: texgen for `eye`, and the maps of
@@ -288,11 +295,12 @@ impl PemPlayer {
         }
         let s = &self.settings;
         let (cell_a, cell_e) = self.grid.cell_size(az, el, s.spacing);
-        let ahead = self.grid.blend(
+        let ahead = self.grid.blend_by(
             az + da.signum() * cell_a * f32::from(da != 0.0),
             el + de.signum() * cell_e * f32::from(de != 0.0),
             s.spacing,
             s.blend,
+            s.view_blend,
         );
         for r in &self.reflectors {
             for sample in ahead.indices().filter(|&k| !r.table.holds(k)) {

@@ -3,6 +3,7 @@
 
 use super::source::MapLayer;
 use crate::backend::Filtering;
+use inference::scene::ViewBlend;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct PemSettings {
@@ -13,6 +14,8 @@ pub struct PemSettings {
     pub blend: bool,
     /// Use every `spacing`-th sample only (1 = all).
     pub spacing: u32,
+    /// How a view between rings weighs the samples around it.
+    pub view_blend: ViewBlend,
     /// Finest MIP levels dropped: the EM resolution is `res >> drop_levels`.
     pub drop_levels: u32,
     pub filtering: Filtering,
@@ -50,6 +53,7 @@ impl PemSettings {
             local_layer: true,
             blend: true,
             spacing: 1,
+            view_blend: ViewBlend::default(),
             drop_levels: 0,
             filtering: Filtering::Trilinear,
             compositing: Compositing::Deferred,

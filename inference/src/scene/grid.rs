@@ -4,11 +4,15 @@
 //! them where the scene needs them — and sample `k` is `(i_az, i_el)` with
 //! `k = i_az + n_az · i_el`. Rings above the first may keep every n-th
 //! line only (`ring_line_every`), numbered after the first ring's. A view
-//! between lines blends the corners of its cell bilinearly.
+//! between lines blends the corners of its cell bilinearly, or those of the
+//! triangle that holds it (`triangles`).
 
 use super::camera::Orbit;
 use super::ring_lines::RingLines;
 use glam::Vec3;
+
+mod triangles;
+pub use triangles::ViewBlend;
 
 /// Weights below this count as "exactly on a sample": no blend.
 pub const ON_SAMPLE: f32 = 1e-4;
@@ -168,6 +172,15 @@ impl ViewGrid {
                 }
             }
         }
+        SampleBlend::normalized(samples, blend, nearest.unwrap_or(0))
+    }
+}
+
+impl SampleBlend {
+    /// `samples` (index, weight) without the negligible ones, nearest
+    /// first, weights summing to 1 (with `blend` false the nearest alone);
+    /// `fallback` alone when no weight is usable.
+    fn normalized(mut samples: Vec<(u32, f32)>, blend: bool, fallback: u32) -> Self {
         samples.retain(|s| s.1 >= ON_SAMPLE);
         samples.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
         if !blend {
@@ -175,7 +188,7 @@ impl ViewGrid {
         }
         let total: f32 = samples.iter().map(|s| s.1).sum();
         if samples.is_empty() || !total.is_finite() || total <= 0.0 {
-            return SampleBlend::one(nearest.unwrap_or(0));
+            return SampleBlend::one(fallback);
         }
         samples.iter_mut().for_each(|s| s.1 /= total);
         SampleBlend { samples }

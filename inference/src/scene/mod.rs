@@ -38,7 +38,7 @@ pub use crate::fresnel::schlick_fresnel;
 pub use camera::{Camera, Orbit};
 pub use error::SceneError;
 pub use glass::GlassSettings;
-pub use grid::{SampleBlend, ViewGrid};
+pub use grid::{SampleBlend, ViewBlend, ViewGrid};
 pub use light::{AreaLight, DirectionalLight, PointLight};
 pub use material::{EM_RESOLUTIONS, EmLayer, EmSettings, LOD_BIASES, Material};
 pub use mesh::Mesh;

@@ -7,9 +7,13 @@ use engine::options::{
     LightPathOptions, Maps, Mode, PemOptions, PlayOptions, RoomShading, RunPlace,
 };
 use engine::pem::settings::Compositing;
+use inference::scene::ViewBlend;
 use std::path::PathBuf;
 
-pub use parse::{parse_degrees, parse_elevation, parse_ratio, parse_size, parse_tau, parse_weight};
+pub use parse::{
+    parse_degrees, parse_elevation, parse_ratio, parse_size, parse_tau, parse_view_blend,
+    parse_weight,
+};
 
 mod bench;
 mod codec;
@@ -330,6 +334,12 @@ pub struct PemArgs {
     /// Use every Nth viewpoint sample only.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub spacing: u32,
+    /// How a view between rings weighs the samples around it: the three
+    /// corners of the triangle of samples that holds it (`triangles`), or
+    /// the four corners of its grid cell (`bilinear`: one cube lookup per
+    /// layer more).
+    #[arg(long, value_parser = parse_view_blend, default_value = "triangles")]
+    pub view_blend: ViewBlend,
     /// EM resolution to play (a power of two up to the inferred one; lower
     /// sizes use the inferred maps' coarser MIP levels) [default: inferred].
     #[arg(long)]
@@ -410,6 +420,7 @@ impl PemArgs {
             blend: !self.no_blend,
             local_layer: !self.distant_only,
             spacing: self.spacing,
+            view_blend: self.view_blend,
             em_size: self.em_size,
             filtering: self.filtering,
             compositing: self.compositing,

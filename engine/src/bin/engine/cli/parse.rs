@@ -65,6 +65,11 @@ pub fn parse_ratio(s: &str) -> Result<f64, String> {
     )
 }
 
+/// `bilinear` or `triangles` (`--view-blend`).
+pub fn parse_view_blend(s: &str) -> Result<inference::scene::ViewBlend, String> {
+    s.parse()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -75,5 +80,14 @@ mod tests {
         for bad in ["640", "0x480", "640x", "axb", "9000x10", "-1x5"] {
             assert!(parse_size(bad).is_err(), "{bad}");
         }
+    }
+
+    #[test]
+    fn view_blends_parse_and_name_what_is_expected() {
+        use inference::scene::ViewBlend;
+        assert_eq!(parse_view_blend("triangles"), Ok(ViewBlend::Triangles));
+        assert_eq!(parse_view_blend("bilinear"), Ok(ViewBlend::Bilinear));
+        let e = parse_view_blend("cubic").expect_err("unknown");
+        assert!(e.contains("cubic") && e.contains("`triangles`"), "{e}");
     }
 }
