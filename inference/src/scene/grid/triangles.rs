@@ -72,6 +72,11 @@ impl ViewGrid {
             return bilinear();
         }
         let rows = [e0, e1].map(|e| self.azimuth_lines(spacing, e));
+        // A ring with no line in use (a subset of lines that skips all of
+        // a sparse ring's) has no triangles.
+        if rows.iter().any(|r| r.is_empty()) {
+            return bilinear();
+        }
         let angles = rows.clone().map(|r| {
             r.iter()
                 .map(|&i| self.azimuths_deg[i])

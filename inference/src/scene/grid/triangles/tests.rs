@@ -106,6 +106,12 @@ fn on_rings_beyond_the_grid_and_bad_input_fall_back_to_the_cell() {
     ] {
         assert!(triangles(&g, az, el).indices().all(|k| k < g.len()));
     }
+    // Lines in use that the sparse rings do not hold: no triangles there.
+    let subset = sparse().with_azimuths_used(Some(&[1, 2, 3]));
+    for (az, el) in [(2.5, 5.0), (2.5, 15.0), (7.0, 12.0)] {
+        let b = triangles(&subset, az, el);
+        assert_eq!(b, subset.blend(az, el, 1, true), "{az} {el}");
+    }
     // Nearest alone and the bilinear rule are the cell's as before.
     assert_eq!(
         g.blend_by(3.3, 5.0, 1, false, ViewBlend::Triangles),
@@ -135,4 +141,36 @@ fn the_ribbon_covers_its_strip_and_prefers_short_diagonals() {
     // reaching across to the upper line 0 or 8.
     let w = ribbon_weights(&lower, &upper, 4.0, 0.99).expect("inside");
     assert!(w.iter().any(|&(c, x)| c == (true, 1) && x > 0.9), "{w:?}");
+}
+
+proptest::proptest! {
+    /// Any grid (lines unevenly spaced, sparse upper rings, subsets in
+    /// use), any view: no panic, samples in range, weights positive and
+    /// summing to 1 (three from a triangle, up to four where the cell's
+    /// blend stands in).
+    #[test]
+    fn any_grid_and_view_give_a_valid_blend(
+        steps in proptest::collection::vec(0.1f32..5.0, 1..12),
+        rings in proptest::collection::vec(1.0f32..15.0, 0..4),
+        every in 0u32..5,
+        used in proptest::option::of(proptest::collection::vec(1u32..14, 0..6)),
+        az in -30.0f32..60.0,
+        el in -10.0f32..70.0,
+        spacing in 1u32..3,
+    ) {
+        let azimuths_deg = std::iter::once(0.0)
+            .chain(steps.iter().scan(0.0, |a, s| { *a += s; Some(*a) }))
+            .collect();
+        let elevations_deg = std::iter::once(0.0)
+            .chain(rings.iter().scan(0.0, |e, s| { *e += s; Some(*e) }))
+            .collect();
+        let g = ViewGrid { azimuths_deg, elevations_deg, ring_line_every: every, ..Default::default() }
+            .with_azimuths_used(used.as_deref());
+        let b = g.blend_by(az, el, spacing, true, ViewBlend::Triangles);
+        proptest::prop_assert!(b.indices().all(|k| k < g.len()), "{:?}", b);
+        proptest::prop_assert!(b.samples.iter().all(|s| s.1 > 0.0));
+        let sum: f32 = b.samples.iter().map(|s| s.1).sum();
+        proptest::prop_assert!((sum - 1.0).abs() < 1e-4, "{:?}", b);
+        proptest::prop_assert!(b.samples.len() <= 4);
+    }
 }
