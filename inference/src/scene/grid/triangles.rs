@@ -77,7 +77,7 @@ impl ViewGrid {
         if rows.iter().any(|r| r.is_empty()) {
             return bilinear();
         }
-        let angles = rows.clone().map(|r| {
+        let angles = rows.each_ref().map(|r| {
             r.iter()
                 .map(|&i| self.azimuths_deg[i])
                 .collect::<Vec<f32>>()
@@ -88,12 +88,8 @@ impl ViewGrid {
         let samples = corners
             .iter()
             .map(|&((upper, i), w)| {
-                let (ring, row) = if upper {
-                    (e1, &rows[1])
-                } else {
-                    (e0, &rows[0])
-                };
-                (self.index(row[i] as u32, ring), w)
+                let ring = usize::from(upper);
+                (self.index(rows[ring][i] as u32, [e0, e1][ring]), w)
             })
             .collect();
         SampleBlend::normalized(samples, true, self.index(rows[0][0] as u32, e0))
