@@ -107,6 +107,9 @@ pub struct PemOptions {
     pub tau: Option<f32>,
     /// Hybrid glass: the one traced shell map, not the per-sample ones.
     pub traced_shell: bool,
+    /// Hybrid glass with layered shells: the traced layer maps, not the
+    /// per-sample ones.
+    pub traced_layers: bool,
     /// How the room is lit.
     pub room: RoomShading,
     /// Reflection-space IBR: source sphere-map resolution.
@@ -130,6 +133,7 @@ impl Default for PemOptions {
             compositing: Compositing::Deferred,
             tau: None,
             traced_shell: false,
+            traced_layers: false,
             room: RoomShading::Inferred,
             rem_size: crate::rem::sources::RemSettings::default().size,
             rem_level: 0,
@@ -172,6 +176,9 @@ impl PemOptions {
         }
         if self.traced_shell {
             f.push(("traced-shell".into(), None));
+        }
+        if self.traced_layers {
+            f.push(("traced-layers".into(), None));
         }
         if self.room != d.room {
             f.push(("room".into(), Some("analytic".into())));

@@ -161,7 +161,9 @@ fn reference_noise() -> Row {
 /// The rows of a scene with a glass object: hybrid at τ = 3 (labelled
 /// plainly, so the eval pictures it), 5 and 10 subpixels, hybrid from the
 /// one traced shell (where the scene has per-sample shells, the
-/// comparison), the static refraction EM baseline and the tracer.
+/// comparison), from the traced layers (where layered shells have
+/// per-sample maps; elsewhere the same frames as `hybrid`), the static
+/// refraction EM baseline and the tracer.
 pub fn glass_rows() -> Vec<Row> {
     let mut rows: Vec<Row> = [3.0f32, 5.0, 10.0]
         .iter()
@@ -176,6 +178,10 @@ pub fn glass_rows() -> Vec<Row> {
     rows.push(Row::new("hybrid traced-shell", Mode::Hybrid).with(|p| {
         p.tau = Some(3.0);
         p.traced_shell = true;
+    }));
+    rows.push(Row::new("hybrid traced-layers", Mode::Hybrid).with(|p| {
+        p.tau = Some(3.0);
+        p.traced_layers = true;
     }));
     rows.push(Row::new("static-em", Mode::StaticEm));
     rows.push(trace_4spp());
@@ -224,10 +230,13 @@ mod tests {
     fn glass_rows_carry_tau() {
         let rows = glass_rows();
         let taus: Vec<_> = rows.iter().filter_map(|r| r.pem.tau).collect();
-        assert_eq!(taus, vec![3.0, 5.0, 10.0, 3.0]);
+        assert_eq!(taus, vec![3.0, 5.0, 10.0, 3.0, 3.0]);
         let traced = rows.iter().find(|r| r.pem.traced_shell).expect("row");
         assert_eq!(traced.flags(), "--mode hybrid --tau 3 --traced-shell");
         assert_eq!(traced.settings()["traced_shell"], serde_json::json!(true));
+        let layers = rows.iter().find(|r| r.pem.traced_layers).expect("row");
+        assert_eq!(layers.flags(), "--mode hybrid --tau 3 --traced-layers");
+        assert_eq!(layers.settings()["traced_layers"], serde_json::json!(true));
         assert_eq!(rows[0].flags(), "--mode hybrid --tau 3");
         assert_eq!(rows[0].label, "hybrid");
         assert_eq!(rows[1].label, "hybrid tau5");
