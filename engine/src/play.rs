@@ -121,11 +121,18 @@ pub fn setup_mode<'s>(
         Mode::Hybrid => {
             let deferred = pem.compositing == crate::pem::settings::Compositing::Deferred;
             crate::glass::setup(renderer, ctx.scene, ctx.out, (pem.tau, deferred))?;
-            // Layered scenes play their traced layers; one-shell scenes
-            // their per-sample maps, if any.
-            if !pem.traced_shell && crate::glass::layers::load(renderer, ctx.scene, ctx.out)? == 1 {
-                let raw = pem.maps == crate::options::Maps::Exr;
-                crate::compile::glass_shells::load(ctx, renderer, raw)?;
+            // Layered scenes play their layers, per sample where the scene
+            // asks for per-sample maps; one-shell scenes their per-sample
+            // maps, if any.
+            let raw = pem.maps == crate::options::Maps::Exr;
+            if !pem.traced_shell {
+                match crate::glass::layers::load(renderer, ctx.scene, ctx.out)? {
+                    1 => crate::compile::glass_shells::load(ctx, renderer, raw)?,
+                    _ if pem.traced_layers => {}
+                    _ => {
+                        crate::compile::glass_shells::layered::load(ctx, renderer, raw)?;
+                    }
+                }
             }
             FrameSource::Raster(FrameMode::Hybrid)
         }

@@ -326,3 +326,71 @@ fn only_triangles_an_inner_layer_reaches_read_it_and_the_frame_stays() {
         differ.len()
     );
 }
+
+#[test]
+fn per_sample_layers_blend_layer_by_layer_as_the_mixed_layers_draw() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (scene, set) = layered_scene(dir.path(), 16);
+    let device = validated_device();
+    // The eye at 15°, samples at 10° and 30°: a quarter of the way.
+    let eye = scene.orbit.eye(15.0, 5.0);
+    let draw = |renderer: &mut Renderer| {
+        renderer
+            .frame(FrameMode::Hybrid, eye, scene.orbit.view(eye))
+            .expect("frame");
+        renderer.pixels().expect("pixels")
+    };
+    let per_sample = |layers: [[[f32; 4]; 2]; 2]| {
+        let mut renderer = Renderer::new(&device, &scene, W, H).expect("renderer");
+        let samples = engine::glass::samples::LayerSamples {
+            azimuths: vec![10.0, 30.0],
+            layers: (0..2)
+                .map(|k| layers.iter().map(|s| constant_rgba(16, s[k])).collect())
+                .collect(),
+        };
+        renderer
+            .load_glass_layer_samples(&samples, &set)
+            .expect("per-sample layers");
+        let g = renderer.glass.as_ref().expect("glass");
+        assert_eq!((g.layer_count(), g.layer_sample_count()), (2, 2));
+        draw(&mut renderer)
+    };
+    let traced = |layers: [[f32; 4]; 2]| {
+        let mut renderer = Renderer::new(&device, &scene, W, H).expect("renderer");
+        let maps: Vec<Vec<u8>> = layers.iter().map(|&l| constant_rgba(16, l)).collect();
+        renderer.load_glass_layers(&maps, &set).expect("layers");
+        draw(&mut renderer)
+    };
+    // Sample 0: a quarter-covering red inner layer over blue; sample 1: a
+    // clear inner layer over green.
+    let (s0, s1) = (
+        [[0.25, 0.0, 0.0, 0.25], [0.0, 0.0, 1.0, 1.0]],
+        [[0.0; 4], [0.0, 1.0, 0.0, 1.0]],
+    );
+    let blended = per_sample([s0, s1]);
+    let mixed = traced([[0.1875, 0.0, 0.0, 0.1875], [0.0, 0.25, 0.75, 1.0]]);
+    let first = traced(s0);
+    let (mut glass, mut largest) = (0, 0.0f32);
+    for ((b, m), f) in blended.iter().zip(&mixed).zip(&first) {
+        for c in 0..3 {
+            assert!(
+                (b[c] - m[c]).abs() <= 4e-3 * m[c].max(1.0),
+                "channel {c}: {} against the mixed layers' {}",
+                b[c],
+                m[c]
+            );
+            largest = largest.max((b[c] - f[c]).abs());
+        }
+        glass += usize::from(m[1] > 0.02 && m[2] > 0.05);
+    }
+    assert!(glass > (W * H / 20) as usize, "glass covers {glass} pixels");
+    assert!(largest > 0.05, "the blend draws sample 0's layers alone");
+    // Maps of another count than the shells are refused.
+    let mut renderer = Renderer::new(&device, &scene, W, H).expect("renderer");
+    let one = engine::glass::samples::LayerSamples {
+        azimuths: vec![10.0, 30.0],
+        layers: vec![vec![constant_rgba(16, [0.0; 4]); 2]],
+    };
+    assert!(renderer.load_glass_layer_samples(&one, &set).is_err());
+    assert_no_validation_messages();
+}

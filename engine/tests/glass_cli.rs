@@ -49,6 +49,14 @@ fn small_scene(dir: &Path, name: &str, edits: &[(&str, &str)]) -> String {
     path.to_str().expect("utf-8 path").to_owned()
 }
 
+/// `engine compile` of `scene` into `out` at 96×64, probes validated.
+fn compile(scene: &str, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec!["compile", "--scene", scene, "--size", "96x64", "--validate"];
+    args.extend(["--out", out.to_str().expect("utf-8 path")]);
+    args.extend(extra);
+    engine(&args)
+}
+
 /// `run` that must succeed with the validation layer silent; its stderr.
 fn run_clean(scene: &str, out: &Path, extra: &[&str]) -> String {
     let o = run(scene, out, extra);
@@ -254,19 +262,7 @@ fn a_glass_scene_compiles_and_ships_its_shell_maps() {
     let dir = tempfile::tempdir().expect("tempdir");
     let scene = small_glass(dir.path());
     let (out, dest) = (dir.path().join("out"), dir.path().join("ship"));
-    let compile = |extra: &[&str]| {
-        let mut args = vec![
-            "compile",
-            "--scene",
-            &scene,
-            "--size",
-            "96x64",
-            "--validate",
-        ];
-        args.extend(["--out", out.to_str().expect("utf-8 path")]);
-        args.extend(extra);
-        engine(&args)
-    };
+    let compile = |extra: &[&str]| compile(&scene, &out, extra);
     let o = compile(&["--ship", dest.to_str().expect("utf-8 path")]);
     let log = common::output_text(&o);
     assert!(o.status.success(), "{log}");
@@ -357,7 +353,7 @@ fn the_shipped_glass_scene_plays_its_shipped_shell_maps() {
 /// per-sample maps (its samples and container bytes stated), the
 /// traced-shell row the one traced map (none stated, other frames).
 fn eval_states_the_shells(scene: &str, out: &Path, dir: &Path) {
-    let eval = eval_hybrid_rows(scene, out, &dir.join("eval"));
+    let eval = eval_hybrid_rows(scene, out, &dir.join("eval"), "hybrid,hybrid traced-shell");
     let row = |label: &str| eval_row(&eval, label);
     let (blended, traced) = (row("hybrid"), row("hybrid traced-shell"));
     assert_eq!(blended["samples"], 3, "{blended}");
@@ -393,7 +389,8 @@ fn hybrid_without_glass_fails_cleanly() {
 #[test]
 fn a_near_object_plays_as_a_layer_traced_once() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let scene = small_scene(dir.path(), "glass_near", &[]);
+    let traced = [("shell_every = 10", "shell_every = 0")];
+    let scene = small_scene(dir.path(), "glass_near", &traced);
     let out = dir.path().join("out");
     let stderr = run_clean(&scene, &out, &[]);
     for i in 1..=2 {
@@ -424,23 +421,75 @@ fn a_near_object_plays_as_a_layer_traced_once() {
     let stderr = String::from_utf8_lossy(&one.stderr);
     assert!(one.status.success(), "stderr:\n{stderr}");
     assert!(!stderr.contains("shell layers"), "{stderr}");
-    // Per-sample maps asked for too: the layers play, and say why.
-    let text = std::fs::read_to_string(&scene).expect("scene") + "shell_every = 50\n";
-    let per_sample = dir.path().join("per_sample_near.toml");
-    std::fs::write(&per_sample, text).expect("write scene");
-    let stderr = run_clean(per_sample.to_str().expect("utf-8"), &out, &[]);
+    eval_states_the_layers(&scene, &out, dir.path());
+}
+
+/// A near object with per-sample maps asked for (lines 0 and 99, one view
+/// each): `engine compile` solves both layers of both lines and packs them,
+/// refusing to ship them; playing solves nothing and blends them, a
+/// damaged map is solved again alone, `--traced-layers` plays the traced
+/// layers, and eval's rows for the two score differently.
+#[test]
+fn near_layers_get_per_sample_maps_solved_once_and_blended() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let edits = [
+        ("shell_every = 10", "shell_every = 99"),
+        ("views = 3", "views = 1"),
+    ];
+    let scene = small_scene(dir.path(), "glass_near", &edits);
+    let out = dir.path().join("out");
+    let compile = |extra: &[&str]| compile(&scene, &out, extra);
+    let o = compile(&["--ship", dir.path().join("ship").to_str().expect("utf-8")]);
+    let log = common::output_text(&o);
+    assert!(!o.status.success() && log.contains("not shipped"), "{log}");
+    assert!(!dir.path().join("ship").exists(), "nothing shipped");
+    let o = compile(&[]);
+    let log = common::output_text(&o);
+    assert!(o.status.success(), "{log}");
     assert!(
-        stderr.contains("per-sample maps are solved for one shell"),
+        log.contains("solved per-sample shell layer maps: 4 of 4 (2 orbit lines)"),
+        "{log}"
+    );
+    assert!(log.contains("layer_shells.ptxc"), "{log}");
+    let stderr = run_clean(&scene, &out, &[]);
+    let blends = "blends 2 per-sample maps of each of its 2 shell layers";
+    assert!(stderr.contains(blends), "{stderr}");
+    assert!(!stderr.contains("solved"), "{stderr}");
+    // Without its container, a damaged map is solved again, alone.
+    std::fs::remove_file(out.join("glass/layer_shells.ptxc")).expect("container");
+    std::fs::write(out.join("glass/layer_1_line0099.bin"), b"not a map").expect("damage");
+    let stderr = run_clean(&scene, &out, &[]);
+    let again = "solved per-sample shell layer maps: 1 of 4 (1 orbit lines)";
+    assert!(
+        stderr.contains(again) && stderr.contains(blends),
         "{stderr}"
     );
-    assert!(!stderr.contains("solved 2 per-sample"), "{stderr}");
-    eval_states_the_layers(&scene, &out, dir.path());
+    let stderr = run_clean(&scene, &out, &["--traced-layers"]);
+    assert!(
+        !stderr.contains("per-sample") && stderr.contains("reads 2 shell layers"),
+        "{stderr}"
+    );
+    let rows = "hybrid,hybrid traced-layers";
+    let eval = eval_hybrid_rows(&scene, &out, &dir.path().join("eval"), rows);
+    let (blended, traced) = (
+        eval_row(&eval, "hybrid"),
+        eval_row(&eval, "hybrid traced-layers"),
+    );
+    let between = |r: &serde_json::Value| r["psnr_between_db"].as_f64().expect("psnr");
+    assert_ne!(between(blended), between(traced));
+    assert_eq!(blended["samples"], 2, "{blended}");
+    assert!(
+        blended["map_bytes"].as_u64().is_some_and(|b| b > 0),
+        "{blended}"
+    );
+    assert!(traced["samples"].is_null(), "{traced}");
 }
 
 /// `engine eval` on the compiled `out`: the hybrid row reads two layers,
 /// the traced-shell row one, and they score differently.
 fn eval_states_the_layers(scene: &str, out: &Path, dir: &Path) {
-    let eval = eval_hybrid_rows(scene, out, &dir.join("eval_layers"));
+    let rows = "hybrid,hybrid traced-shell";
+    let eval = eval_hybrid_rows(scene, out, &dir.join("eval_layers"), rows);
     let row = |label: &str| eval_row(&eval, label);
     let (layered, one) = (row("hybrid"), row("hybrid traced-shell"));
     assert_eq!(layered["shell_layers"], 2, "{layered}");
@@ -453,9 +502,9 @@ fn eval_states_the_layers(scene: &str, out: &Path, dir: &Path) {
     );
 }
 
-/// `engine eval` of the rows `hybrid` and `hybrid traced-shell` on the
-/// compiled `out` (small frames, one view per kind), its `eval.json`.
-fn eval_hybrid_rows(scene: &str, out: &Path, eval_out: &Path) -> serde_json::Value {
+/// `engine eval` of `rows` (labels, comma-separated) on the compiled
+/// `out` (small frames, one view per kind), its `eval.json`.
+fn eval_hybrid_rows(scene: &str, out: &Path, eval_out: &Path, rows: &str) -> serde_json::Value {
     let o = engine(&[
         "eval",
         "--scene",
@@ -476,7 +525,7 @@ fn eval_hybrid_rows(scene: &str, out: &Path, eval_out: &Path) -> serde_json::Val
         "10",
         "--validate",
         "--rows",
-        "hybrid,hybrid traced-shell",
+        rows,
     ]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "stderr:\n{stderr}");

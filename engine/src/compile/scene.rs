@@ -103,6 +103,14 @@ fn compile_glass(ctx: &CompileContext, part: Part, ship: Option<&Path>) -> Resul
             ctx.scene.source.display()
         );
     }
+    let layered = super::glass_shells::layered::LayeredObject::for_scene(ctx.scene, ctx.out)?;
+    if let (Some(dest), Some(_)) = (ship, layered) {
+        bail!(
+            "--ship {}: {} has layered shells; their per-sample maps play from --out and are not shipped",
+            dest.display(),
+            ctx.scene.source.display()
+        );
+    }
     let start = Instant::now();
     let Some((file, bytes)) = super::glass_shells::compile(ctx)? else {
         bail!(

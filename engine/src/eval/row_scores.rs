@@ -91,9 +91,13 @@ pub(super) fn table_row(row: &Row, results: &[ViewResult], views: u32) -> EvalRo
 /// (PEM modes and REM; glass where it blends per-sample shell maps), the
 /// samples, and glass's shell layers.
 pub(super) fn with_facts(line: EvalRow, row: &Row, renderer: &Renderer, scene: &Scene) -> EvalRow {
-    // Glass: the per-sample shell maps' bytes where it plays them.
+    // Glass: the per-sample shell maps' bytes where it plays them (of the
+    // room shell, or of every layer).
     let glass_samples = (row.mode == Mode::Hybrid)
-        .then(|| (renderer.glass.as_ref()).map_or(0, |g| g.sample_count() as u32))
+        .then(|| {
+            (renderer.glass.as_ref())
+                .map_or(0, |g| g.sample_count().max(g.layer_sample_count()) as u32)
+        })
         .filter(|&n| n > 0);
     let map_bytes = match row.mode {
         Mode::Rem | Mode::LayeredPem | Mode::SpherePem | Mode::Ptm => renderer.map_bytes,

@@ -174,12 +174,6 @@ pub fn load(renderer: &mut crate::renderer::Renderer, scene: &Scene, out: &Path)
         "hybrid glass reads {n} shell layers, nearest first: {} ({placed}--traced-shell: the one room shell)",
         names.join("; ")
     );
-    if settings.shell_every > 0 {
-        eprintln!(
-            "note: [objects.glass] shell_every = {}: per-sample maps are solved for one shell; these {n} layers play traced, the same for every view",
-            settings.shell_every
-        );
-    }
     Ok(n as u32)
 }
 

@@ -78,6 +78,12 @@ pub struct GlassPlayer {
     /// Layered shells: their maps (a cube-map array, nearest first) and
     /// the shells (the stream pads them to [`MAX_SHELLS`]).
     layers: Option<(Image, ShellSet)>,
+    /// With per-sample layer maps (the array holds every sample's layers,
+    /// sample after sample), their azimuths.
+    layer_azimuths: Option<Vec<f32>>,
+    /// This frame's push for the layered shaders: layers, the two blended
+    /// samples' first array elements, the weight of the second.
+    layer_blend: Vec4,
     /// The directions each inner layer covers ([`coverage`]).
     cones: Vec<coverage::Cone>,
     /// Whether this frame reads the layers (hybrid frames with layers),
@@ -124,6 +130,8 @@ impl GlassPlayer {
             samples: None,
             blend: None,
             layers: None,
+            layer_azimuths: None,
+            layer_blend: Vec4::ZERO,
             cones: Vec::new(),
             layered_frame: None,
             split: Vec::new(),
@@ -202,6 +210,7 @@ impl GlassPlayer {
             }
             _ => None,
         };
+        self.layer_blend = self.layer_push(request.eye);
         let traced = Instant::now();
         let slots = match layered {
             true => MAX_SHELLS,
@@ -264,8 +273,8 @@ impl GlassPlayer {
     /// The passes drawing what [`GlassPlayer::prepare`] uploaded.
     pub fn passes<'a>(&'a self, target: Target<'a>, view_proj: Mat4) -> Vec<Box<dyn Pass + 'a>> {
         let source = match (&self.samples, self.blend, &self.layers, self.layered_frame) {
-            (_, _, Some((image, set)), Some(first)) => {
-                ShellSource::Layers(image, set.shells.len() as u32, first)
+            (_, _, Some((image, _)), Some(first)) => {
+                ShellSource::Layers(image, self.layer_blend, first)
             }
             (Some((image, _)), Some(blend), ..) => ShellSource::Samples(image, blend),
             _ => ShellSource::One(&self.cube.color),
@@ -274,12 +283,13 @@ impl GlassPlayer {
     }
 
     /// Plays hybrid frames from layered shells: `image` holds `set`'s maps
-    /// (nearest first, uploaded and ready for sampling), `cones` what each
-    /// inner one covers (None: unknown, every direction).
+    /// (nearest first, uploaded and ready for sampling) — with `azimuths`,
+    /// every per-sample map of each layer, sample after sample — and
+    /// `cones` what each inner one covers (None: unknown, every direction).
     pub fn set_layers(
         &mut self,
         image: Image,
-        set: &ShellSet,
+        (set, azimuths): (&ShellSet, Option<Vec<f32>>),
         cones: &[Option<coverage::Cone>],
     ) -> GpuResult<()> {
         let n = set.shells.len();
@@ -288,8 +298,16 @@ impl GlassPlayer {
                 "{n} shell layers: expected 1 to {MAX_SHELLS}"
             )));
         }
-        self.geometry.set_layers(&image)?;
+        let elements = n * azimuths.as_ref().map_or(1, |a| a.len().max(1));
+        if image.desc.array as usize != elements {
+            return Err(GpuError::Invalid(format!(
+                "shell layers: {} array elements, expected {elements}",
+                image.desc.array
+            )));
+        }
+        self.geometry.set_layers(&image, azimuths.is_some())?;
         self.layers = Some((image, set.clone()));
+        self.layer_azimuths = azimuths;
         // An inner layer that covers nothing never needs its triangles.
         self.cones = cones.iter().take(n - 1).flatten().copied().collect();
         Ok(())
@@ -302,6 +320,28 @@ impl GlassPlayer {
         if self.layers.is_some() {
             self.cones = vec![coverage::Cone::ALL];
         }
+    }
+
+    /// The layered shaders' push for the eye at `eye`:
+    /// (layers, first element of sample a, of sample b, weight of b);
+    /// traced layers read elements 0 to n − 1.
+    fn layer_push(&self, eye: Vec3) -> Vec4 {
+        let Some((_, set)) = &self.layers else {
+            return Vec4::ZERO;
+        };
+        let n = set.shells.len() as f32;
+        let blend = (self.layer_azimuths.as_deref())
+            .and_then(|azimuths| samples::blend_of(azimuths, self.orbit.angles(eye).0));
+        match blend {
+            Some((a, b, w)) => Vec4::new(n, a as f32 * n, b as f32 * n, w),
+            None => Vec4::new(n, 0.0, 0.0, 0.0),
+        }
+    }
+
+    /// How many per-sample maps of each shell layer hybrid frames blend
+    /// (0: the traced layers, or no layers).
+    pub fn layer_sample_count(&self) -> usize {
+        self.layer_azimuths.as_ref().map_or(0, Vec::len)
     }
 
     /// How many shell layers hybrid frames read (1: the room's box alone).
@@ -331,6 +371,7 @@ impl GlassPlayer {
         self.samples = None;
         self.blend = None;
         self.layers = None;
+        self.layer_azimuths = None;
         self.cones.clear();
         self.layered_frame = None;
     }

@@ -10,6 +10,14 @@ pub struct SampleShells {
     pub maps: Vec<Vec<u8>>,
 }
 
+/// Every shell layer's per-sample maps: `layers[k][s]`, f16 RGBA bytes of
+/// a full MIP chain, nearest layer first, samples at `azimuths`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LayerSamples {
+    pub azimuths: Vec<f32>,
+    pub layers: Vec<Vec<Vec<u8>>>,
+}
+
 /// Layers `a`, `b` of the array and the weight of `b` for an eye at
 /// azimuth `az` (degrees, any turn): linear between the bracketing
 /// samples, the nearest end outside them. None without samples.
@@ -35,20 +43,42 @@ pub fn blend_of(azimuths: &[f32], az: f32) -> Option<(u32, u32, f32)> {
 
 /// The maps' bytes in a cube-map array's upload order: level-major, then
 /// element, then face and rows. `level_bytes[l]` is one map's level `l`.
-pub fn array_bytes(maps: &[Vec<u8>], level_bytes: &[usize]) -> Option<Vec<u8>> {
+pub fn array_bytes<M: AsRef<[u8]>>(maps: &[M], level_bytes: &[usize]) -> Option<Vec<u8>> {
     let per_map: usize = level_bytes.iter().sum();
-    if maps.iter().any(|m| m.len() != per_map) {
+    if maps.iter().any(|m| m.as_ref().len() != per_map) {
         return None;
     }
     let mut out = Vec::with_capacity(per_map * maps.len());
     let mut offset = 0;
     for &n in level_bytes {
         for m in maps {
-            out.extend_from_slice(&m[offset..offset + n]);
+            out.extend_from_slice(&m.as_ref()[offset..offset + n]);
         }
         offset += n;
     }
     Some(out)
+}
+
+/// Maps of f16 RGBA texels (equal sizes) as one whose every texel is the
+/// one with the largest alpha among them: what any of them covers.
+pub fn max_alpha(maps: &[Vec<u8>]) -> Vec<u8> {
+    let Some(first) = maps.first() else {
+        return Vec::new();
+    };
+    let alpha = |m: &[u8], t: usize| {
+        m.get(8 * t + 6..8 * t + 8).map_or(f32::NEG_INFINITY, |b| {
+            half::f16::from_le_bytes([b[0], b[1]]).to_f32()
+        })
+    };
+    let mut out = first.clone();
+    for m in &maps[1..] {
+        for t in 0..out.len() / 8 {
+            if alpha(m, t) > alpha(&out, t) {
+                out[8 * t..8 * t + 8].copy_from_slice(&m[8 * t..8 * t + 8]);
+            }
+        }
+    }
+    out
 }
 
 #[cfg(test)]
@@ -80,5 +110,22 @@ mod tests {
             Some(vec![1, 2, 3, 5, 6, 7, 4, 8])
         );
         assert_eq!(array_bytes(&[vec![1, 2]], &[3, 1]), None);
+    }
+
+    #[test]
+    fn max_alpha_keeps_each_texels_most_covered_sample() {
+        let texel = |rgba: [f32; 4]| -> Vec<u8> {
+            rgba.iter()
+                .flat_map(|&x| half::f16::from_f32(x).to_le_bytes())
+                .collect()
+        };
+        let a = [texel([1.0, 0.0, 0.0, 0.0]), texel([2.0, 0.0, 0.0, 0.75])].concat();
+        let b = [texel([3.0, 0.0, 0.0, 0.5]), texel([4.0, 0.0, 0.0, 0.25])].concat();
+        let max = max_alpha(&[a, b]);
+        assert_eq!(
+            max,
+            [texel([3.0, 0.0, 0.0, 0.5]), texel([2.0, 0.0, 0.0, 0.75])].concat()
+        );
+        assert!(max_alpha(&[]).is_empty());
     }
 }

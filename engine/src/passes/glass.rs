@@ -29,11 +29,12 @@ pub enum Stream {
 /// The glass pipeline (back faces culled: the CPU emits front faces only)
 /// with `fragment` over `stream`: `glass.frag` or `glass_blend.frag` over
 /// the one-shell stream, `glass_layers.frag` over every layer,
-/// `glass_layer.frag` over the outermost.
+/// `glass_layer.frag` over the outermost; `blend` sets the layered
+/// shaders' constant (per-sample layer maps).
 pub fn glass_pipeline(
     device: &Device,
     (name, fragment): (&str, &[u8]),
-    stream: Stream,
+    (stream, blend): (Stream, bool),
     (color_format, depth_format): (vk::Format, vk::Format),
 ) -> GpuResult<Pipeline> {
     let (vertex_spirv, binding, attributes): (_, _, &[_]) = match stream {
@@ -49,7 +50,8 @@ pub fn glass_pipeline(
         ),
         Stream::OneShell => (spirv::GLASS_VERT, GLASS_BINDING, &GLASS_ATTRIBUTES),
     };
-    Pipeline::new(
+    let variants: &[u32] = if blend { &[1] } else { &[] };
+    Pipeline::with_variants(
         device,
         &PipelineDesc {
             name,
@@ -66,6 +68,7 @@ pub fn glass_pipeline(
             depth: crate::backend::DepthTest::TestWrite,
             stencil: crate::backend::StencilTest::Off,
         },
+        variants,
     )
 }
 
@@ -98,7 +101,7 @@ impl GlassGeometry {
         formats: (vk::Format, vk::Format),
     ) -> GpuResult<Self> {
         let names = ("glass", spirv::GLASS_FRAG);
-        let pipeline = glass_pipeline(device, names, Stream::OneShell, formats)?;
+        let pipeline = glass_pipeline(device, names, (Stream::OneShell, false), formats)?;
         let sampler = Sampler::trilinear(device, vk::SamplerAddressMode::CLAMP_TO_EDGE)?;
         let set = pipeline.descriptor_set(&[Binding::Image(shell.view, sampler.raw)])?;
         Ok(Self {
@@ -125,7 +128,8 @@ impl GlassGeometry {
         deferred: Option<(u32, u32)>,
     ) -> GpuResult<()> {
         let names = ("glass blend", spirv::GLASS_BLEND_FRAG);
-        let pipeline = glass_pipeline(&self.device, names, Stream::OneShell, self.formats)?;
+        let pipeline =
+            glass_pipeline(&self.device, names, (Stream::OneShell, false), self.formats)?;
         let set = pipeline.descriptor_set(&[Binding::Image(samples.view, self.sampler.raw)])?;
         let make =
             |size| DeferredGlass::new(&self.device, samples, &self.sampler, self.formats, size);
@@ -149,10 +153,11 @@ impl GlassGeometry {
         self.layers = None;
     }
 
-    /// Makes the layered pipelines, reading the cube-map array `layers`.
-    pub fn set_layers(&mut self, layers: &crate::backend::Image) -> GpuResult<()> {
+    /// Makes the layered pipelines, reading the cube-map array `layers`
+    /// (with `blend`, per-sample layer maps mixed two by two).
+    pub fn set_layers(&mut self, layers: &crate::backend::Image, blend: bool) -> GpuResult<()> {
         let make = |names, stream| -> GpuResult<(Pipeline, vk::DescriptorSet)> {
-            let pipeline = glass_pipeline(&self.device, names, stream, self.formats)?;
+            let pipeline = glass_pipeline(&self.device, names, (stream, blend), self.formats)?;
             let set = pipeline.descriptor_set(&[Binding::Image(layers.view, self.sampler.raw)])?;
             Ok((pipeline, set))
         };
@@ -233,9 +238,8 @@ impl GlassGeometry {
             (ShellSource::Samples(_, blend), Some((p, set)), _) => {
                 vec![(p, *set, *blend, 0, total)]
             }
-            (ShellSource::Layers(_, n, lead), _, Some([every, outer])) => {
-                let lead = (*lead).min(total);
-                let blend = Vec4::new(*n as f32, n.saturating_sub(1) as f32, 0.0, 0.0);
+            (ShellSource::Layers(_, blend, lead), _, Some([every, outer])) => {
+                let (lead, blend) = ((*lead).min(total), *blend);
                 [(every, 0, lead), (outer, lead, total - lead)]
                     .into_iter()
                     .filter(|d| d.2 > 0)
@@ -279,10 +283,11 @@ pub enum ShellSource<'a> {
     One(&'a crate::backend::Image),
     /// Per-sample maps and the blend (layers, weight of the second).
     Samples(&'a crate::backend::Image, Vec4),
-    /// Layer maps, nearest first, how many layers, and how many indices
-    /// lead with triangles that read every layer (the rest read the
-    /// outermost alone).
-    Layers(&'a crate::backend::Image, u32, u32),
+    /// Layer maps (nearest first; per sample, sample after sample), the
+    /// layered shaders' push (layers, the two samples' first elements,
+    /// the weight of the second) and how many indices lead with triangles
+    /// that read every layer (the rest read the outermost alone).
+    Layers(&'a crate::backend::Image, Vec4, u32),
 }
 
 impl ShellSource<'_> {

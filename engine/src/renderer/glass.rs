@@ -49,13 +49,52 @@ impl Renderer {
         let cones: Vec<_> = (maps.iter())
             .map(|m| crate::glass::coverage::covered_cone(m, size))
             .collect();
-        g.set_layers(image, set, &cones)
+        g.set_layers(image, (set, None), &cones)
+    }
+
+    /// Uploads the per-sample maps of every shell layer of `set` into one
+    /// cube-map array (sample after sample, each nearest layer first) and
+    /// has hybrid frames blend them layer by layer.
+    pub fn load_glass_layer_samples(
+        &mut self,
+        samples: &crate::glass::samples::LayerSamples,
+        set: &inference::glass::ShellSet,
+    ) -> GpuResult<()> {
+        let n = samples.layers.len();
+        if n != set.shells.len()
+            || samples
+                .layers
+                .iter()
+                .any(|l| l.len() != samples.azimuths.len())
+        {
+            return Err(GpuError::Invalid(format!(
+                "per-sample layer maps: {n} layers of {:?} samples for {} shells and {} azimuths",
+                samples.layers.iter().map(Vec::len).collect::<Vec<_>>(),
+                set.shells.len(),
+                samples.azimuths.len()
+            )));
+        }
+        let maps: Vec<&[u8]> = (0..samples.azimuths.len())
+            .flat_map(|s| samples.layers.iter().map(move |l| l[s].as_slice()))
+            .collect();
+        let image = self.glass_cube_array("glass per-sample shell layers", &maps)?;
+        let Some(g) = self.glass.as_mut() else {
+            return Err(GpuError::Invalid("no glass object".into()));
+        };
+        let size = g.shell_map().desc.width;
+        // An inner layer's cone covers what any of its samples covers.
+        let cones: Vec<_> = (samples.layers.iter())
+            .map(|l| {
+                crate::glass::coverage::covered_cone(&crate::glass::samples::max_alpha(l), size)
+            })
+            .collect();
+        g.set_layers(image, (set, Some(samples.azimuths.clone())), &cones)
     }
 
     /// A cube-map array of `maps` (each a full MIP chain of the shell
     /// map's size and format, f16 RGBA in upload order), uploaded and
     /// ready for sampling.
-    fn glass_cube_array(&mut self, name: &str, maps: &[Vec<u8>]) -> GpuResult<Image> {
+    fn glass_cube_array<M: AsRef<[u8]>>(&mut self, name: &str, maps: &[M]) -> GpuResult<Image> {
         let Some(g) = self.glass.as_ref() else {
             return Err(GpuError::Invalid("no glass object".into()));
         };

@@ -9,8 +9,10 @@
 //! beside them, up to −1.9 dB 10° off with one view), hence one map per
 //! sample rather than one for the orbit.
 
+pub mod layered;
 pub mod pack;
 pub mod solve;
+pub mod solve_layers;
 pub mod views;
 
 use crate::glass::samples::SampleShells;
@@ -53,13 +55,8 @@ impl<'a> GlassObject<'a> {
     /// for per-sample maps (`shell_every`); its shell map's origin and size
     /// are playback's (the mesh's centroid, `resolution`).
     pub fn for_scene(scene: &'a Scene) -> Option<GlassObject<'a>> {
-        let (index, object) =
-            (scene.objects.iter().enumerate()).find(|(_, o)| o.glass.is_some())?;
-        let settings = object.glass.clone()?;
-        if settings.shell_lines(scene.orbit.samples).is_empty() {
-            return None;
-        }
-        let (index, origin) = (index as u32, object.mesh.area_weighted_centroid());
+        let (index, object, settings) = per_sample_object(scene)?;
+        let origin = object.mesh.area_weighted_centroid();
         let traced_key = crate::glass::shell::shell_key(scene, index, origin, settings.resolution);
         Some(GlassObject {
             scene,
@@ -71,6 +68,15 @@ impl<'a> GlassObject<'a> {
     }
 }
 
+/// The scene's glass object (the first, as playback's: its index, the
+/// object, its settings) when it asks for per-sample maps (`shell_every`).
+fn per_sample_object(scene: &Scene) -> Option<(u32, &inference::scene::Object, GlassSettings)> {
+    let (index, object) = (scene.objects.iter().enumerate()).find(|(_, o)| o.glass.is_some())?;
+    let settings = object.glass.clone()?;
+    let lines = settings.shell_lines(scene.orbit.samples);
+    (!lines.is_empty()).then_some((index as u32, object, settings))
+}
+
 /// Where line `line`'s map is cached under `out`.
 pub fn sample_path(out: &Path, line: u32) -> PathBuf {
     crate::glass::shell::shell_path(out).with_file_name(format!("room_shell_line{line:04}.bin"))
@@ -79,9 +85,18 @@ pub fn sample_path(out: &Path, line: u32) -> PathBuf {
 /// What line `line`'s map depends on.
 fn sample_key(g: &GlassObject, line: u32, size: (u32, u32)) -> Key {
     let az = g.scene.orbit.angle_deg(line);
-    let mut key = g.traced_key.clone().with("sample shell", VERSION);
-    key = key.with("azimuth", u64::from(az.to_bits()));
-    for e in g.settings.view_elevations() {
+    let key = g.traced_key.clone().with("sample shell", VERSION);
+    views_key(
+        key.with("azimuth", u64::from(az.to_bits())),
+        &g.settings,
+        size,
+    )
+}
+
+/// `key` with what a sample's views and solve depend on: their elevations,
+/// the frame size, spp, τ and the prior.
+fn views_key(mut key: Key, settings: &GlassSettings, size: (u32, u32)) -> Key {
+    for e in settings.view_elevations() {
         key = key.with("view elevation", u64::from(e.to_bits()));
     }
     key.with("width", u64::from(size.0))
@@ -328,6 +343,11 @@ fn compile_shells(
 /// `engine compile` of a glass scene: its per-sample maps' container under
 /// `ctx.out` (solved where missing); None when the scene asks for none.
 pub fn compile(ctx: &super::CompileContext) -> Result<Option<(PathBuf, u64)>> {
+    // Layered shells: every layer's maps (the room shell's alone would
+    // not be played).
+    if let Some(done) = layered::compile(ctx)? {
+        return Ok(Some(done));
+    }
     let Some(g) = GlassObject::for_scene(ctx.scene) else {
         return Ok(None);
     };

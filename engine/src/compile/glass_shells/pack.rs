@@ -34,46 +34,69 @@ pub fn container_key(map_keys: &[Key]) -> Key {
     key
 }
 
-/// The maps' layout: `size`² cube faces with every MIP level, RGB.
-fn leaf(size: u32) -> LeafLayout {
+/// Where the layered shells' per-sample maps are cached under `out`.
+pub fn layers_container_path(out: &Path) -> PathBuf {
+    crate::glass::shell::shell_path(out).with_file_name("layer_shells.ptxc")
+}
+
+/// The maps' layout: `size`² cube faces with every MIP level, `channels`
+/// (3: RGB; 4: premultiplied RGBA, an inner shell layer).
+fn leaf(size: u32, channels: u32) -> LeafLayout {
     LeafLayout {
         width: size,
         height: size,
         faces: 6,
         mips: LeafLayout::max_mips(size, size),
-        channels: 3,
+        channels,
     }
 }
 
-/// `shells` compressed `ratio`:1 into a container (bytes).
-pub fn encode(shells: &SampleShells, size: u32, ratio: f64) -> Result<Vec<u8>> {
-    let layout = leaf(size);
-    let id = TextureId {
-        object: 0,
-        layer: 0,
-    };
-    let grid = ParamGrid::one_d(shells.maps.len() as u32);
+/// One parameter texture over the samples of `maps` (f16 RGBA bytes each),
+/// keeping `channels` of each texel; texture `layer` of object 0.
+fn texture(layer: u32, maps: &[Vec<u8>], size: u32, channels: u32) -> Result<ParamTexture> {
+    let layout = leaf(size, channels);
+    let id = TextureId { object: 0, layer };
+    let grid = ParamGrid::one_d(maps.len() as u32);
     let mut texture = ParamTexture::zeroed(id, grid, layout, 1.0);
-    for (k, map) in shells.maps.iter().enumerate() {
+    let n = channels as usize;
+    for (k, map) in maps.iter().enumerate() {
         let halves: &[f16] = bytemuck::try_cast_slice(map)
-            .map_err(|e| anyhow::anyhow!("shell map of sample {k}: {e}"))?;
+            .map_err(|e| anyhow::anyhow!("shell map {layer} of sample {k}: {e}"))?;
         let sample = texture.sample_mut(k);
-        if halves.len() / 4 * 3 != sample.len() {
+        if halves.len() / 4 * n != sample.len() {
             bail!(
-                "shell map of sample {k}: {} texels, expected {}",
+                "shell map {layer} of sample {k}: {} texels, expected {}",
                 halves.len() / 4,
-                sample.len() / 3
+                sample.len() / n
             );
         }
-        for (texel, h) in sample.chunks_exact_mut(3).zip(halves.chunks_exact(4)) {
-            for c in 0..3 {
+        for (texel, h) in sample.chunks_exact_mut(n).zip(halves.chunks_exact(4)) {
+            for c in 0..n {
                 texel[c] = h[c].to_f32();
             }
         }
     }
-    let input = EncodeInput {
-        textures: vec![texture],
-    };
+    Ok(texture)
+}
+
+/// `shells` compressed `ratio`:1 into a container (bytes).
+pub fn encode(shells: &SampleShells, size: u32, ratio: f64) -> Result<Vec<u8>> {
+    encode_textures(vec![texture(0, &shells.maps, size, 3)?], ratio)
+}
+
+/// Layered shells' per-sample maps (`layers[k][s]`: layer `k`, nearest
+/// first, of sample `s`) compressed `ratio`:1 into one container: the
+/// inner layers premultiplied RGBA, the outermost RGB (it is opaque).
+pub fn encode_layers(layers: &[Vec<Vec<u8>>], size: u32, ratio: f64) -> Result<Vec<u8>> {
+    let n = layers.len();
+    let textures = (layers.iter().enumerate())
+        .map(|(k, maps)| texture(k as u32, maps, size, if k + 1 < n { 4 } else { 3 }))
+        .collect::<Result<Vec<_>>>()?;
+    encode_textures(textures, ratio)
+}
+
+fn encode_textures(textures: Vec<ParamTexture>, ratio: f64) -> Result<Vec<u8>> {
+    let input = EncodeInput { textures };
     let options = EncodeOptions::default();
     let encoded = match codec::encode(&input, Target::Ratio(ratio), &options) {
         // Maps so small that the ratio leaves less than the container's
@@ -90,30 +113,49 @@ pub fn encode(shells: &SampleShells, size: u32, ratio: f64) -> Result<Vec<u8>> {
 /// Every sample of a container [`encode`] made, decoded to f16 RGBA bytes
 /// (the maps' playback form), at `azimuths`.
 pub fn decode(bytes: Vec<u8>, azimuths: Vec<f32>, file: &Path) -> Result<SampleShells> {
+    let mut layers = decode_layers(bytes, azimuths.len(), 1, file)?;
+    let maps = layers.pop().unwrap_or_default();
+    Ok(SampleShells { azimuths, maps })
+}
+
+/// Every sample of every layer of a container [`encode_layers`] made with
+/// `layers` layers of `samples` samples: `[layer][sample]`, f16 RGBA bytes.
+pub fn decode_layers(
+    bytes: Vec<u8>,
+    samples: usize,
+    layers: usize,
+    file: &Path,
+) -> Result<Vec<Vec<Vec<u8>>>> {
     let bad = |e: codec::CodecError| anyhow::anyhow!("{}: {e}", file.display());
     let c = Container::from_bytes(bytes).map_err(bad)?;
-    let t = c
-        .textures()
-        .first()
-        .with_context(|| format!("{}: no texture", file.display()))?;
-    if t.grid.len() != azimuths.len() {
+    if c.textures().len() != layers {
         bail!(
-            "{}: {} samples, expected {}",
+            "{}: {} textures, expected {layers} (one per shell layer)",
             file.display(),
-            t.grid.len(),
-            azimuths.len()
+            c.textures().len()
         );
     }
     let mut cache = DecodeCache::default();
-    let mut maps = Vec::with_capacity(azimuths.len());
-    for k in 0..azimuths.len() as u32 {
-        let mut out = vec![f16::ZERO; t.layout.texels() * 4];
-        cache
-            .decode_leaf_all(&c, 0, 0, [k, 0], &mut out)
-            .map_err(bad)?;
-        maps.push(bytemuck::cast_slice(&out).to_vec());
-    }
-    Ok(SampleShells { azimuths, maps })
+    (c.textures().iter())
+        .map(|t| {
+            if t.grid.len() != samples {
+                bail!(
+                    "{}: {} samples, expected {samples}",
+                    file.display(),
+                    t.grid.len()
+                );
+            }
+            (0..samples as u32)
+                .map(|s| {
+                    let mut out = vec![f16::ZERO; t.layout.texels() * 4];
+                    cache
+                        .decode_leaf_all(&c, t.id.object, t.id.layer, [s, 0], &mut out)
+                        .map_err(bad)?;
+                    Ok(bytemuck::cast_slice(&out).to_vec())
+                })
+                .collect()
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -122,7 +164,7 @@ mod tests {
 
     /// A smooth map of `size`² per face, varying with `k`, as f16 RGBA bytes.
     fn map(size: u32, k: usize) -> Vec<u8> {
-        let texels = leaf(size).texels();
+        let texels = leaf(size, 3).texels();
         (0..texels)
             .flat_map(|i| {
                 let x = 0.5 + 0.4 * (i as f32 * 0.002).sin();
@@ -167,5 +209,50 @@ mod tests {
         // A container of other samples is refused, naming the file.
         let e = decode(bytes, vec![0.0], file).expect_err("sample count");
         assert!(e.to_string().contains("room_shells.ptxc"), "{e}");
+    }
+
+    #[test]
+    fn packed_layers_keep_the_inner_coverage_and_an_opaque_outermost() {
+        // Two layers of two samples: the inner one's alpha varies.
+        let texels = leaf(16, 4).texels();
+        let inner = |k: usize| -> Vec<u8> {
+            (0..texels)
+                .flat_map(|i| {
+                    let a = 0.5 + 0.4 * (i as f32 * 0.003 + k as f32).sin();
+                    [0.8 * a, 0.2 * a, 0.1 * a, a].map(f16::from_f32)
+                })
+                .flat_map(f16::to_le_bytes)
+                .collect()
+        };
+        let layers = vec![vec![inner(0), inner(1)], vec![map(16, 0), map(16, 1)]];
+        let bytes = encode_layers(&layers, 16, 20.0).expect("encode");
+        let file = Path::new("layer_shells.ptxc");
+        let back = decode_layers(bytes.clone(), 2, 2, file).expect("decode");
+        assert_eq!(back.len(), 2);
+        for (k, (a, b)) in layers
+            .iter()
+            .flatten()
+            .zip(back.iter().flatten())
+            .enumerate()
+        {
+            let a: Vec<f16> = bytemuck::pod_collect_to_vec(a);
+            let b: Vec<f16> = bytemuck::pod_collect_to_vec(b);
+            assert_eq!(a.len(), b.len());
+            let mut worst = 0.0f32;
+            for (p, q) in a.chunks_exact(4).zip(b.chunks_exact(4)) {
+                if k >= 2 {
+                    assert_eq!(q[3], f16::ONE, "the outermost layer is opaque");
+                }
+                for c in 0..4 {
+                    worst = worst.max((p[c].to_f32() - q[c].to_f32()).abs());
+                }
+            }
+            assert!(worst < 0.1, "map {k}: off by {worst}");
+        }
+        // Another count of layers or samples is refused, naming the file.
+        for (samples, n) in [(3, 2), (2, 3)] {
+            let e = decode_layers(bytes.clone(), samples, n, file).expect_err("counts");
+            assert!(e.to_string().contains("layer_shells.ptxc"), "{e}");
+        }
     }
 }

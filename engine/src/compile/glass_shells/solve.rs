@@ -33,7 +33,7 @@ pub struct ChannelStats {
 }
 
 /// Row `row` of `a` scaled by `s`, appended to `entries`.
-fn extend_scaled_row(entries: &mut Vec<(u32, f32)>, a: &CsrMatrix, row: usize, s: f32) {
+pub(super) fn extend_scaled_row(entries: &mut Vec<(u32, f32)>, a: &CsrMatrix, row: usize, s: f32) {
     let span = a.row_ptr[row]..a.row_ptr[row + 1];
     entries.extend(
         a.col_idx[span.clone()]
@@ -48,7 +48,7 @@ fn extend_scaled_row(entries: &mut Vec<(u32, f32)>, a: &CsrMatrix, row: usize, s
 /// exit rays) weighted by each term's share `F·G` of the pixel, so a
 /// pixel whose one lookup per term stands for a wide spread of exit rays
 /// pulls the map less.
-fn row_weight((wt, ct): (f32, f32), (wr, cr): (f32, f32)) -> f32 {
+pub(super) fn row_weight((wt, ct): (f32, f32), (wr, cr): (f32, f32)) -> f32 {
     let share = wt.abs() + wr.abs();
     match share > 0.0 {
         true => ((wt.abs() * ct + wr.abs() * cr) / share)
@@ -109,7 +109,7 @@ fn system(
 }
 
 /// `b − A x`.
-fn residual(a: &CsrMatrix, x: &[f32], b: &[f32]) -> Vec<f32> {
+pub(super) fn residual(a: &CsrMatrix, x: &[f32], b: &[f32]) -> Vec<f32> {
     let mut ax = vec![0.0; a.rows];
     a.mul(x, &mut ax);
     b.iter().zip(&ax).map(|(b, ax)| b - ax).collect()

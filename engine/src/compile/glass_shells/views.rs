@@ -37,6 +37,35 @@ pub fn frame_view(
     s: ViewSettings,
     key: u64,
 ) -> Result<FrameView> {
+    let view = layer_view(tracer, lens, shells, eye, s, |i| key + i)?;
+    let [t, r] = (view.shells.into_iter().next()).context("the room shell set has no shell")?;
+    Ok(FrameView {
+        t,
+        r,
+        targets: view.targets,
+        beauty: view.beauty,
+    })
+}
+
+/// One view of a layered solve: the traced targets (each term's image of
+/// every shell), per shell the two terms' probe geometry (T, R), and the
+/// whole frame traced independently (RGB per pixel).
+pub struct LayerView {
+    pub targets: inference::glass::targets::GlassTargets,
+    pub shells: Vec<[ProbeGeometry; 2]>,
+    pub beauty: Vec<[f32; 3]>,
+}
+
+/// The view from `eye` for every shell of `shells`; `key(i)` names probe
+/// mesh `i` (2·shell + term), unique per view of one solve.
+pub fn layer_view(
+    tracer: &Tracer,
+    lens: &Lens,
+    shells: &ShellSet,
+    eye: Vec3,
+    s: ViewSettings,
+    key: impl Fn(u64) -> u64,
+) -> Result<LayerView> {
     let scene = tracer.scene();
     let (width, height) = s.size;
     let view_proj = camera::projection(scene, width, height) * scene.orbit.view(eye);
@@ -53,36 +82,48 @@ pub fn frame_view(
         ..TraceSettings::default()
     };
     let targets = trace_targets(tracer, lens, shells, eye, &settings);
-    let frame = tracer.render(
-        eye,
-        &TraceSettings {
-            seed: SOLVE_FRAME_SEED,
-            ..settings
-        },
-    )?;
-    let beauty = frame
-        .layer("beauty")
-        .context("the traced frame has no beauty layer")?;
-    let geometry = |term, key| ProbeGeometry {
-        key,
+    let beauty = beauty(tracer, eye, &settings)?;
+    let geometry = |shell: usize, term: Term, i: u64| ProbeGeometry {
+        key: key(i),
         positions: tess.positions.clone(),
         indices: tess.indices.clone(),
         lookup: Lookup::Cube {
-            dirs: term_lookups(&tess, shells, term, 0),
+            dirs: term_lookups(&tess, shells, term, shell),
             lod_bias: 0.0,
         },
         view_proj,
         width,
         height,
     };
-    Ok(FrameView {
-        t: geometry(Term::T, key),
-        r: geometry(Term::R, key + 1),
+    let shells = (0..shells.shells.len())
+        .map(|k| {
+            let i = 2 * k as u64;
+            [geometry(k, Term::T, i), geometry(k, Term::R, i + 1)]
+        })
+        .collect();
+    Ok(LayerView {
         targets,
-        beauty: beauty
-            .pixels
-            .chunks_exact(3)
-            .map(|p| [p[0], p[1], p[2]])
-            .collect(),
+        shells,
+        beauty,
     })
+}
+
+/// The whole frame from `eye` traced at `settings` with the solve's own
+/// seed, RGB per pixel.
+fn beauty(tracer: &Tracer, eye: Vec3, settings: &TraceSettings) -> Result<Vec<[f32; 3]>> {
+    let frame = tracer.render(
+        eye,
+        &TraceSettings {
+            seed: SOLVE_FRAME_SEED,
+            ..settings.clone()
+        },
+    )?;
+    let beauty = frame
+        .layer("beauty")
+        .context("the traced frame has no beauty layer")?;
+    Ok(beauty
+        .pixels
+        .chunks_exact(3)
+        .map(|p| [p[0], p[1], p[2]])
+        .collect())
 }
