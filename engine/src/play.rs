@@ -76,6 +76,24 @@ pub fn compile_context<'a>(
     }
 }
 
+/// Sets `renderer` up for hybrid glass: the room shell, then layered
+/// scenes' layers, per sample where the scene asks for per-sample maps
+/// (`--traced-layers`: traced), or one-shell scenes' per-sample maps, if
+/// any (`--traced-shell`: the one traced room shell, no layers).
+fn setup_hybrid(ctx: &CompileContext, renderer: &mut Renderer, pem: &PemOptions) -> Result<()> {
+    let deferred = pem.compositing == crate::pem::settings::Compositing::Deferred;
+    crate::glass::setup(renderer, ctx.scene, ctx.out, (pem.tau, deferred))?;
+    let raw = pem.maps == crate::options::Maps::Exr;
+    if pem.traced_shell {
+        return Ok(());
+    }
+    match crate::glass::layers::load(renderer, ctx.scene, ctx.out)? {
+        1 => crate::compile::glass_shells::load(ctx, renderer, raw),
+        _ if pem.traced_layers => Ok(()),
+        _ => crate::compile::glass_shells::layered::load(ctx, renderer, raw).map(|_| ()),
+    }
+}
+
 /// Sets `renderer` up for `mode`, compiling missing maps first.
 pub fn setup_mode<'s>(
     ctx: &CompileContext<'s>,
@@ -119,21 +137,7 @@ pub fn setup_mode<'s>(
             FrameSource::Trace(Box::new(Tracer::new(ctx.scene)?), settings)
         }
         Mode::Hybrid => {
-            let deferred = pem.compositing == crate::pem::settings::Compositing::Deferred;
-            crate::glass::setup(renderer, ctx.scene, ctx.out, (pem.tau, deferred))?;
-            // Layered scenes play their layers, per sample where the scene
-            // asks for per-sample maps; one-shell scenes their per-sample
-            // maps, if any.
-            let raw = pem.maps == crate::options::Maps::Exr;
-            if !pem.traced_shell {
-                match crate::glass::layers::load(renderer, ctx.scene, ctx.out)? {
-                    1 => crate::compile::glass_shells::load(ctx, renderer, raw)?,
-                    _ if pem.traced_layers => {}
-                    _ => {
-                        crate::compile::glass_shells::layered::load(ctx, renderer, raw)?;
-                    }
-                }
-            }
+            setup_hybrid(ctx, renderer, pem)?;
             FrameSource::Raster(FrameMode::Hybrid)
         }
         Mode::Rem => {

@@ -162,6 +162,7 @@ fn check_flags(pem: &PemOptions) -> Result<()> {
         (pem.tau.is_some(), "--tau"),
         (pem.compositing != Compositing::Deferred, "--compositing"),
         (pem.traced_shell, "--traced-shell"),
+        (pem.traced_layers, "--traced-layers"),
     ]
     .into_iter()
     .filter_map(|(given, flag)| given.then_some(flag))

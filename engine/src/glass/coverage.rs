@@ -33,10 +33,19 @@ impl Cone {
         half_angle: std::f32::consts::PI,
     };
 
+    /// No direction: a layer that covers nothing (negative half angle).
+    pub const NONE: Cone = Cone {
+        axis: Vec3::Z,
+        half_angle: -1.0,
+    };
+
     /// Whether the cone around unit `dir` whose half angle has cosine
     /// `cos_spread` meets this one: the angle between the axes is at most
     /// the sum of the half angles (compared by cosines, no `acos`).
     pub fn meets(&self, dir: Vec3, cos_spread: f32) -> bool {
+        if self.half_angle < 0.0 {
+            return false;
+        }
         let cs = cos_spread.clamp(-1.0, 1.0);
         let (sh, ch) = self.half_angle.sin_cos();
         // The sum reaches π (every direction) when spread ≥ π − half.
@@ -183,6 +192,12 @@ mod tests {
         // No cone: nothing needs layers; every direction: all do.
         assert_eq!(split_triangles(&s, &indices, &[], &mut out), 0);
         assert_eq!(split_triangles(&s, &indices, &[Cone::ALL], &mut out), 9);
+        // A layer covering nothing needs no triangle, even the widest.
+        assert_eq!(split_triangles(&s, &indices, &[Cone::NONE], &mut out), 0);
+        assert!(
+            !Cone::NONE.meets(Vec3::X, -1.0),
+            "a spread over every direction"
+        );
     }
 
     #[test]

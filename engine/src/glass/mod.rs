@@ -308,8 +308,11 @@ impl GlassPlayer {
         self.geometry.set_layers(&image, azimuths.is_some())?;
         self.layers = Some((image, set.clone()));
         self.layer_azimuths = azimuths;
-        // An inner layer that covers nothing never needs its triangles.
-        self.cones = cones.iter().take(n - 1).flatten().copied().collect();
+        // An inner layer that covers nothing never needs its triangles; it
+        // keeps its place, so each cone is tested against its own shell.
+        self.cones = (cones.iter().take(n - 1))
+            .map(|c| c.unwrap_or(coverage::Cone::NONE))
+            .collect();
         Ok(())
     }
 

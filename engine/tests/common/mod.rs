@@ -132,3 +132,4 @@ pub fn traced_views(out: &Path) -> Vec<String> {
     views
 }
 pub mod glass;
+pub mod glass_cli;

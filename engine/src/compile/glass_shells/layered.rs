@@ -175,8 +175,10 @@ impl<'a> Solver<'a> {
         let n = g.set.shells.len();
         let traced = (traced.iter().enumerate())
             .map(|(k, bytes)| {
-                let halves: &[f16] = bytemuck::try_cast_slice(bytes)
-                    .map_err(|e| anyhow::anyhow!("shell layer {k}'s traced map: {e}"))?;
+                let halves: &[f16] = bytemuck::try_cast_slice(bytes).map_err(|e| {
+                    let file = crate::glass::layers::layer_path(Path::new("<out>"), k);
+                    anyhow::anyhow!("shell layer {k}'s traced map ({}): {e}", file.display())
+                })?;
                 let channels = if k + 1 < n { 4 } else { 3 };
                 Ok((0..channels)
                     .map(|c| halves.chunks_exact(4).map(|t| t[c].to_f32()).collect())
@@ -207,7 +209,8 @@ impl<'a> Solver<'a> {
         let views: Vec<LayerView> = (self.g.settings.view_elevations().iter().enumerate())
             .map(|(v, &el)| {
                 let key = move |i: u64| {
-                    ((u64::from(line) << 16) | ((v as u64) << 8) | i) * 0x9e37_79b9_7f4a_7c15
+                    ((u64::from(line) << 16) | ((v as u64) << 8) | i)
+                        .wrapping_mul(0x9e37_79b9_7f4a_7c15)
                 };
                 layer_view(
                     &self.tracer,
@@ -342,7 +345,9 @@ pub fn load(
         }
         None => compile_layers(ctx, &g, raw)?,
     };
-    renderer.load_glass_layer_samples(&samples, &g.set)?;
+    renderer
+        .load_glass_layer_samples(&samples, &g.set)
+        .with_context(|| format!("playing the per-sample layer maps of {}", file.display()))?;
     renderer.map_bytes = Some(bytes);
     eprintln!(
         "hybrid glass blends {} per-sample maps of each of its {n} shell layers (every {} orbit lines)",

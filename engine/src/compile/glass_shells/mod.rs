@@ -269,7 +269,8 @@ impl<'a> Solver<'a> {
         };
         let views = (self.g.settings.view_elevations().iter().enumerate())
             .map(|(i, &el)| {
-                let key = ((u64::from(line) << 8) | (2 * i as u64)) * 0x9e37_79b9_7f4a_7c15;
+                let key =
+                    ((u64::from(line) << 8) | (2 * i as u64)).wrapping_mul(0x9e37_79b9_7f4a_7c15);
                 views::frame_view(
                     &self.tracer,
                     &self.lens,

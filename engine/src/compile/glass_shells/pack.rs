@@ -136,8 +136,9 @@ pub fn decode_layers(
         );
     }
     let mut cache = DecodeCache::default();
-    (c.textures().iter())
-        .map(|t| {
+    (0..layers as u32)
+        .map(|k| {
+            let t = &c.textures()[c.texture_index(0, k).map_err(bad)?];
             if t.grid.len() != samples {
                 bail!(
                     "{}: {} samples, expected {samples}",

@@ -41,9 +41,10 @@ pub fn solve_layer(
 ) -> Result<Vec<Vec<f32>>> {
     let layout = TextureLayout::full_chain(shape);
     let channels = traced.len();
-    if !(1..=4).contains(&channels) || traced.iter().any(|t| t.len() != layout.len()) {
+    let texels: Vec<usize> = traced.iter().map(Vec::len).collect();
+    if !(1..=4).contains(&channels) || texels.iter().any(|&n| n != layout.len()) {
         bail!(
-            "layer {k}: traced map of {channels} channels, expected 1 to 4 of {} texels",
+            "layer {k}: traced map of {channels} channels of {texels:?} texels, expected 1 to 4 of {}",
             layout.len()
         );
     }
@@ -101,9 +102,10 @@ pub fn solve_outer(
     refine: f32,
 ) -> Result<Vec<Vec<f32>>> {
     let layout = TextureLayout::full_chain(shape);
-    if traced.len() != 3 || traced.iter().any(|t| t.len() != layout.len()) {
+    let texels: Vec<usize> = traced.iter().map(Vec::len).collect();
+    if texels.len() != 3 || texels.iter().any(|&n| n != layout.len()) {
         bail!(
-            "the outermost layer's traced map: expected RGB of {} texels",
+            "the outermost layer's traced map: {texels:?} texels per channel, expected RGB of {}",
             layout.len()
         );
     }
