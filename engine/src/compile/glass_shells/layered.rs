@@ -8,11 +8,13 @@
 
 use super::solve_layers::{solve_layer, solve_outer};
 use super::views::{LayerView, ViewSettings, layer_view};
-use super::{SHELL_REFINE, SHELL_SOLVE_TAU, SHELL_VIEW_SPP, pack, progress, read_fresh, views_key};
+use super::{
+    SHELL_REFINE, SHELL_SOLVE_TAU, SHELL_VIEW_SPP, channels_of, pack, progress, read_fresh,
+    rgba_bytes, views_key,
+};
 use crate::glass::samples::LayerSamples;
 use crate::probe::VulkanProbe;
 use anyhow::{Context, Result};
-use half::f16;
 use inference::glass::{Lens, ShellSet};
 use inference::key::Key;
 use inference::scene::{GlassSettings, Scene};
@@ -116,7 +118,7 @@ fn sample_layers(
     }
     if let Some(&first) = todo.first() {
         let (start, mut solved) = (Instant::now(), 0);
-        let mut solver = Solver::new(g, device, size, traced)?;
+        let mut solver = Solver::new(g, out, device, size, traced)?;
         let bar = progress(todo.len());
         for &i in &todo {
             let line = lines[i];
@@ -167,6 +169,7 @@ struct Solver<'a> {
 impl<'a> Solver<'a> {
     fn new(
         g: &'a LayeredObject<'a>,
+        out: &Path,
         device: &crate::backend::DeviceOptions,
         size: (u32, u32),
         traced: &[Vec<u8>],
@@ -175,16 +178,12 @@ impl<'a> Solver<'a> {
         let n = g.set.shells.len();
         let traced = (traced.iter().enumerate())
             .map(|(k, bytes)| {
-                let halves: &[f16] = bytemuck::try_cast_slice(bytes).map_err(|e| {
-                    let file = crate::glass::layers::layer_path(Path::new("<out>"), k);
-                    anyhow::anyhow!("shell layer {k}'s traced map ({}): {e}", file.display())
-                })?;
-                let channels = if k + 1 < n { 4 } else { 3 };
-                Ok((0..channels)
-                    .map(|c| halves.chunks_exact(4).map(|t| t[c].to_f32()).collect())
-                    .collect())
+                channels_of(bytes, if k + 1 < n { 4 } else { 3 }).map_err(|e| {
+                    let file = crate::glass::layers::layer_path(out, k);
+                    anyhow::anyhow!("shell layer {k}'s traced map {}: {e}", file.display())
+                })
             })
-            .collect::<Result<Vec<Vec<Vec<f32>>>>>()?;
+            .collect::<Result<Vec<_>>>()?;
         let device = crate::backend::create_device(device)?;
         Ok(Self {
             g,
@@ -239,20 +238,6 @@ impl<'a> Solver<'a> {
             })
             .collect()
     }
-}
-
-/// A solved map (3 or 4 channels of `len` texels) as f16 RGBA bytes:
-/// colours ≥ 0, alpha clamped to [0, 1], 1 where the map has none.
-fn rgba_bytes(map: &[Vec<f32>], len: usize) -> Vec<u8> {
-    let at = |c: usize, i: usize| map.get(c).and_then(|m| m.get(i)).copied();
-    let halves: Vec<f16> = (0..len)
-        .flat_map(|i| {
-            let rgb = |c: usize| at(c, i).unwrap_or(0.0).max(0.0);
-            let alpha = at(3, i).map_or(1.0, |a| a.clamp(0.0, 1.0));
-            [rgb(0), rgb(1), rgb(2), alpha].map(f16::from_f32)
-        })
-        .collect();
-    bytemuck::cast_slice(&halves).to_vec()
 }
 
 /// The per-sample layer maps of `g` solved where missing under `ctx.out`
@@ -360,6 +345,7 @@ pub fn load(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use half::f16;
 
     #[test]
     fn solved_maps_keep_colours_and_coverage_in_range() {
@@ -369,12 +355,12 @@ mod tests {
             vec![0.0, 1.0],
             vec![1.5, -0.2],
         ];
-        let halves: Vec<f16> = bytemuck::cast_slice::<u8, f16>(&rgba_bytes(&rgba, 2)).to_vec();
+        let halves: Vec<f16> = bytemuck::pod_collect_to_vec(&rgba_bytes(&rgba, 2));
         let got: Vec<f32> = halves.iter().map(|h| h.to_f32()).collect();
         assert_eq!(got, vec![0.0, 2.0, 0.0, 1.0, 0.5, 0.25, 1.0, 0.0]);
         // The outermost layer has no alpha: opaque.
         let rgb = &rgba[..3];
-        let halves: Vec<f16> = bytemuck::cast_slice::<u8, f16>(&rgba_bytes(rgb, 2)).to_vec();
+        let halves: Vec<f16> = bytemuck::pod_collect_to_vec(&rgba_bytes(rgb, 2));
         assert_eq!(halves[3].to_f32(), 1.0);
         assert_eq!(halves[7].to_f32(), 1.0);
     }

@@ -237,7 +237,7 @@ impl<'a> Solver<'a> {
     ) -> Result<Self> {
         let start = Instant::now();
         let object = &g.scene.objects[g.index as usize];
-        let halves: &[f16] = bytemuck::try_cast_slice(traced)
+        let traced = channels_of(traced, 3)
             .map_err(|e| anyhow::anyhow!("the traced shell map's bytes: {e}"))?;
         let device = crate::backend::create_device(device)?;
         Ok(Self {
@@ -250,9 +250,7 @@ impl<'a> Solver<'a> {
                 g.origin,
                 inference::glass::room_box_shape(g.scene),
             ),
-            traced: (0..3)
-                .map(|c| halves.chunks_exact(4).map(|t| t[c].to_f32()).collect())
-                .collect(),
+            traced,
             size,
             start,
         })
@@ -293,14 +291,31 @@ impl<'a> Solver<'a> {
         )
         .with_context(|| format!("solving the shell map of orbit line {line}"))?;
         let len = TextureLayout::full_chain(shape).len();
-        let halves: Vec<f16> = (0..len)
-            .flat_map(|i| {
-                let c = |k: usize| f16::from_f32(map[k][i].max(0.0));
-                [c(0), c(1), c(2), f16::ONE]
-            })
-            .collect();
-        Ok(bytemuck::cast_slice(&halves).to_vec())
+        Ok(rgba_bytes(&map, len))
     }
+}
+
+/// The first `channels` channels of f16 RGBA texel bytes, each as f32 in
+/// texel order (what a solve starts from).
+fn channels_of(bytes: &[u8], channels: usize) -> Result<Vec<Vec<f32>>, bytemuck::PodCastError> {
+    let halves: &[f16] = bytemuck::try_cast_slice(bytes)?;
+    Ok((0..channels)
+        .map(|c| halves.chunks_exact(4).map(|t| t[c].to_f32()).collect())
+        .collect())
+}
+
+/// A solved map (3 or 4 channels of `len` texels) as f16 RGBA bytes:
+/// colours ≥ 0, alpha clamped to [0, 1], 1 where the map has none.
+fn rgba_bytes(map: &[Vec<f32>], len: usize) -> Vec<u8> {
+    let at = |c: usize, i: usize| map.get(c).and_then(|m| m.get(i)).copied();
+    let halves: Vec<f16> = (0..len)
+        .flat_map(|i| {
+            let rgb = |c: usize| at(c, i).unwrap_or(0.0).max(0.0);
+            let alpha = at(3, i).map_or(1.0, |a| a.clamp(0.0, 1.0));
+            [rgb(0), rgb(1), rgb(2), alpha].map(f16::from_f32)
+        })
+        .collect();
+    bytemuck::cast_slice(&halves).to_vec()
 }
 
 /// The key the per-sample maps' container of `scene` carries at frame

@@ -13,7 +13,7 @@ use crate::probe::VulkanProbe;
 use anyhow::{Context, Result, bail};
 use inference::glass::targets::TermImages;
 use inference::probe::build_matrix;
-use inference::solve::csr::CsrBuilder;
+use inference::solve::csr::{CsrBuilder, CsrMatrix};
 use inference::solve::layout::{TextureLayout, TextureShape};
 use inference::solve::{SolveOptions, solve_channels};
 use std::collections::HashMap;
@@ -70,17 +70,28 @@ pub fn solve_layer(
             }
         }
     }
-    let a = a.finish();
-    let rhs: Vec<Vec<f32>> = (0..channels)
-        .map(|c| residual(&a, &traced[c], &b[c]))
+    refined(&a.finish(), traced, &b, &layout, refine)
+        .with_context(|| format!("solving shell layer {k}"))
+}
+
+/// `traced` (per channel) plus the correction δ minimising
+/// `‖A(traced + δ) − b‖² + refine·‖δ‖²` for every channel's `b` at once.
+fn refined(
+    a: &CsrMatrix,
+    traced: &[Vec<f32>],
+    b: &[Vec<f32>],
+    layout: &TextureLayout,
+    refine: f32,
+) -> Result<Vec<Vec<f32>>> {
+    let rhs: Vec<Vec<f32>> = (traced.iter().zip(b))
+        .map(|(t, b)| residual(a, t, b))
         .collect();
     let rhs: Vec<&[f32]> = rhs.iter().map(Vec::as_slice).collect();
     let options = SolveOptions {
         eps_prior: refine,
         ..SolveOptions::default()
     };
-    let solved = solve_channels(&a, &rhs, &layout, None, &options)
-        .with_context(|| format!("solving shell layer {k}"))?;
+    let solved = solve_channels(a, &rhs, layout, None, &options)?;
     Ok(traced
         .iter()
         .zip(solved)
@@ -145,20 +156,14 @@ pub fn solve_outer(
             }
         }
     }
-    let options = SolveOptions {
-        eps_prior: refine,
-        ..SolveOptions::default()
-    };
-    (a.into_iter().map(CsrBuilder::finish).zip(traced).zip(&b))
+    // Each channel has its own rows (weighted by its F·G): one solve each.
+    (a.into_iter().map(CsrBuilder::finish).zip(traced).zip(b))
         .map(|((a, traced), b)| {
-            let rhs = residual(&a, traced, b);
-            let d = solve_channels(&a, &[rhs.as_slice()], &layout, None, &options)
+            let x = refined(&a, std::slice::from_ref(traced), &[b], &layout, refine)
                 .context("solving the outermost shell layer")?;
-            let d = d
-                .into_iter()
+            x.into_iter()
                 .next()
-                .context("the solve returned no channel")?;
-            Ok(traced.iter().zip(&d.x).map(|(t, d)| t + d).collect())
+                .context("the solve returned no channel")
         })
         .collect()
 }
