@@ -8,6 +8,7 @@ layout(push_constant) uniform Push {
     mat4 view_proj;
     vec4 albedo;          // rgb; a = 1 when the texture modulates it
     vec4 emission;        // rgb emitted radiance
+    vec4 pattern;         // rgb albedo × colors[1]; a = texel (albedo.glsl)
 } pc;
 
 layout(location = 0) out vec3 out_position;

@@ -86,6 +86,7 @@ impl GpuScene {
                 width: 1,
                 height: 1,
                 texels: vec![[1.0; 4]],
+                pattern: None,
             },
         )?;
         Ok(Self {

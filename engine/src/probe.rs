@@ -12,6 +12,7 @@ use crate::passes::mirror::{fresnel_lut_image, mirror_pipeline};
 use crate::passes::probe::ProbePass;
 use crate::passes::readback::ReadbackPass;
 use crate::passes::room::{RoomStyle, room_pipeline};
+use crate::passes::room_albedo::SurfaceAlbedo;
 use crate::passes::target::{Load, Target};
 use crate::shader_interface::{MirrorPush, RoomPush};
 use ash::vk;
@@ -51,6 +52,9 @@ pub struct VulkanProbe {
     device: Device,
     executor: Executor,
     bare: Pipeline,
+    /// The room passes' albedo alone (`RoomStyle::Albedo`); its set layout
+    /// is the bare pipeline's, so it draws with the bare set.
+    albedo: Pipeline,
     mirror: Pipeline,
     lut: Image,
     repeat: Sampler,
@@ -73,6 +77,7 @@ impl VulkanProbe {
         Ok(Self {
             device: device.clone(),
             bare: room_pipeline(device, RoomStyle::Bare, FORMAT, DEPTH)?,
+            albedo: room_pipeline(device, RoomStyle::Albedo, FORMAT, DEPTH)?,
             mirror: mirror_pipeline(device, FORMAT, DEPTH)?,
             lut,
             executor,
@@ -248,11 +253,41 @@ impl VulkanProbe {
         Ok(())
     }
 
+    /// A diffuse surface's albedo at `geometry`'s view exactly as the room
+    /// passes draw it (`surface`: a pattern in closed form, or `texels`
+    /// read through the room's sampler): the light-map solve's factor.
+    pub fn render_albedo(
+        &mut self,
+        geometry: &ProbeGeometry,
+        layout: &TextureLayout,
+        texels: &[[f32; 4]],
+        surface: SurfaceAlbedo,
+    ) -> GpuResult<Vec<[f32; 4]>> {
+        if !matches!(geometry.lookup, Lookup::Uv(_)) {
+            return Err(GpuError::Invalid(
+                "an albedo probe reads uv lookups (the room's sampler)".into(),
+            ));
+        }
+        self.render_with(geometry, layout, texels, Some(surface))
+    }
+
     fn render_gpu(
         &mut self,
         geometry: &ProbeGeometry,
         layout: &TextureLayout,
         texels: &[[f32; 4]],
+    ) -> GpuResult<Vec<[f32; 4]>> {
+        self.render_with(geometry, layout, texels, None)
+    }
+
+    /// One probe render: the mirror pipeline for cube lookups, else the
+    /// albedo pipeline for `surface`, else the bare one.
+    fn render_with(
+        &mut self,
+        geometry: &ProbeGeometry,
+        layout: &TextureLayout,
+        texels: &[[f32; 4]],
+        surface: Option<SurfaceAlbedo>,
     ) -> GpuResult<Vec<[f32; 4]>> {
         let cube = probe_is_cube(geometry, layout, texels)?;
         self.ensure_targets(geometry.width, geometry.height)?;
@@ -268,14 +303,17 @@ impl VulkanProbe {
             Lookup::Cube { lod_bias, .. } => lod_bias,
             Lookup::Uv(_) | Lookup::UvNearestLevel(_) => 0.0,
         };
+        let surface_or_white = surface.unwrap_or(SurfaceAlbedo::of(glam::Vec3::ONE, None));
         let push_bare = move |p: &Pipeline, cmd| {
-            p.bind(
+            p.bind_variant(
                 cmd,
+                surface_or_white.variant,
                 Some(texture.set),
                 &RoomPush {
                     view_proj,
-                    albedo: Vec4::ONE,
+                    albedo: surface_or_white.first,
                     emission: Vec4::ZERO,
+                    pattern: surface_or_white.second,
                 },
             )
         };
@@ -300,7 +338,11 @@ impl VulkanProbe {
         };
         let probe = ProbePass {
             device: &self.device,
-            pipeline: if cube { &self.mirror } else { &self.bare },
+            pipeline: match (cube, surface) {
+                (true, _) => &self.mirror,
+                (false, Some(_)) => &self.albedo,
+                (false, None) => &self.bare,
+            },
             set: texture.set,
             push: if cube { &push_mirror } else { &push_bare },
             mesh: &uploaded.mesh,

@@ -103,9 +103,12 @@ const fn attribute(
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct RoomPush {
     pub view_proj: Mat4,
-    /// rgb albedo, times the bound texture (a white texel when untextured).
+    /// rgb albedo, times the bound texture (a white texel when untextured)
+    /// or colors[0] of a pattern; a its line width (`shaders/albedo.glsl`).
     pub albedo: Vec4,
     pub emission: Vec4,
+    /// rgb albedo × a pattern's colors[1]; a its baked texel in tiles.
+    pub pattern: Vec4,
 }
 
 /// `shaders/room.frag` uniform block `Light` (set 0, binding 1), std140.
@@ -291,6 +294,7 @@ pub mod spirv {
     pub const ROOM_VERT: &[u8] = shader!("room.vert");
     pub const ROOM_FRAG: &[u8] = shader!("room.frag");
     pub const BARE_FRAG: &[u8] = shader!("bare.frag");
+    pub const ALBEDO_PROBE_FRAG: &[u8] = shader!("albedo_probe.frag");
     pub const ROOM_INFERRED_VERT: &[u8] = shader!("room_inferred.vert");
     pub const ROOM_INFERRED_FRAG: &[u8] = shader!("room_inferred.frag");
     pub const MIRROR_VERT: &[u8] = shader!("mirror.vert");

@@ -14,6 +14,7 @@ pub mod readback;
 pub mod relight;
 pub mod rem;
 pub mod room;
+pub mod room_albedo;
 pub mod room_maps;
 pub mod target;
 pub mod upload;

@@ -1,9 +1,10 @@
-//! The diffuse room (and emitters): Lambertian with the baked procedural
-//! textures, lit either by the area light as a point emitter plus ambient
+//! The diffuse room (and emitters): Lambertian with the procedural
+//! textures (drawn in closed form by the inferred room, `room_albedo`), lit either by the area light as a point emitter plus ambient
 //! (the analytic room) or by each object's inferred light map (the traced
 //! light: `compile::room`). Also the "bare" variant: every mesh with one
 //! texture, nothing else.
 
+use super::room_albedo::{PATTERN_VARIANTS, SurfaceAlbedo};
 use super::room_maps::GpuRoomMap;
 use super::target::{Target, draw_mesh};
 use crate::backend::{Binding, Buffer, Device, GpuResult, Pipeline, PipelineDesc};
@@ -20,6 +21,8 @@ struct Draw {
     object: usize,
     set: vk::DescriptorSet,
     push: RoomPush,
+    /// The pipeline variant: how the albedo is drawn (`room_albedo`).
+    variant: usize,
     /// The light-map coordinates (index into `light_uvs`), inferred room only.
     light_uvs: Option<usize>,
 }
@@ -46,6 +49,9 @@ pub enum RoomStyle {
     Bare,
     /// Diffuse room from inferred light maps (`compile::room`), emitters.
     Inferred,
+    /// The albedo alone, as the lit styles draw it: the light-map solve's
+    /// known factor (probe renders).
+    Albedo,
 }
 
 /// What a room draw of `o` pushes under `style`: albedo, emission and the
@@ -54,17 +60,40 @@ fn material_of(
     style: RoomStyle,
     scene: &Scene,
     o: &inference::scene::Object,
-) -> Option<(Vec4, Vec4, Option<usize>)> {
+) -> Option<(SurfaceAlbedo, Vec4, Option<usize>)> {
     let first_texture = scene.textures.first().map(|_| 0);
     match (style, scene.materials.get(o.material)) {
-        (RoomStyle::Bare, _) => Some((Vec4::ONE, Vec4::ZERO, first_texture)),
+        // The bare pass reads one texture, whatever it was baked from.
+        (RoomStyle::Bare, _) => Some((
+            SurfaceAlbedo::of(glam::Vec3::ONE, None),
+            Vec4::ZERO,
+            first_texture,
+        )),
+        // The analytic room stays as the issue measured it (the static EM
+        // frame's room and the inferred room's yardstick): texture reads.
+        (RoomStyle::Lit, Some(Material::Diffuse { albedo, texture })) => {
+            Some((SurfaceAlbedo::of(*albedo, None), Vec4::ZERO, *texture))
+        }
         (_, Some(Material::Diffuse { albedo, texture })) => {
-            Some((albedo.extend(1.0), Vec4::ZERO, *texture))
+            let baked = texture.and_then(|t| scene.textures.get(t));
+            Some((SurfaceAlbedo::of(*albedo, baked), Vec4::ZERO, *texture))
         }
-        (_, Some(Material::Emissive { radiance })) => {
-            Some((Vec4::ZERO, radiance.extend(0.0), None))
-        }
+        (_, Some(Material::Emissive { radiance })) => Some((
+            SurfaceAlbedo::of(glam::Vec3::ZERO, None),
+            radiance.extend(0.0),
+            None,
+        )),
         _ => None, // reflectors and glass have their own passes
+    }
+}
+
+/// The push constants of a draw (its `view_proj` set when drawn).
+fn push_of(albedo: SurfaceAlbedo, emission: Vec4) -> RoomPush {
+    RoomPush {
+        albedo: albedo.first,
+        emission,
+        pattern: albedo.second,
+        ..RoomPush::default()
     }
 }
 
@@ -97,11 +126,8 @@ impl RoomRenderer {
             draws.push(Draw {
                 object,
                 set,
-                push: RoomPush {
-                    albedo,
-                    emission,
-                    ..RoomPush::default()
-                },
+                push: push_of(albedo, emission),
+                variant: albedo.variant,
                 light_uvs: None,
             });
         }
@@ -181,11 +207,8 @@ impl RoomRenderer {
             draws.push(Draw {
                 object,
                 set,
-                push: RoomPush {
-                    albedo,
-                    emission,
-                    ..RoomPush::default()
-                },
+                push: push_of(albedo, emission),
+                variant: albedo.variant,
                 light_uvs: Some(light_uvs.len() - 1),
             });
         }
@@ -226,7 +249,8 @@ impl RoomRenderer {
                 view_proj,
                 ..draw.push
             };
-            self.pipeline.bind(cmd, Some(draw.set), &push)?;
+            self.pipeline
+                .bind_variant(cmd, draw.variant, Some(draw.set), &push)?;
             if let Some(mesh) = gpu.meshes.get(draw.object) {
                 let light_uvs = draw.light_uvs.and_then(|i| self.light_uvs.get(i));
                 draw_mesh(&self.device, cmd, mesh, light_uvs);
@@ -263,6 +287,7 @@ pub fn room_pipeline(
     let (name, vertex_spirv, fragment_spirv) = match style {
         RoomStyle::Lit => ("room", spirv::ROOM_VERT, spirv::ROOM_FRAG),
         RoomStyle::Bare => ("bare", spirv::ROOM_VERT, spirv::BARE_FRAG),
+        RoomStyle::Albedo => ("albedo", spirv::ROOM_VERT, spirv::ALBEDO_PROBE_FRAG),
         RoomStyle::Inferred => (
             "room inferred",
             spirv::ROOM_INFERRED_VERT,
@@ -283,7 +308,14 @@ pub fn room_pipeline(
     } else {
         vk::DescriptorType::UNIFORM_BUFFER
     };
-    Pipeline::new(
+    // The inferred room and its albedo probe: one variant per albedo kind;
+    // the bare and analytic rooms read textures (one shader each).
+    let variants: &[u32] = if matches!(style, RoomStyle::Inferred | RoomStyle::Albedo) {
+        &PATTERN_VARIANTS
+    } else {
+        &[]
+    };
+    Pipeline::with_variants(
         device,
         &PipelineDesc {
             name,
@@ -300,12 +332,13 @@ pub fn room_pipeline(
             depth: crate::backend::DepthTest::TestWrite,
             // The deferred PEM frame marks its reflectors before the room:
             // a diffuse object drawn in front of one unmarks those pixels.
-            stencil: if style == RoomStyle::Bare {
+            stencil: if matches!(style, RoomStyle::Bare | RoomStyle::Albedo) {
                 crate::backend::StencilTest::Off
             } else {
                 crate::backend::StencilTest::Unmark
             },
         },
+        variants,
     )
 }
 

@@ -13,6 +13,7 @@ mod local_group;
 pub mod material;
 pub mod mesh;
 pub mod obj;
+pub mod pattern_filter;
 pub mod placed;
 pub mod ring_lines;
 pub mod room;
@@ -43,7 +44,7 @@ pub use light::{AreaLight, DirectionalLight, PointLight};
 pub use material::{EM_RESOLUTIONS, EmLayer, EmSettings, LOD_BIASES, Material};
 pub use mesh::Mesh;
 pub use shipped::{SHIPPED, shipped};
-pub use texture::{Pattern, Texture};
+pub use texture::{Pattern, PatternSource, Texture};
 
 /// A loaded, validated scene. Room surfaces ("floor", "walls", "ceiling") and lights are
 /// objects too, so a rasteriser draws everything from `objects` alone.

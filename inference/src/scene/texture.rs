@@ -10,6 +10,19 @@ pub struct Texture {
     pub width: u32,
     pub height: u32,
     pub texels: Vec<[f32; 4]>,
+    /// The pattern it was baked from, when it was: the room pass draws
+    /// patterns in closed form instead of reading the texels.
+    pub pattern: Option<PatternSource>,
+}
+
+/// What a procedural texture was baked from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PatternSource {
+    pub pattern: Pattern,
+    /// `colors[0]`, `colors[1]` (linear).
+    pub colors: [Vec3; 2],
+    /// Joint or line width, in tiles.
+    pub line_width: f32,
 }
 
 /// A pattern over one tile, in tile coordinates [0, 1)².
@@ -31,7 +44,7 @@ const SUPERSAMPLE: u32 = 4;
 
 impl Pattern {
     /// Returns the weight of `colors[1]` at tile point `p` (0 or 1).
-    fn second_color(self, p: Vec2, line_width: f32) -> bool {
+    pub(super) fn second_color(self, p: Vec2, line_width: f32) -> bool {
         let (u, v) = (p.x, p.y);
         match self {
             Pattern::Checker => ((2.0 * u).floor() + (2.0 * v).floor()) as i32 % 2 == 1,
@@ -87,6 +100,11 @@ impl Texture {
             width: resolution,
             height: resolution,
             texels,
+            pattern: Some(PatternSource {
+                pattern,
+                colors,
+                line_width,
+            }),
         }
     }
 
@@ -179,6 +197,7 @@ mod tests {
             width: 0,
             height: 0,
             texels: vec![],
+            pattern: None,
         };
         assert_eq!(empty.sample_bilinear(Vec2::ONE), Vec4::ZERO);
     }

@@ -27,8 +27,9 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Bumped when the light maps change for the same inputs (2: solved for
-/// the room pass's nearest-MIP-level reads).
-const ROOM_MAPS_VERSION: u64 = 2;
+/// the room pass's nearest-MIP-level reads; 3: for its patterns drawn in
+/// closed form).
+const ROOM_MAPS_VERSION: u64 = 3;
 /// One surveyed ray per this many pixels in x and in y.
 const SURVEY_STRIDE: u32 = 4;
 

@@ -2,20 +2,21 @@
 //! the target is the tracer's diffuse layer of the object (soft shadows,
 //! indirect light, caustics and the light's true shape included), the rows
 //! are the pixels the object covers whole, and the known factor is the
-//! albedo the device itself samples there (the material's texture through
-//! the room pass's sampler, times its albedo).
+//! albedo the device itself draws there (the room passes' albedo shader:
+//! a pattern filtered in closed form, or the texture through their sampler).
 
 use crate::compile::CompileContext;
 use crate::compile::infer::targets::target_pixels;
 use crate::compile::trace::traced_layers;
 use crate::gpu_scene::mip_chain;
+use crate::passes::room_albedo::SurfaceAlbedo;
 use crate::probe::VulkanProbe;
 use anyhow::{Context, Result, bail};
 use glam::Vec2;
 use inference::infer::factored::{FactoredResult, FactoredView, infer_factored};
 use inference::key::Key;
 use inference::lightmap::{ObjectLightmap, ObjectSight, Viewpoint};
-use inference::probe::{Lookup, ProbeGeometry, ProbeRenderer};
+use inference::probe::{Lookup, ProbeGeometry};
 use inference::scene::{Material, Scene};
 use inference::solve::SolveOptions;
 use inference::solve::layout::{TextureLayout, TextureShape};
@@ -120,14 +121,17 @@ impl<'a> Solver<'a> {
             width,
             height,
         };
-        let sampled = self.probe.render(
-            &geometry(key, Lookup::Uv(o.mesh.uvs.clone())),
-            &albedo_layout,
-            &albedo_texels,
-        )?;
-        let factor = sampled
+        let baked = texture.and_then(|t| scene.textures.get(t));
+        let factor = self
+            .probe
+            .render_albedo(
+                &geometry(key, Lookup::Uv(o.mesh.uvs.clone())),
+                &albedo_layout,
+                &albedo_texels,
+                SurfaceAlbedo::of(*albedo, baked),
+            )?
             .iter()
-            .map(|s| [s[0] * albedo.x, s[1] * albedo.y, s[2] * albedo.z, 1.0])
+            .map(|s| [s[0], s[1], s[2], 1.0])
             .collect();
         let name = format!(
             "{}.diffuse at az {:+} el {:+}",
