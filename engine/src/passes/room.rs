@@ -1,7 +1,8 @@
 //! The diffuse room (and emitters): Lambertian with the procedural
-//! textures (drawn in closed form by the inferred room, `room_albedo`), lit either by the area light as a point emitter plus ambient
-//! (the analytic room) or by each object's inferred light map (the traced
-//! light: `compile::room`). Also the "bare" variant: every mesh with one
+//! textures, lit either by the area light as a point emitter plus ambient
+//! (the analytic room, which reads them baked) or by each object's inferred
+//! light map (the traced light: `compile::room`; patterns drawn in closed
+//! form, `room_albedo`). Also the "bare" variant: every mesh with one
 //! texture, nothing else.
 
 use super::room_albedo::{PATTERN_VARIANTS, SurfaceAlbedo};
@@ -49,8 +50,8 @@ pub enum RoomStyle {
     Bare,
     /// Diffuse room from inferred light maps (`compile::room`), emitters.
     Inferred,
-    /// The albedo alone, as the lit styles draw it: the light-map solve's
-    /// known factor (probe renders).
+    /// The albedo alone, as the inferred room draws it: the light-map
+    /// solve's known factor (probe renders).
     Albedo,
 }
 
