@@ -39,6 +39,11 @@ impl SurfaceAlbedo {
             },
         }
     }
+
+    /// Whether the draw reads the bound texture (else it is white-bound).
+    pub fn reads_texture(&self) -> bool {
+        self.variant == 0
+    }
 }
 
 #[cfg(test)]
@@ -52,12 +57,14 @@ mod tests {
         let t = Texture::bake("floor", Pattern::Checker, colors, 0.0, 64);
         let s = SurfaceAlbedo::of(Vec3::new(1.0, 0.5, 1.0), Some(&t));
         assert_eq!(s.variant, 1);
+        assert!(!s.reads_texture());
         assert_eq!(PATTERN_VARIANTS[s.variant], Pattern::Checker.shader_id());
         assert_eq!(s.first, Vec4::new(0.8, 0.39, 0.72, 0.0));
         assert_eq!(s.second.w, 1.0 / 64.0);
         let image = Texture { pattern: None, ..t };
         let s = SurfaceAlbedo::of(Vec3::splat(0.5), Some(&image));
         assert_eq!((s.variant, s.first), (0, Vec4::new(0.5, 0.5, 0.5, 1.0)));
+        assert!(s.reads_texture());
         assert_eq!(SurfaceAlbedo::of(Vec3::ONE, None).variant, 0);
         for p in [Pattern::Checker, Pattern::Bricks, Pattern::Grid] {
             assert!(PATTERN_VARIANTS.contains(&p.shader_id()));

@@ -105,7 +105,11 @@ impl<'a> Solver<'a> {
         let Some(Material::Diffuse { albedo, texture }) = scene.materials.get(o.material) else {
             bail!("{}: a light map needs a diffuse material", o.name);
         };
-        let (albedo_layout, albedo_texels) = albedo_texture(scene, *texture);
+        let surface = SurfaceAlbedo::of(*albedo, texture.and_then(|t| scene.textures.get(t)));
+        // A pattern is drawn in closed form: its baked texels are not read,
+        // so neither their MIP chain nor their upload is made.
+        let read = texture.filter(|_| surface.reads_texture());
+        let (albedo_layout, albedo_texels) = albedo_texture(scene, read);
         let (width, height) = (self.settings.width, self.settings.height);
         let n = width as usize * height as usize;
         let view_proj =
@@ -121,14 +125,13 @@ impl<'a> Solver<'a> {
             width,
             height,
         };
-        let baked = texture.and_then(|t| scene.textures.get(t));
         let factor = self
             .probe
             .render_albedo(
                 &geometry(key, Lookup::Uv(o.mesh.uvs.clone())),
                 &albedo_layout,
                 &albedo_texels,
-                SurfaceAlbedo::of(*albedo, baked),
+                surface,
             )?
             .iter()
             .map(|s| [s[0], s[1], s[2], 1.0])
