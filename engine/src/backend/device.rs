@@ -45,6 +45,14 @@ impl DeviceShared {
         self.allocator.lock().unwrap_or_else(|e| e.into_inner())
     }
 
+    /// Whether points wider than a pixel can be drawn (`largePoints`,
+    /// enabled at creation where the device has it).
+    pub fn large_points(&self) -> bool {
+        // SAFETY: a query on the physical device this device was made from.
+        let features = unsafe { self.instance.get_physical_device_features(self.physical) };
+        features.large_points != 0
+    }
+
     /// Nanoseconds per timestamp tick.
     pub fn timestamp_period(&self) -> f64 {
         f64::from(self.properties.limits.timestamp_period)
@@ -306,9 +314,14 @@ fn create_logical_device(
     let queue_infos = [vk::DeviceQueueCreateInfo::default()
         .queue_family_index(queue_family)
         .queue_priorities(&priorities)];
+    // Points wider than a pixel (the edge filter's tiles) where the device
+    // has them; without, the edge filter refuses to start (`large_points`).
+    // SAFETY: a query on a physical device of this instance.
+    let supported = unsafe { instance.get_physical_device_features(physical) };
     let features = vk::PhysicalDeviceFeatures::default()
         .pipeline_statistics_query(true)
-        .image_cube_array(true);
+        .image_cube_array(true)
+        .large_points(supported.large_points != 0);
     let mut features13 = vk::PhysicalDeviceVulkan13Features::default()
         .dynamic_rendering(true)
         .synchronization2(true)

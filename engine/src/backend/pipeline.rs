@@ -17,6 +17,9 @@ pub struct PipelineDesc<'a> {
     pub color_formats: &'a [vk::Format],
     pub depth_format: vk::Format,
     pub cull_mode: vk::CullModeFlags,
+    /// Triangles, or points (`gl_PointSize` from the vertex shader: the
+    /// device has `largePoints`).
+    pub topology: vk::PrimitiveTopology,
     /// Size of the `#[repr(C)]` push-constant struct shared with the shader.
     pub push_constant_size: u32,
     /// Set 0, binding i has descriptor type `bindings[i]` (fragment stage).

@@ -62,6 +62,7 @@ pub fn glass_pipeline(
             color_formats: &[color_format],
             depth_format,
             cull_mode: vk::CullModeFlags::BACK,
+            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
             push_constant_size: size_of::<GlassPush>() as u32,
             bindings: &[vk::DescriptorType::COMBINED_IMAGE_SAMPLER],
             blend: crate::backend::Blend::Replace,

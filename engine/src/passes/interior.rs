@@ -36,6 +36,7 @@ pub fn interior_pipeline(
             color_formats,
             depth_format,
             cull_mode: vk::CullModeFlags::NONE,
+            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
             push_constant_size: size_of::<PemPush>() as u32,
             bindings: &[],
             blend: crate::backend::Blend::Replace,

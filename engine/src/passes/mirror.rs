@@ -40,6 +40,7 @@ pub fn mirror_pipeline(
             color_formats: &[color_format],
             depth_format,
             cull_mode: vk::CullModeFlags::BACK,
+            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
             push_constant_size: size_of::<MirrorPush>() as u32,
             bindings: &[vk::DescriptorType::COMBINED_IMAGE_SAMPLER; 2],
             blend: crate::backend::Blend::Replace,

@@ -37,6 +37,7 @@ impl PanoramaCube {
                 color_formats: &[format],
                 depth_format: vk::Format::UNDEFINED,
                 cull_mode: vk::CullModeFlags::NONE,
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
                 push_constant_size: size_of::<PanoramaCubePush>() as u32,
                 bindings: &[vk::DescriptorType::COMBINED_IMAGE_SAMPLER],
                 blend: Blend::Replace,

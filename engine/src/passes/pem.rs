@@ -75,6 +75,7 @@ impl PemPipelines {
                     color_formats: &[color],
                     depth_format: depth,
                     cull_mode: vk::CullModeFlags::BACK,
+                    topology: vk::PrimitiveTopology::TRIANGLE_LIST,
                     push_constant_size: size_of::<PemPush>() as u32,
                     bindings: &vec![vk::DescriptorType::COMBINED_IMAGE_SAMPLER; shading.bindings()],
                     blend: if blend {

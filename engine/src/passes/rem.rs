@@ -226,6 +226,7 @@ fn pipeline(
             color_formats: &[formats.0],
             depth_format: formats.1,
             cull_mode: cull,
+            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
             push_constant_size: push as u32,
             bindings: &[vk::DescriptorType::COMBINED_IMAGE_SAMPLER],
             blend,

@@ -327,6 +327,7 @@ pub fn room_pipeline(
             color_formats: &[color_format],
             depth_format,
             cull_mode: vk::CullModeFlags::BACK,
+            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
             push_constant_size: size_of::<RoomPush>() as u32,
             bindings: &[vk::DescriptorType::COMBINED_IMAGE_SAMPLER, second],
             blend: crate::backend::Blend::Replace,

@@ -256,6 +256,7 @@ fn relight_pipeline(device: &Device, fragment: &[u8], name: &str) -> GpuResult<P
             color_formats: &[TARGET_FORMAT],
             depth_format: vk::Format::UNDEFINED,
             cull_mode: vk::CullModeFlags::NONE,
+            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
             push_constant_size: size_of::<RelightPush>() as u32,
             bindings: &[
                 vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
