@@ -20,3 +20,8 @@ float fresnel_factor(sampler1D lut, float cos_theta) {
 vec3 local_over_distant(vec4 local, vec3 distant) {
     return local.rgb + (1.0 - clamp(local.a, 0.0, 1.0)) * distant;
 }
+
+// The alpha the deferred PEM composite writes: its pixels are the
+// reflector's as the frame shows it (the room writes 1, a clear 0), which
+// the edge filter reads back to find the reflector's outline.
+const float REFLECTOR_ALPHA = 2.0;

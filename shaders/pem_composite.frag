@@ -47,5 +47,5 @@ void main() {
     float n = float(textureSize(fresnel_lut, 0));
     float u = (clamp(cos_theta, 0.0, 1.0) * (n - 1.0) + 0.5) / n;
     vec3 fresnel = schlick(pc.f0.rgb, textureLod(fresnel_lut, u, 0.0).r);
-    out_color = vec4(fresnel * sum, 1.0);
+    out_color = vec4(fresnel * sum, REFLECTOR_ALPHA);
 }

@@ -1,10 +1,12 @@
 //! CPU cost per frame of the compositing pass's scissor bands
-//! (`engine::passes::bands::screen_bands`) on the teapot at 640×480.
+//! (`engine::passes::bands::screen_bands`) and of the edge filter's
+//! outline tiles (`engine::passes::outline`) on the teapot at 640×480.
 //!
 //! `cargo bench -p engine --bench bands`
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use engine::passes::bands::screen_bands;
+use engine::passes::outline::MeshEdges;
 use inference::scene::Scene;
 use std::hint::black_box;
 
@@ -27,6 +29,11 @@ fn bench(c: &mut Criterion) {
                 &mut pixels,
             )
         })
+    });
+    let edges = MeshEdges::new(positions, indices);
+    screen_bands(view_proj, positions, indices, (w, h), &mut pixels).expect("in view");
+    group.bench_function("outline_tiles", |b| {
+        b.iter(|| edges.outline_tiles(black_box(&pixels), indices, (w, h)))
     });
     group.finish();
 }

@@ -102,6 +102,9 @@ pub struct PemOptions {
     pub filtering: Filtering,
     /// How blended samples and layers are composited.
     pub compositing: Compositing,
+    /// Deferred compositing: the tracer's film filter along the
+    /// reflectors' outlines.
+    pub edge_filter: bool,
     /// Hybrid glass: tessellation threshold in subpixels [default: the
     /// scene's `[objects.glass] tau`].
     pub tau: Option<f32>,
@@ -131,6 +134,7 @@ impl Default for PemOptions {
             em_size: None,
             filtering: Filtering::Trilinear,
             compositing: Compositing::Deferred,
+            edge_filter: false,
             tau: None,
             traced_shell: false,
             traced_layers: false,
@@ -170,6 +174,9 @@ impl PemOptions {
         }
         if self.compositing != d.compositing {
             f.push(("compositing".into(), Some("multipass".into())));
+        }
+        if self.edge_filter {
+            f.push(("edge-filter".into(), None));
         }
         if let Some(tau) = self.tau {
             f.push(("tau".into(), Some(tau.to_string())));

@@ -428,6 +428,7 @@ pub fn pem_settings(mode: Mode, pem: &PemOptions, scene: &Scene) -> Result<PemSe
     settings.view_blend = pem.view_blend;
     settings.filtering = pem.filtering;
     settings.compositing = pem.compositing;
+    settings.edge_filter = pem.edge_filter;
     if let Some(size) = pem.em_size {
         let inferred = scene
             .objects

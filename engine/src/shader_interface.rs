@@ -68,6 +68,15 @@ pub const PEM_ATTRIBUTES: [vk::VertexInputAttributeDescription; 3] = [
     MIRROR_ATTRIBUTES[1],
     attribute(2, 2, vk::Format::R32G32B32A32_SFLOAT, 0),
 ];
+/// `shaders/edge_filter.vert`: one tile's centre (NDC) per point.
+pub const EDGE_TILE_BINDING: vk::VertexInputBindingDescription =
+    vk::VertexInputBindingDescription {
+        binding: 0,
+        stride: 8,
+        input_rate: vk::VertexInputRate::VERTEX,
+    };
+pub const EDGE_TILE_ATTRIBUTES: [vk::VertexInputAttributeDescription; 1] =
+    [attribute(0, 0, vk::Format::R32G32_SFLOAT, 0)];
 /// `shaders/room_inferred.vert`: position and albedo UVs of binding 0, the
 /// light-map UVs of binding 1.
 pub const LIGHT_UV_BINDING: vk::VertexInputBindingDescription = vk::VertexInputBindingDescription {
@@ -310,6 +319,8 @@ pub mod spirv {
     pub const REFLECTOR_INTERIOR_FRAG: &[u8] = shader!("reflector_interior.frag");
     pub const PEM_COMPOSITE_VERT: &[u8] = shader!("pem_composite.vert");
     pub const PEM_COMPOSITE_FRAG: &[u8] = shader!("pem_composite.frag");
+    pub const EDGE_FILTER_VERT: &[u8] = shader!("edge_filter.vert");
+    pub const EDGE_FILTER_FRAG: &[u8] = shader!("edge_filter.frag");
     pub const RELIGHT_DIRECTIONAL_FRAG: &[u8] = shader!("relight_directional.frag");
     pub const RELIGHT_POINT_FRAG: &[u8] = shader!("relight_point.frag");
     pub const PANORAMA_CUBE_FRAG: &[u8] = shader!("panorama_cube.frag");

@@ -148,7 +148,7 @@ fn assert_bench_rows(scene: &Path, out: &Path) {
 }
 
 /// Every mode and knob plays cleanly (sphere PEMs are inferred on first
-/// use); each mode's frame between samples matches its golden image (the
+/// use; the edge filter runs its passes only when asked for); each mode's frame between samples matches its golden image (the
 /// goldens hold the analytic room: the reflectors are what they test;
 /// the inferred room has its own test, room_maps.rs).
 fn assert_every_mode_plays(scene: &Path, out: &Path) {
@@ -168,6 +168,7 @@ fn assert_every_mode_plays(scene: &Path, out: &Path) {
         &["--no-blend", "--distant-only"],
         &["--maps", "exr", "--filtering", "nearest", "--em-size", "4"],
         &["--spacing", "2", "--filtering", "bilinear"],
+        &["--edge-filter"],
     ] {
         let mut args = vec!["--no-capture"];
         args.extend_from_slice(extra);
@@ -178,6 +179,10 @@ fn assert_every_mode_plays(scene: &Path, out: &Path) {
         if extra.contains(&"--no-blend") {
             assert!(!names.iter().any(|n| n == "pem_blend"), "{names:?}");
         }
+        // The edge filter's two passes run only when asked for.
+        let filtered = ["edge_copy", "edge_filter"].map(|p| names.iter().any(|n| n == p));
+        let asked = extra.contains(&"--edge-filter");
+        assert_eq!(filtered, [asked; 2], "{extra:?}: {names:?}");
     }
 }
 

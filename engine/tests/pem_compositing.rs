@@ -64,7 +64,10 @@ fn deferred_and_multipass_frames_agree() {
             ("mispredicted", orbit.eye(7.0, 5.0)),
         ] {
             let mut r = Renderer::new(&device, &scene, 96, 72).expect("renderer");
-            let settings = PemSettings::new(PemKind::Layered);
+            let settings = PemSettings {
+                edge_filter: false,
+                ..PemSettings::new(PemKind::Layered)
+            };
             let source = MapSource::container(&scene, &out.join("teapot.ptxc")).expect("container");
             r.set_pem(&scene, settings, source).expect("set-up");
             let first = orbit.sample_eye(0).expect("eye");
@@ -97,7 +100,7 @@ fn deferred_and_multipass_frames_agree() {
 fn every_composite_variant_draws_what_multipass_draws() {
     let dir = tempfile::tempdir().expect("tempdir");
     let rings = "rings = 2\nring_step_deg = 15.0\nring_line_every = 2\n";
-    let (scene, out) = compile_with(dir.path(), "rings", -2.0, rings);
+    let (scene, out) = compile_with(dir.path(), "rings", -2.0, rings, true);
     let orbit = scene.orbit.clone();
     let grid = inference::scene::ViewGrid::from_orbit(&orbit);
     let device = validated_device();
@@ -128,6 +131,108 @@ fn every_composite_variant_draws_what_multipass_draws() {
     assert_no_validation_messages();
 }
 
+/// The edge filter is the tracer's film filter (a Gaussian of σ = ½
+/// pixel, as 3×3 taps of its variance) at exactly the pixels where the frame steps
+/// between showing the reflector and not (four-neighbours), and nowhere
+/// else: computed here on the CPU from the unfiltered frame, it matches
+/// the device's to half-float precision — so the outline's tiles hold
+/// every such pixel and the copy every pixel its taps read. With the card
+/// in front of the teapot, the pixels it covers count as the room's and
+/// its edge over the teapot (no outline of the teapot's) is left as
+/// rasterized: every pixel is either the filter's or untouched.
+#[test]
+fn the_edge_filter_is_the_film_filter_along_the_outline() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let device = validated_device();
+    for card in [false, true] {
+        let name = if card { "card" } else { "open" };
+        let (scene, out) = compile_with(dir.path(), name, 0.0, "", card);
+        let orbit = scene.orbit.clone();
+        let frame = |edge_filter: bool, eye: glam::Vec3| {
+            let mut r = Renderer::new(&device, &scene, 96, 72).expect("renderer");
+            let settings = PemSettings {
+                edge_filter,
+                ..PemSettings::new(PemKind::Layered)
+            };
+            let container = out.join("teapot.ptxc");
+            let source = MapSource::container(&scene, &container).expect("container");
+            r.set_pem(&scene, settings, source).expect("set-up");
+            r.frame(FrameMode::Pem, eye, orbit.view(eye))
+                .expect("frame");
+            let mask = r.reflector_pixels().expect("mask");
+            (r.pixels().expect("pixels"), mask)
+        };
+        for eye in [
+            orbit.sample_eye(0).expect("eye"),
+            orbit.eye(orbit.start_deg + 0.4 * orbit.step_deg, 5.0),
+        ] {
+            let (plain, mask) = frame(false, eye);
+            let (filtered, filtered_mask) = frame(true, eye);
+            assert_eq!(mask, filtered_mask, "the filter keeps the marks");
+            let expected = film_filter_at_steps(&plain, &mask, 96, 72);
+            let near = |a: &[f32; 4], b: &[f32; 4]| {
+                (0..3).all(|c| (a[c] - b[c]).abs() <= 1e-3 * a[c].abs().max(1.0) + 1e-4)
+            };
+            let (mut steps, mut left) = (0, 0);
+            for (i, ((e, f), p)) in expected.iter().zip(&filtered).zip(&plain).enumerate() {
+                let (x, y) = (i % 96, i / 96);
+                let ok = near(e, f) || (card && f == p);
+                assert!(
+                    ok,
+                    "{name} ({x}, {y}): expected {e:?}, drew {f:?}, unfiltered {p:?}"
+                );
+                steps += usize::from(e != p);
+                left += usize::from(e != p && !near(e, f));
+            }
+            let covered = mask.iter().filter(|&&m| m).count();
+            eprintln!("{name}: {covered} reflector pixels, {steps} steps, {left} left as drawn");
+            assert!(
+                covered > 100 && steps > 20,
+                "{covered} covered, {steps} steps"
+            );
+            assert!(
+                left < steps / 2,
+                "{name}: {left} of {steps} steps left as drawn"
+            );
+        }
+    }
+    assert_no_validation_messages();
+}
+
+/// The 3×3 film filter (the Gaussian of σ = ½ pixel as three taps per
+/// axis of the same variance, borders clamped) of `frame` at pixels whose
+/// `mask` differs from a four-neighbour's; the rest as they are.
+fn film_filter_at_steps(frame: &[[f32; 4]], mask: &[bool], w: i32, h: i32) -> Vec<[f32; 4]> {
+    let at = |x: i32, y: i32| (y.clamp(0, h - 1) * w + x.clamp(0, w - 1)) as usize;
+    // Each axis's taps have the film Gaussian's variance, σ² = ¼ (2w = ¼).
+    let side = 0.125;
+    let weight = |d: i32| if d == 0 { 1.0 - 2.0 * side } else { side };
+    let mut out = frame.to_vec();
+    for y in 0..h {
+        for x in 0..w {
+            let m = mask[at(x, y)];
+            let step = [(1, 0), (-1, 0), (0, 1), (0, -1)]
+                .iter()
+                .any(|&(dx, dy)| mask[at(x + dx, y + dy)] != m);
+            if !step {
+                continue;
+            }
+            let mut sum = [0.0f32; 3];
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    let p = frame[at(x + dx, y + dy)];
+                    for c in 0..3 {
+                        sum[c] += weight(dx) * weight(dy) * p[c];
+                    }
+                }
+            }
+            let o = &mut out[at(x, y)];
+            o[..3].copy_from_slice(&sum);
+        }
+    }
+    out
+}
+
 /// One 96×72 layered-PEM frame from `eye`, played from `out`'s container.
 fn draw(
     device: &engine::backend::Device,
@@ -141,6 +246,8 @@ fn draw(
         compositing,
         // Bilinear, so a view between rings blends four samples.
         view_blend: ViewBlend::Bilinear,
+        // Multipass has none: the compositing paths are what is compared.
+        edge_filter: false,
         ..PemSettings::new(PemKind::Layered)
     };
     let source = MapSource::container(scene, &out.join("teapot.ptxc")).expect("container");
@@ -164,19 +271,21 @@ material = \"floor\"
 /// The tiny scene with `lod_bias` and the card, compiled into
 /// `dir/<name>` at 96×72.
 fn compile(dir: &std::path::Path, name: &str, lod_bias: f32) -> (Scene, std::path::PathBuf) {
-    compile_with(dir, name, lod_bias, "")
+    compile_with(dir, name, lod_bias, "", true)
 }
 
-/// [`compile`], `orbit` added after the orbit's `samples` line.
+/// [`compile`], `orbit` added after the orbit's `samples` line, with or
+/// without the card.
 fn compile_with(
     dir: &std::path::Path,
     name: &str,
     lod_bias: f32,
     orbit: &str,
+    card: bool,
 ) -> (Scene, std::path::PathBuf) {
     let scene_path = tiny_scene(dir);
     std::fs::write(dir.join("card.obj"), CARD_OBJ).expect("write card");
-    let text = std::fs::read_to_string(&scene_path).expect("scene") + CARD;
+    let text = std::fs::read_to_string(&scene_path).expect("scene") + if card { CARD } else { "" };
     let with_orbit = text.replacen("samples = 3\n", &format!("samples = 3\n{orbit}"), 1);
     assert!(
         orbit.is_empty() || with_orbit != text,

@@ -6,7 +6,8 @@
 //! The last row then runs alone with its eye one sample further every
 //! frame, so each frame needs a new sample's maps decoded (ahead, on the
 //! worker) and uploaded: decoding on against resident maps, in one run.
-//! "default, bilinear views" blends a view between rings from its grid
+//! "default, edge filter" adds the film filter along the reflectors'
+//! outlines (`--edge-filter`). "default, bilinear views" blends a view between rings from its grid
 //! cell's four corners instead of the triangle of three that holds it.
 //! Each row also reports the compositing passes' fragment-shader
 //! invocations per covered reflector pixel (the overdraw the deferred
@@ -54,6 +55,13 @@ fn variants() -> Vec<(&'static str, Draws)> {
         ("bare", Draws::Bare),
         ("static-em", Draws::StaticEm),
         ("default", Draws::Pem(default)),
+        (
+            "default, edge filter",
+            Draws::Pem(PemSettings {
+                edge_filter: true,
+                ..default
+            }),
+        ),
         (
             "default, nearest sample",
             Draws::Pem(PemSettings {

@@ -106,6 +106,7 @@ pub fn all_rows() -> Vec<Row> {
         labelled("layered-pem analytic-room").with(|p| p.room = RoomShading::Analytic),
         labelled("layered-pem nearest-sample").with(|p| p.blend = false),
         labelled("layered-pem bilinear-views").with(|p| p.view_blend = ViewBlend::Bilinear),
+        labelled("layered-pem edge-filter").with(|p| p.edge_filter = true),
         labelled("layered-pem distant-only").with(|p| p.local_layer = false),
         labelled("layered-pem em128").with(|p| p.em_size = Some(128)),
         labelled("layered-pem em64").with(|p| p.em_size = Some(64)),

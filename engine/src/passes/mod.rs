@@ -1,11 +1,13 @@
 //! One module per pass.
 
 pub mod bands;
+pub mod edge_filter;
 pub mod em_capture;
 pub mod glass;
 pub mod glass_deferred;
 pub mod interior;
 pub mod mirror;
+pub mod outline;
 pub mod panorama_cube;
 pub mod pem;
 pub mod pem_deferred;

@@ -1,11 +1,12 @@
-//! Frames in flight for PEM frames: the next frame's texgen streams and
-//! compositing bands, computed on a worker while the device renders this
-//! frame. lavapipe keeps only part of the two cores busy while it renders
+//! Frames in flight for PEM frames: the next frame's texgen streams,
+//! compositing bands and outline tiles, computed on a worker while the
+//! device renders this frame. lavapipe keeps only part of the two cores busy while it renders
 //! (its triangle set-up is one thread), and the ~1.2 ms of CPU work a PEM
 //! frame needs before it can be recorded fits in what it leaves idle. The
 //! result is used only for exactly the view and settings it was made for.
 
 use super::settings::{PemKind, PemSettings};
+use crate::passes::outline::MeshEdges;
 use ash::vk;
 use glam::{Mat4, Vec3};
 use inference::em_geometry::{EmGeometry, texgen};
@@ -20,12 +21,21 @@ pub struct TexgenRequest {
     pub settings: PemSettings,
 }
 
-/// One reflector's texgen streams (distant, then local when drawn) and
-/// compositing bands for one request.
+/// One reflector's texgen streams (distant, then local when drawn),
+/// compositing bands and outline tiles for one request.
 pub struct TexgenFrame {
     pub request: TexgenRequest,
     pub streams: Vec<Vec<TexgenVertex>>,
+    pub screen: ScreenParts,
+}
+
+/// Where a reflector lies on one frame's screen: its compositing bands
+/// (empty where no bound holds: draw the bounding rectangle) and, for the
+/// edge filter, the tiles its outline can reach (then the whole frame).
+#[derive(Default)]
+pub struct ScreenParts {
     pub bands: Vec<vk::Rect2D>,
+    pub outline: Vec<vk::Rect2D>,
 }
 
 /// What a reflector's texgen reads: its mesh and EM geometries, borrowed.
@@ -34,6 +44,7 @@ pub struct TexgenInputs<'a> {
     pub positions: &'a [Vec3],
     pub normals: &'a [Vec3],
     pub triangles: &'a [u32],
+    pub edges: &'a MeshEdges,
     pub origin: Vec3,
     pub distant: EmGeometry,
     pub local: EmGeometry,
@@ -65,41 +76,119 @@ impl TexgenInputs<'_> {
         out
     }
 
-    /// The compositing bands of the frame `view_proj` (only deferred
-    /// frames draw by bands; empty: draw the bounding rectangle).
-    fn bands(&self, request: &TexgenRequest) -> Vec<vk::Rect2D> {
-        request
-            .settings
-            .deferred()
-            .then(|| {
-                crate::passes::bands::screen_bands(
-                    request.view_proj,
-                    self.positions,
-                    self.triangles,
-                    request.size,
-                    &mut Vec::new(),
-                )
-            })
-            .flatten()
-            .unwrap_or_default()
+    /// The compositing bands and outline tiles of the frame `view_proj`
+    /// (only deferred frames draw by them).
+    fn screen(&self, request: &TexgenRequest) -> ScreenParts {
+        if !request.settings.deferred() {
+            return ScreenParts::default();
+        }
+        let mut pixels = Vec::new();
+        let bands = crate::passes::bands::screen_bands(
+            request.view_proj,
+            self.positions,
+            self.triangles,
+            request.size,
+            &mut pixels,
+        );
+        let filter = request.settings.edge_filter;
+        let outline = match &bands {
+            Some(_) if filter => self
+                .edges
+                .outline_tiles(&pixels, self.triangles, request.size),
+            _ => None,
+        };
+        // Where no bound holds, the filter runs over the whole frame.
+        let (width, height) = request.size;
+        let whole = vk::Rect2D {
+            offset: vk::Offset2D::default(),
+            extent: vk::Extent2D { width, height },
+        };
+        ScreenParts {
+            bands: bands.unwrap_or_default(),
+            outline: match outline {
+                Some(tiles) => tiles,
+                None if filter => vec![whole],
+                None => Vec::new(),
+            },
+        }
     }
 
     /// Everything `request` needs: the streams and, beside them on
-    /// rayon's other thread, the bands.
+    /// rayon's other thread, the bands and outline tiles.
     pub fn compute(&self, request: TexgenRequest) -> TexgenFrame {
-        let (streams, bands) = rayon::join(
+        let (streams, screen) = rayon::join(
             || {
                 self.geometries(&request.settings)
                     .iter()
                     .map(|g| self.stream(g, request.eye))
                     .collect()
             },
-            || self.bands(&request),
+            || self.screen(&request),
         );
         TexgenFrame {
             request,
             streams,
-            bands,
+            screen,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A quad in front of or around the eye, its inputs and a request.
+    fn screen_of(z: f32, edge_filter: bool) -> ScreenParts {
+        let positions: Vec<Vec3> = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+            .map(|(x, y)| Vec3::new(x, y, z))
+            .to_vec();
+        let normals = vec![Vec3::Z; 4];
+        let triangles = vec![0, 1, 2, 0, 2, 3];
+        let edges = MeshEdges::new(&positions, &triangles);
+        let inputs = TexgenInputs {
+            positions: &positions,
+            normals: &normals,
+            triangles: &triangles,
+            edges: &edges,
+            origin: Vec3::ZERO,
+            distant: EmGeometry::SphereAtInfinity,
+            local: EmGeometry::SphereAtInfinity,
+        };
+        // The eye at the origin looking down -z.
+        let view_proj = glam::camera::rh::proj::vulkan::perspective(1.0, 4.0 / 3.0, 0.1, 10.0);
+        let request = TexgenRequest {
+            eye: Vec3::ZERO,
+            view_proj,
+            size: (64, 48),
+            settings: PemSettings {
+                edge_filter,
+                ..PemSettings::new(PemKind::Layered)
+            },
+        };
+        inputs.screen(&request)
+    }
+
+    #[test]
+    fn the_outline_falls_back_to_the_whole_frame_where_no_bound_holds() {
+        // In front: bands and the rim's tiles, not the whole frame.
+        let front = screen_of(-3.0, true);
+        assert!(!front.bands.is_empty() && !front.outline.is_empty());
+        let tiled: u32 = front
+            .outline
+            .iter()
+            .map(|r| r.extent.width * r.extent.height)
+            .sum();
+        assert!(tiled < 64 * 48, "{tiled} pixels of tiles");
+        // Through the eye's plane: no bands, and the filter runs everywhere.
+        let through = screen_of(0.5, true);
+        assert!(through.bands.is_empty());
+        assert_eq!(through.outline.len(), 1);
+        assert_eq!(
+            through.outline[0].extent.width * through.outline[0].extent.height,
+            64 * 48
+        );
+        // Off: no tiles either way.
+        assert!(screen_of(-3.0, false).outline.is_empty());
+        assert!(screen_of(0.5, false).outline.is_empty());
     }
 }

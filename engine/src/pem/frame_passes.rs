@@ -87,10 +87,14 @@ impl PemPlayer {
             sampled: self.sets.composite_sampled(gbuffer),
             name: "pem_composite",
         };
+        let mut after_room: Vec<Box<dyn Pass + 'a>> = vec![Box::new(composite)];
+        if self.settings.edge_filter {
+            after_room.extend(self.sets.edges.passes(target));
+        }
         Ok(AroundRoom {
             before_room: vec![Box::new(fill)],
             room_load: Load::ClearColor,
-            after_room: vec![Box::new(composite)],
+            after_room,
         })
     }
 

@@ -7,6 +7,7 @@
 use super::settings::{PemKind, PemSettings};
 use crate::backend::{Binding, Device, Image, Sampler};
 use crate::graph::Executor;
+use crate::passes::edge_filter::EdgeFilter;
 use crate::passes::mirror::fresnel_lut_image;
 use crate::passes::pem::{PemPipelines, Shading};
 use crate::passes::pem_deferred::{DeferredPipelines, GBuffer};
@@ -32,6 +33,8 @@ pub struct MapClass {
 pub struct FrameSets {
     pub forward: PemPipelines,
     pub deferred: DeferredPipelines,
+    /// The film filter along the reflectors' outlines (deferred frames).
+    pub edges: EdgeFilter,
     /// One per EM resolution the scene's reflectors play at.
     pub classes: Vec<MapClass>,
     lut: Image,
@@ -51,6 +54,14 @@ impl FrameSets {
     ) -> Result<Self> {
         let forward = PemPipelines::new(device, color, depth)?;
         let deferred = DeferredPipelines::new(device, color, depth)?;
+        if settings.edge_filter && !device.large_points() {
+            anyhow::bail!(
+                "the edge filter draws 4-pixel points, and {} has no largePoints feature",
+                device.name
+            );
+        }
+        let size = gbuffer.images[2].desc.mip_extent(0);
+        let edges = EdgeFilter::new(device, size, (color, depth))?;
         let lut = fresnel_lut_image(device, executor)?;
         let cube = Sampler::new(
             device,
@@ -79,6 +90,7 @@ impl FrameSets {
         Ok(Self {
             forward,
             deferred,
+            edges,
             classes,
             lut,
             _samplers: samplers,
@@ -107,6 +119,7 @@ impl FrameSets {
     /// Forgets every image's tracked state before they are destroyed.
     pub fn release(&self, executor: &mut Executor) {
         executor.states.forget(&self.lut);
+        self.edges.release(executor);
         for a in self.arrays() {
             executor.states.forget(a);
         }

@@ -3,12 +3,13 @@
 //! streams, and which samples its slots hold (the slots themselves are
 //! elements of the player's map arrays, from `base` on).
 
-use super::ahead::{TexgenFrame, TexgenInputs, TexgenRequest};
+use super::ahead::{ScreenParts, TexgenFrame, TexgenInputs, TexgenRequest};
 use super::residency::{SLOTS, SlotTable};
 use super::settings::{PemKind, PemSettings};
 use crate::backend::{Buffer, Device};
 use crate::gpu_scene::GpuMesh;
 use crate::maps::ptm_edge;
+use crate::passes::outline::MeshEdges;
 use anyhow::{Result, bail};
 use ash::vk;
 use glam::Vec3;
@@ -30,9 +31,12 @@ pub struct PemReflector {
     normals: Vec<Vec3>,
     /// The mesh's triangles (the compositing bands' screen bounds).
     triangles: Vec<u32>,
-    /// The compositing pass's scissor bands for the frame texgen last ran
-    /// for (empty: draw the bounding rectangle).
-    bands: Vec<vk::Rect2D>,
+    /// Its edges and the triangles beside them (the outline's tiles).
+    edges: MeshEdges,
+    /// The compositing pass's scissor bands and the edge filter's outline
+    /// tiles for the frame texgen last ran for (empty: draw the bounding
+    /// rectangle).
+    screen: ScreenParts,
     origin: Vec3,
     /// World-space bounds: what the draw passes' render area must cover.
     pub bounds: (Vec3, Vec3),
@@ -105,7 +109,8 @@ impl PemReflector {
             positions: o.mesh.positions.clone(),
             normals: o.mesh.normals.clone(),
             triangles: o.mesh.indices.clone(),
-            bands: Vec::new(),
+            edges: MeshEdges::new(&o.mesh.positions, &o.mesh.indices),
+            screen: ScreenParts::default(),
             origin,
             bounds: o.mesh.bounds(),
             distant: EmGeometry::Box {
@@ -139,7 +144,14 @@ impl PemReflector {
     /// as scissor bands inside `within` ([`super::bands`]); empty where no
     /// bound holds (a vertex behind the eye: draw `within`).
     pub fn bands(&self, within: vk::Rect2D) -> Vec<vk::Rect2D> {
-        crate::passes::bands::clipped(&self.bands, within)
+        crate::passes::bands::clipped(&self.screen.bands, within)
+    }
+
+    /// The tiles this reflector's outline can reach in the frame texgen
+    /// last ran for ([`crate::passes::outline`]): the whole frame where no
+    /// bound holds (a vertex behind the eye), none with the filter off.
+    pub fn outline(&self) -> &[vk::Rect2D] {
+        &self.screen.outline
     }
 
     /// The array element holding `sample`, if it is resident.
@@ -154,6 +166,7 @@ impl PemReflector {
             positions: &self.positions,
             normals: &self.normals,
             triangles: &self.triangles,
+            edges: &self.edges,
             origin: self.origin,
             distant: self.distant,
             local: self.local,
@@ -178,7 +191,7 @@ impl PemReflector {
             let bytes: &[u8] = bytemuck::cast_slice(stream);
             buffer.mapped_mut()?[..bytes.len()].copy_from_slice(bytes);
         }
-        self.bands = frame.bands;
+        self.screen = frame.screen;
         Ok(served)
     }
 }

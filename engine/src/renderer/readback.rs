@@ -76,11 +76,29 @@ impl Renderer {
         Ok(rgba16f_to_f32(&bytes))
     }
 
-    /// The last frame's pixels as linear RGBA f32, row-major from the top.
+    /// The last frame's pixels as linear RGBA f32, row-major from the top
+    /// (alpha at most 1: the deferred composite marks its pixels above it).
     pub fn pixels(&self) -> GpuResult<Vec<[f32; 4]>> {
         let bytes = self.readback.mapped()?;
         let texels = (self.width * self.height) as usize;
-        Ok(rgba16f_to_f32(&bytes[..texels * 8]))
+        let mut pixels = rgba16f_to_f32(&bytes[..texels * 8]);
+        for p in &mut pixels {
+            p[3] = p[3].min(1.0);
+        }
+        Ok(pixels)
+    }
+}
+
+impl Renderer {
+    /// Which pixels of the last frame show a reflector, as its deferred
+    /// composite marked them (an object in front of one hides it).
+    pub fn reflector_pixels(&self) -> GpuResult<Vec<bool>> {
+        let bytes = self.readback.mapped()?;
+        let texels = (self.width * self.height) as usize;
+        Ok(rgba16f_to_f32(&bytes[..texels * 8])
+            .iter()
+            .map(|p| p[3] > 1.5)
+            .collect())
     }
 }
 
