@@ -93,6 +93,9 @@ impl MeshEdges {
         if triangles.len() / 3 != self.triangles {
             return None;
         }
+        if width == 0 || height == 0 {
+            return Some(Vec::new());
+        }
         // Which way each triangle faces on screen; zero area (or NaN)
         // counts as neither, so its edges are marked. One more entry, 0,
         // for the open edges' missing side.
@@ -312,5 +315,8 @@ mod tests {
                 .outline_tiles(&pixels[..3], &triangles, (64, 64))
                 .is_none()
         );
+        // An empty frame has no tiles (and no tile to clamp to).
+        let empty = edges.outline_tiles(&pixels, &triangles, (0, 64));
+        assert!(empty.is_some_and(|t| t.is_empty()));
     }
 }
