@@ -88,8 +88,8 @@ impl PemPlayer {
             name: "pem_composite",
         };
         let mut after_room: Vec<Box<dyn Pass + 'a>> = vec![Box::new(composite)];
-        if self.settings.edge_filter {
-            after_room.extend(self.sets.edges.passes(target));
+        if let Some(edges) = &self.sets.edges {
+            after_room.extend(edges.passes(target));
         }
         Ok(AroundRoom {
             before_room: vec![Box::new(fill)],

@@ -33,8 +33,9 @@ pub struct MapClass {
 pub struct FrameSets {
     pub forward: PemPipelines,
     pub deferred: DeferredPipelines,
-    /// The film filter along the reflectors' outlines (deferred frames).
-    pub edges: EdgeFilter,
+    /// The film filter along the reflectors' outlines, when the settings
+    /// ask for it (deferred frames).
+    pub edges: Option<EdgeFilter>,
     /// One per EM resolution the scene's reflectors play at.
     pub classes: Vec<MapClass>,
     lut: Image,
@@ -54,14 +55,17 @@ impl FrameSets {
     ) -> Result<Self> {
         let forward = PemPipelines::new(device, color, depth)?;
         let deferred = DeferredPipelines::new(device, color, depth)?;
-        if settings.edge_filter && !device.large_points() {
-            anyhow::bail!(
+        let edges = match settings.edge_filter {
+            true if !device.large_points() => anyhow::bail!(
                 "the edge filter draws 4-pixel points, and {} has no largePoints feature",
                 device.name
-            );
-        }
-        let size = gbuffer.images[2].desc.mip_extent(0);
-        let edges = EdgeFilter::new(device, size, (color, depth))?;
+            ),
+            true => {
+                let size = gbuffer.images[2].desc.mip_extent(0);
+                Some(EdgeFilter::new(device, size, (color, depth))?)
+            }
+            false => None,
+        };
         let lut = fresnel_lut_image(device, executor)?;
         let cube = Sampler::new(
             device,
@@ -119,7 +123,9 @@ impl FrameSets {
     /// Forgets every image's tracked state before they are destroyed.
     pub fn release(&self, executor: &mut Executor) {
         executor.states.forget(&self.lut);
-        self.edges.release(executor);
+        if let Some(edges) = &self.edges {
+            edges.release(executor);
+        }
         for a in self.arrays() {
             executor.states.forget(a);
         }

@@ -203,12 +203,14 @@ impl PemPlayer {
                 self.fill_slot(ri, slot, sample, &mut cpu)?;
             }
         }
-        let outline: Vec<vk::Rect2D> = self
-            .reflectors
-            .iter()
-            .flat_map(|r| r.outline().iter().copied())
-            .collect();
-        self.sets.edges.set_outline(&outline)?;
+        if let Some(edges) = self.sets.edges.as_mut() {
+            let outline: Vec<vk::Rect2D> = self
+                .reflectors
+                .iter()
+                .flat_map(|r| r.outline().iter().copied())
+                .collect();
+            edges.set_outline(&outline)?;
+        }
         self.prefetch_next(eye);
         Ok(cpu)
     }
