@@ -13,6 +13,7 @@
 //! `engine eval`'s `reference/` files); X Y W H the crop in pixels.
 
 use anyhow::{Context, Result, bail};
+use engine::compile::infer::targets::target_pixels;
 use engine::eval::metrics::frame_scores;
 use engine::options::{Mode, PemOptions, RunPlace};
 use engine::play::{Session, compile_context, setup_mode};
@@ -40,7 +41,7 @@ fn main() -> Result<()> {
         az.parse().context("AZIMUTH: expected degrees")?,
         el.parse().context("ELEVATION: expected degrees")?,
     );
-    let traced = beauty(Path::new(reference))?;
+    let layers = read_exr(Path::new(reference))?;
     let place = RunPlace {
         scene: scene.clone(),
         out: Some(PathBuf::from(data)),
@@ -50,8 +51,10 @@ fn main() -> Result<()> {
     };
     let mut session = Session::open(&place)?;
     let (width, height) = session.renderer.size();
-    if traced.len() != (width * height) as usize || x + w > width || y + h > height || zoom == 0 {
-        bail!("{reference}: expected a {width}x{height} trace and a crop inside it");
+    let traced = target_pixels(&layers, "beauty", false, (width * height) as usize)
+        .with_context(|| reference.clone())?;
+    if x + w > width || y + h > height || zoom == 0 {
+        bail!("{x} {y} {w} {h} {zoom}: expected a crop inside the {width}x{height} frame");
     }
     let eye = session.scene.orbit.eye(az, el);
     let mut crops = Vec::new();
@@ -91,21 +94,6 @@ fn main() -> Result<()> {
     }
     engine::capture::write_png(Path::new(out), total, ch, &mosaic)?;
     Ok(())
-}
-
-/// The traced beauty of `path` as RGBA.
-fn beauty(path: &Path) -> Result<Frame> {
-    let layers = read_exr(path)?;
-    let channel = |c: &str| {
-        layers
-            .iter()
-            .find(|(n, _)| n == "beauty")
-            .and_then(|(_, chs)| chs.iter().find(|(n, _)| n == c))
-            .map(|(_, v)| v.clone())
-            .with_context(|| format!("{}: no beauty.{c}", path.display()))
-    };
-    let (r, g, b) = (channel("R")?, channel("G")?, channel("B")?);
-    Ok((0..r.len()).map(|i| [r[i], g[i], b[i], 1.0]).collect())
 }
 
 /// The `(x, y, w, h)` piece of a `width`-wide frame, each pixel `zoom`

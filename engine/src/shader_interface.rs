@@ -68,6 +68,10 @@ pub const PEM_ATTRIBUTES: [vk::VertexInputAttributeDescription; 3] = [
     MIRROR_ATTRIBUTES[1],
     attribute(2, 2, vk::Format::R32G32B32A32_SFLOAT, 0),
 ];
+/// `common.glsl`'s `REFLECTOR_ALPHA`: the alpha the deferred composite
+/// writes where it shades (the room writes 1, a clear 0).
+pub const REFLECTOR_ALPHA: f32 = 2.0;
+
 /// `shaders/edge_filter.vert`: one tile's centre (NDC) per point.
 pub const EDGE_TILE_BINDING: vk::VertexInputBindingDescription =
     vk::VertexInputBindingDescription {

@@ -87,9 +87,7 @@ impl Renderer {
         }
         Ok(pixels)
     }
-}
 
-impl Renderer {
     /// Which pixels of the last frame show a reflector, as its deferred
     /// composite marked them (an object in front of one hides it).
     pub fn reflector_pixels(&self) -> GpuResult<Vec<bool>> {
@@ -97,7 +95,7 @@ impl Renderer {
         let texels = (self.width * self.height) as usize;
         Ok(rgba16f_to_f32(&bytes[..texels * 8])
             .iter()
-            .map(|p| p[3] > 1.5)
+            .map(|p| p[3] > 0.5 * (1.0 + crate::shader_interface::REFLECTOR_ALPHA))
             .collect())
     }
 }

@@ -17,7 +17,7 @@ mod pictures;
 mod report;
 mod sample;
 mod summary;
-pub(crate) mod targets;
+pub mod targets;
 
 pub use budget::{Budget, inputs_budget};
 pub use diffuse::{DiffuseRequest, infer_diffuse};

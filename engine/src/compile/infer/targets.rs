@@ -5,7 +5,7 @@ use anyhow::{Context, Result, bail};
 use inference::trace::output;
 
 /// `name`'s pixels as RGBA (premultiplied by A when `premultiply`).
-pub(crate) fn target_pixels(
+pub fn target_pixels(
     layers: &[output::ExrLayer],
     name: &str,
     premultiply: bool,
