@@ -60,7 +60,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             t.positions
                 .par_iter()
                 .zip(&t.normals)
-                .map(|(p, n)| inference::glass::path::vertex_paths(&lens, eye, *p, *n))
+                .zip(&t.on)
+                .map(|((p, n), on)| {
+                    inference::glass::path::vertex_paths(&lens, eye, (*p, *n), Some(*on))
+                })
                 .collect()
         };
         let paths_ms = start.elapsed().as_secs_f64() * 1e3;

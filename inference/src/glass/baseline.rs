@@ -69,6 +69,7 @@ pub fn baseline_mesh(lens: &Lens, eye: Vec3) -> super::Tessellation {
         positions: m.positions.clone(),
         normals: (0..m.positions.len()).map(normal).collect(),
         paths,
+        on: Vec::new(),
         indices,
         stats: Default::default(),
     }

@@ -23,6 +23,13 @@ pub struct Lens {
     /// Interfaces a path may cross before it counts as never exiting.
     pub max_interfaces: u32,
     bvh: SceneBvh,
+    /// Per triangle, its plane when it lies on the lens's convex hull
+    /// (unit outward normal n, n·a): a ray on the plane's outer side going
+    /// outwards cannot meet the lens again (see [`Lens::escapes`]).
+    hull_planes: Vec<Option<(Vec3, f32)>>,
+    /// How far in front of a hull plane a ray must start to escape: twice
+    /// the hull test's tolerance (a vertex may lie that far in front).
+    escape_margin: f32,
 }
 
 /// A point on the lens surface as a ray meets it, normals facing the ray:
@@ -65,6 +72,7 @@ impl Lens {
     /// A lens from a bare mesh (tests, tools).
     pub fn from_mesh(object: u32, mesh: Mesh, ior: f32, absorption: Vec3) -> Lens {
         let bvh = SceneBvh::from_meshes(&[(object, &mesh)]);
+        let (hull_planes, escape_margin) = hull_planes(&mesh);
         Lens {
             object,
             mesh,
@@ -72,7 +80,28 @@ impl Lens {
             absorption,
             max_interfaces: DEFAULT_MAX_INTERFACES,
             bvh,
+            hull_planes,
+            escape_margin,
         }
+    }
+
+    /// True when lens triangle `triangle` lies on the convex hull.
+    pub fn on_hull(&self, triangle: u32) -> bool {
+        matches!(self.hull_planes.get(triangle as usize), Some(Some(_)))
+    }
+
+    /// True when the ray from `origin` along `dir`, leaving triangle
+    /// `triangle`, cannot meet the lens: the triangle lies on the convex
+    /// hull, the ray starts in front of its plane by more than the hull
+    /// test's slack and moves away from it, so every point of the ray lies
+    /// where no vertex (and so no triangle) of the lens does. Such rays —
+    /// most exits through the outer side of a convex part — need no
+    /// traversal; the answer is the traversal's (a miss) either way.
+    pub fn escapes(&self, triangle: u32, origin: Vec3, dir: Vec3) -> bool {
+        let Some(Some((n, d))) = self.hull_planes.get(triangle as usize) else {
+            return false;
+        };
+        n.dot(dir) > 0.0 && n.dot(origin) - d > self.escape_margin
     }
 
     /// Nearest lens hit along a ray, `t ≥ 0`.
@@ -114,4 +143,40 @@ pub fn hit_on(object: u32, triangle: u32, bary: Vec2, t: f32) -> Hit {
         prim: crate::trace::bvh::PrimRef { object, triangle },
         bary,
     }
+}
+
+/// The hull planes of `mesh`'s triangles and the margin a ray must keep in
+/// front of them (see [`Lens::escapes`]).
+fn hull_planes(mesh: &Mesh) -> (Vec<Option<(Vec3, f32)>>, f32) {
+    let on_hull = crate::hull::hull_triangles(mesh);
+    let planes = (0..mesh.triangle_count())
+        .map(|t| {
+            let [a, b, c] = mesh.triangle(t);
+            let n = (b - a).cross(c - a).try_normalize()?;
+            on_hull
+                .get(t)
+                .copied()
+                .unwrap_or(false)
+                .then(|| (n, n.dot(a)))
+        })
+        .collect();
+    // The hull test's tolerance (`inference::hull`), doubled, plus the
+    // rounding of n·origin in f32 at the mesh's magnitude.
+    let (lo, hi) = mesh.positions.iter().filter(|p| p.is_finite()).fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(lo, hi), &p| (lo.min(p), hi.max(p)),
+    );
+    let diagonal = (hi - lo).length();
+    let magnitude = lo.abs().max(hi.abs()).max_element().max(1.0);
+    let tolerance =
+        crate::hull::RELATIVE_TOLERANCE as f32 * diagonal + 8.0 * f32::EPSILON * magnitude;
+    let margin = 2.0 * tolerance + 4.0 * f32::EPSILON * magnitude;
+    (
+        planes,
+        if margin.is_finite() {
+            margin
+        } else {
+            f32::INFINITY
+        },
+    )
 }

@@ -28,6 +28,8 @@ pub mod tessellate;
 pub mod vertices;
 
 #[cfg(test)]
+mod escape_tests;
+#[cfg(test)]
 mod scene_tests;
 #[cfg(test)]
 mod shell_tests;

@@ -49,8 +49,9 @@ pub struct TwoPaths {
 }
 
 /// The two paths of a ray along `dir` arriving at `s` (a vertex, or a hit
-/// found by a camera ray).
-pub fn two_paths(lens: &Lens, s: &Surface, dir: Vec3) -> TwoPaths {
+/// found by a camera ray), `on` the lens triangle `s` lies on when known
+/// (rays leaving it outwards may then skip their traversal).
+pub fn two_paths(lens: &Lens, s: &Surface, dir: Vec3, on: Option<u32>) -> TwoPaths {
     let cos_i = s.ns.dot(-dir).clamp(0.0, 1.0);
     let (f, cos_t) = dielectric(lens.ior, cos_i, s.front);
     let reflected = (reflect(dir, s.ns).normalize_or(s.ng), offset(s.p, s.ng));
@@ -61,6 +62,7 @@ pub fn two_paths(lens: &Lens, s: &Surface, dir: Vec3) -> TwoPaths {
         s.medium_after_reflection(lens),
         1,
         1,
+        on,
     );
     let t = match cos_t {
         Some(cos_t) if f < 1.0 => {
@@ -73,6 +75,7 @@ pub fn two_paths(lens: &Lens, s: &Surface, dir: Vec3) -> TwoPaths {
                 medium,
                 0,
                 1,
+                on,
             )
         }
         // Total internal reflection or grazing: nothing is transmitted.
@@ -99,7 +102,8 @@ impl Surface {
 
 /// Follows one path from its first child ray `(dir, origin)` with weight
 /// `weight` so far, inside glass when `medium` is set; `choices` and
-/// `interfaces` describe the first interface.
+/// `interfaces` describe the first interface; `on` is the lens triangle the
+/// ray starts from, when known.
 fn follow(
     lens: &Lens,
     (mut dir, mut origin): (Vec3, Vec3),
@@ -107,11 +111,19 @@ fn follow(
     mut medium: Option<Vec3>,
     mut choices: u32,
     mut interfaces: u8,
+    mut on: Option<u32>,
 ) -> Path {
     loop {
         // Out of the lens. (Through a hole of an open mesh the tracer would
         // still absorb along the way to the room; the model stops here.)
-        let Some(hit) = lens.closest(origin, dir) else {
+        // Leaving a hull triangle outwards needs no traversal to know it.
+        let escapes = on.is_some_and(|t| lens.escapes(t, origin, dir));
+        let hit = if escapes {
+            None
+        } else {
+            lens.closest(origin, dir)
+        };
+        let Some(hit) = hit else {
             return Path {
                 weight,
                 origin,
@@ -139,6 +151,7 @@ fn follow(
             };
         }
         let s = lens.surface(&hit, dir);
+        on = Some(hit.prim.triangle);
         let cos_i = s.ns.dot(-dir).clamp(0.0, 1.0);
         let (f, cos_t) = dielectric(lens.ior, cos_i, s.front);
         match cos_t {
@@ -160,10 +173,16 @@ fn follow(
     }
 }
 
-/// The two paths of a mesh vertex at `p` with normal `normal`, seen from `eye`.
-pub fn vertex_paths(lens: &Lens, eye: Vec3, p: Vec3, normal: Vec3) -> TwoPaths {
+/// The two paths of a mesh vertex at `p` with normal `normal`, seen from
+/// `eye`; `on` a lens triangle whose plane holds `p`, when known.
+pub fn vertex_paths(
+    lens: &Lens,
+    eye: Vec3,
+    (p, normal): (Vec3, Vec3),
+    on: Option<u32>,
+) -> TwoPaths {
     let dir = (p - eye).try_normalize().unwrap_or(Vec3::NEG_Z);
-    two_paths(lens, &Lens::vertex_surface(p, normal, dir), dir)
+    two_paths(lens, &Lens::vertex_surface(p, normal, dir), dir, on)
 }
 
 /// Angle in degrees between two unit directions: 0 for equal, 180 for

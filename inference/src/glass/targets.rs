@@ -163,7 +163,7 @@ impl View<'_> {
             }
             on_lens += 1;
             let surface = self.lens.surface(&hit, dir);
-            let paths = two_paths(self.lens, &surface, dir);
+            let paths = two_paths(self.lens, &surface, dir, None);
             *rays +=
                 u64::from(paths.t.topology.interfaces) + u64::from(paths.r.topology.interfaces);
             for (term, path) in sums.iter_mut().zip([&paths.t, &paths.r]) {

@@ -16,6 +16,9 @@ use rayon::prelude::*;
 use super::lens::Lens;
 use super::path::{TwoPaths, angle_deg, vertex_paths};
 
+/// A working triangle: its corners and the lens triangle it lies in.
+type Piece = ([u32; 3], u32);
+
 /// Subpixels per pixel along x and y: the thesis measured τ on a 3×3
 /// supersampled frame.
 pub const SUBPIXELS: f32 = 3.0;
@@ -72,6 +75,10 @@ pub struct Tessellation {
     pub positions: Vec<Vec3>,
     pub normals: Vec<Vec3>,
     pub paths: Vec<TwoPaths>,
+    /// Per vertex, a lens triangle whose plane holds it (a hull triangle
+    /// where one does): rays leaving it outwards may skip their traversal.
+    /// Empty for the static baseline's mesh, which casts no rays.
+    pub on: Vec<u32>,
     pub indices: Vec<u32>,
     pub stats: TessStats,
 }
@@ -139,9 +146,11 @@ pub fn tessellate(lens: &Lens, eye: Vec3, screen: Screen, settings: TessSettings
         pixels: Vec::new(),
         midpoints: EdgeMap::default(),
     };
-    let mut active: Vec<[u32; 3]> = Vec::new();
+    let mut active: Vec<Piece> = Vec::new();
     let mut fresh: Vec<(Vec3, Vec3)> = Vec::new();
-    for tri in mesh.indices.chunks_exact(3) {
+    let mut on: Vec<u32> = Vec::new();
+    for (t, tri) in mesh.indices.chunks_exact(3).enumerate() {
+        let t = t as u32;
         let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| i as usize);
         let (Some(&pa), Some(&pb), Some(&pc)) = (
             mesh.positions.get(a),
@@ -154,24 +163,29 @@ pub fn tessellate(lens: &Lens, eye: Vec3, screen: Screen, settings: TessSettings
         if (pb - pa).cross(pc - pa).dot(eye - pa) <= 0.0 {
             continue;
         }
-        let corner = |i: usize, map: &mut Vec<u32>, fresh: &mut Vec<(Vec3, Vec3)>| {
+        let mut corner = |i: usize| {
             if map[i] == u32::MAX {
                 map[i] = fresh.len() as u32;
                 let n = mesh.normals.get(i).copied().unwrap_or(Vec3::ZERO);
                 fresh.push((mesh.positions[i], n));
+                on.push(t);
+            }
+            let v = map[i] as usize;
+            if lens.on_hull(t) && !lens.on_hull(on[v]) {
+                on[v] = t;
             }
             map[i]
         };
-        active.push([a, b, c].map(|i| corner(i, &mut map, &mut fresh)));
+        active.push(([a, b, c].map(&mut corner), t));
     }
-    work.add_vertices(&fresh);
+    work.add_vertices(&fresh, &on);
     work.out.stats.base_vertices = fresh.len();
     let leaves = work.refine(active);
     let emitted: Vec<Vec<u32>> = leaves
         .par_chunks(1024)
         .map(|chunk| {
             let mut indices = Vec::with_capacity(chunk.len() * 3);
-            for &[a, b, c] in chunk {
+            for &([a, b, c], _) in chunk {
                 work.emit([a, b, c], 0, &mut indices);
             }
             indices
@@ -182,13 +196,17 @@ pub fn tessellate(lens: &Lens, eye: Vec3, screen: Screen, settings: TessSettings
 }
 
 impl Work<'_> {
-    /// Appends vertices (position, normal), traces their paths in parallel.
-    fn add_vertices(&mut self, vertices: &[(Vec3, Vec3)]) {
+    /// Appends vertices (position, normal) lying on lens triangles `on`,
+    /// traces their paths in parallel.
+    fn add_vertices(&mut self, vertices: &[(Vec3, Vec3)], on: &[u32]) {
+        debug_assert_eq!(vertices.len(), on.len());
         let (lens, eye, screen) = (self.lens, self.eye, self.screen);
         let traced: Vec<TwoPaths> = vertices
             .par_iter()
-            .map(|&(p, n)| vertex_paths(lens, eye, p, n))
+            .zip(on)
+            .map(|(&v, &t)| vertex_paths(lens, eye, v, Some(t)))
             .collect();
+        self.out.on.extend_from_slice(on);
         for (&(p, n), paths) in vertices.iter().zip(traced) {
             self.out.stats.rays +=
                 u64::from(paths.t.topology.interfaces) + u64::from(paths.r.topology.interfaces);
@@ -200,17 +218,21 @@ impl Work<'_> {
     }
 
     /// Subdivides level by level; returns the leaf triangles.
-    fn refine(&mut self, mut active: Vec<[u32; 3]>) -> Vec<[u32; 3]> {
+    fn refine(&mut self, mut active: Vec<Piece>) -> Vec<Piece> {
         let mut leaves = Vec::with_capacity(active.len());
         for depth in 0..self.settings.max_depth {
-            let mut splitting: Vec<([u32; 3], u8)> = Vec::new();
+            let mut splitting: Vec<(Piece, u8)> = Vec::new();
             let mut queued: Vec<(u32, u32)> = Vec::new();
+            let mut on: Vec<u32> = Vec::new();
             let mut seen = EdgeMap::default();
             // The masks only read the mesh: in parallel, in order.
-            let masks: Vec<u8> = active.par_iter().map(|&t| self.split_mask(t)).collect();
-            for (tri, mask) in active.drain(..).zip(masks) {
+            let masks: Vec<u8> = active
+                .par_iter()
+                .map(|&(t, _)| self.split_mask(t))
+                .collect();
+            for ((tri, home), mask) in active.drain(..).zip(masks) {
                 if mask == 0 {
-                    leaves.push(tri);
+                    leaves.push((tri, home));
                     continue;
                 }
                 for e in 0..3 {
@@ -221,9 +243,10 @@ impl Work<'_> {
                         && seen.insert(key, 0).is_none()
                     {
                         queued.push((a, b));
+                        on.push(home);
                     }
                 }
-                splitting.push((tri, mask));
+                splitting.push(((tri, home), mask));
             }
             if splitting.is_empty() {
                 break;
@@ -250,10 +273,13 @@ impl Work<'_> {
                 self.midpoints.insert(edge_key(a, b), first + i as u32);
             }
             self.out.stats.added_vertices += fresh.len();
-            self.add_vertices(&fresh);
-            let children: Vec<Vec<[u32; 3]>> = splitting
+            self.add_vertices(&fresh, &on);
+            let children: Vec<Vec<Piece>> = splitting
                 .par_iter()
-                .map(|&(tri, mask)| self.children(tri, mask))
+                .map(|&((tri, home), mask)| {
+                    let pieces = self.children(tri, mask).into_iter();
+                    pieces.map(|child| (child, home)).collect()
+                })
                 .collect();
             active.extend(children.into_iter().flatten());
         }

@@ -98,7 +98,7 @@ fn a_ray_through_the_centre_of_a_sphere_goes_straight_and_absorbs() {
     let sigma = Vec3::new(0.5, 0.1, 0.0);
     let lens = glass(sphere(Vec3::ZERO, 1.0, 48, 96), 1.5, sigma);
     let eye = Vec3::new(0.0, 0.0, 5.0);
-    let paths = vertex_paths(&lens, eye, Vec3::new(0.0, 0.0, 1.0), Vec3::Z);
+    let paths = vertex_paths(&lens, eye, (Vec3::new(0.0, 0.0, 1.0), Vec3::Z), None);
     let t = paths.t;
     assert!(t.exited());
     assert_eq!((t.topology.interfaces, t.topology.choices), (2, 0));
@@ -126,7 +126,7 @@ fn a_slab_shifts_an_oblique_ray_but_keeps_its_direction() {
     let p = Vec3::new(0.0, 0.0, 0.1);
     let eye = p + Vec3::new(1.0, 0.0, 1.0) * 3.0;
     let d = (p - eye).normalize();
-    let paths = vertex_paths(&lens, eye, p, Vec3::Z);
+    let paths = vertex_paths(&lens, eye, (p, Vec3::Z), None);
     assert!(paths.t.exited());
     assert!(angle_deg(paths.t.dir, d) < 1e-3, "{} vs {d}", paths.t.dir);
     // Inside, the ray bends towards the normal: it leaves less far along −x.
@@ -146,7 +146,7 @@ fn ior_one_has_no_interface() {
         .step_by(7)
     {
         let d = (*p - eye).normalize();
-        let paths = vertex_paths(&lens, eye, *p, *n);
+        let paths = vertex_paths(&lens, eye, (*p, *n), None);
         assert_eq!(paths.r.weight, Vec3::ZERO, "no reflection at {p}");
         if n.dot(d) < 0.0 {
             assert!(paths.t.exited());
@@ -161,7 +161,7 @@ fn grazing_rays_transmit_nothing_and_stay_finite() {
     let lens = glass(sphere(Vec3::ZERO, 1.0, 24, 48), 1.5, Vec3::splat(0.2));
     // The eye sees the vertex exactly edge-on, and slightly from behind.
     for eye in [Vec3::new(5.0, 1.0, 0.0), Vec3::new(5.0, 1.0001, 0.0)] {
-        let paths = vertex_paths(&lens, eye, Vec3::Y, Vec3::Y);
+        let paths = vertex_paths(&lens, eye, (Vec3::Y, Vec3::Y), None);
         for path in [paths.t, paths.r] {
             assert!(path.weight.is_finite() && path.dir.is_finite() && path.origin.is_finite());
         }
@@ -170,7 +170,7 @@ fn grazing_rays_transmit_nothing_and_stay_finite() {
     }
     // A zero or NaN normal: finite, treated as facing the eye.
     for n in [Vec3::ZERO, Vec3::splat(f32::NAN)] {
-        let paths = vertex_paths(&lens, Vec3::new(0.0, 5.0, 0.0), Vec3::Y, n);
+        let paths = vertex_paths(&lens, Vec3::new(0.0, 5.0, 0.0), (Vec3::Y, n), None);
         assert!(paths.t.weight.is_finite() && paths.r.dir.is_finite());
     }
 }
@@ -190,7 +190,7 @@ fn total_internal_reflection_everywhere_never_exits() {
     let p = Vec3::new(1.0, 0.1, 0.37);
     let s = Lens::vertex_surface(p, Vec3::X, d);
     assert!(!s.front, "seen from inside");
-    let paths = two_paths(&lens, &s, d);
+    let paths = two_paths(&lens, &s, d, None);
     assert_eq!(paths.t.weight, Vec3::ZERO, "no refraction out");
     let r = paths.r;
     assert!(!r.exited());
