@@ -196,3 +196,32 @@ pub fn angle_deg(a: Vec3, b: Vec3) -> f32 {
         angle.to_degrees()
     }
 }
+
+/// "More than `max_deg` apart" for unit directions: [`angle_deg`]`(a, b) >
+/// max_deg` without the arctangent (the tessellation asks it of every edge
+/// at every level). `2·atan2(|a − b|, |a + b|) > m ⟺ |a − b|² > tan²(m/2)·|a + b|²`
+/// for m in [0°, 180°); non-finite directions are apart, as `angle_deg`
+/// calls them 180°.
+#[derive(Clone, Copy, Debug)]
+pub struct AngleLimit {
+    tan_half_sq: f32,
+    max_deg: f32,
+}
+
+impl AngleLimit {
+    pub fn new(max_deg: f32) -> Self {
+        let half = (max_deg.clamp(0.0, 180.0) * 0.5).to_radians();
+        Self {
+            tan_half_sq: half.tan().powi(2),
+            max_deg,
+        }
+    }
+
+    pub fn exceeded(&self, a: Vec3, b: Vec3) -> bool {
+        let (d, s) = ((a - b).length_squared(), (a + b).length_squared());
+        if !(d.is_finite() && s.is_finite()) {
+            return self.max_deg < 180.0;
+        }
+        d > self.tan_half_sq * s
+    }
+}

@@ -14,7 +14,7 @@ use glam::{Mat4, Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::lens::Lens;
-use super::path::{TwoPaths, angle_deg, vertex_paths};
+use super::path::{AngleLimit, TwoPaths, vertex_paths};
 
 /// A working triangle: its corners and the lens triangle it lies in.
 type Piece = ([u32; 3], u32);
@@ -128,6 +128,7 @@ struct Work<'a> {
     eye: Vec3,
     screen: Screen,
     settings: TessSettings,
+    angle_limit: AngleLimit,
     out: Tessellation,
     pixels: Vec<Option<Vec2>>,
     midpoints: EdgeMap,
@@ -142,6 +143,7 @@ pub fn tessellate(lens: &Lens, eye: Vec3, screen: Screen, settings: TessSettings
         eye,
         screen,
         settings,
+        angle_limit: AngleLimit::new(settings.max_angle_deg),
         out: Tessellation::default(),
         pixels: Vec::new(),
         midpoints: EdgeMap::default(),
@@ -310,10 +312,10 @@ impl Work<'_> {
     }
 
     fn differ(&self, a: &TwoPaths, b: &TwoPaths) -> bool {
-        let max = self.settings.max_angle_deg;
+        let limit = self.angle_limit;
         [(&a.t, &b.t), (&a.r, &b.r)]
             .iter()
-            .any(|(p, q)| p.topology != q.topology || (p.exited() && angle_deg(p.dir, q.dir) > max))
+            .any(|(p, q)| p.topology != q.topology || (p.exited() && limit.exceeded(p.dir, q.dir)))
     }
 
     /// The triangles `tri` becomes when the edges of `mask` are split (their

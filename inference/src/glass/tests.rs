@@ -376,3 +376,38 @@ fn screen_refuses_points_behind_the_eye() {
     let behind = view(Vec3::new(0.0, 0.0, 3.0));
     assert!(behind.pixel(Vec3::new(0.0, 0.0, 5.0)).is_none());
 }
+
+#[test]
+fn the_angle_limit_agrees_with_the_angle() {
+    use super::path::AngleLimit;
+    let mut seed = 3u64;
+    let mut next = || {
+        seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+        (seed >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+    };
+    let (mut over, mut under) = (0, 0);
+    for max in [0.5, 3.0, 45.0, 179.0] {
+        let limit = AngleLimit::new(max);
+        for _ in 0..20_000 {
+            let a = Vec3::new(next(), next(), next()).normalize();
+            // Mostly near `a`, so angles around the limit are common.
+            let spread = next().abs() * max.to_radians() * 2.0;
+            let b = (a + spread * Vec3::new(next(), next(), next())).normalize();
+            let angle = angle_deg(a, b);
+            if (angle - max).abs() < 1e-3 {
+                continue;
+            }
+            assert_eq!(
+                limit.exceeded(a, b),
+                angle > max,
+                "{a} {b}: {angle}° vs {max}°"
+            );
+            if angle > max { over += 1 } else { under += 1 }
+        }
+    }
+    assert!(over > 1000 && under > 1000, "{over} over, {under} under");
+    let nan = Vec3::splat(f32::NAN);
+    assert!(AngleLimit::new(3.0).exceeded(nan, Vec3::X));
+    assert!(!AngleLimit::new(3.0).exceeded(Vec3::X, Vec3::X));
+    assert!(AngleLimit::new(3.0).exceeded(Vec3::X, -Vec3::X));
+}
