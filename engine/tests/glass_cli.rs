@@ -47,11 +47,12 @@ fn glass_compiles_its_shell_once_and_plays_hybrid() {
                 .is_file()
         );
     }
-    // Per-sample maps composite deferred: the lens into its G-buffer,
-    // then each of its pixels once.
+    // Per-sample maps composite deferred: the lens into its G-buffer
+    // first (its depth spares the room's shading behind it), then each of
+    // its pixels once over the room.
     assert_eq!(
         pass_names(&out),
-        ["room", "glass_gbuffer", "glass", "readback"]
+        ["glass_gbuffer", "room", "glass", "readback"]
     );
 
     // Cached: nothing traced again; the baseline plays from the same map.

@@ -19,10 +19,9 @@ pub mod samples;
 pub mod shell;
 
 use crate::backend::{Device, GpuError, GpuResult, Image};
-use crate::graph::Pass;
 use crate::passes::em_capture::CubeTarget;
 use crate::passes::glass::{GlassGeometry, ShellSource};
-use crate::passes::target::Target;
+use crate::passes::target::{AroundRoom, Target};
 use ahead::{Ahead, PathRequest};
 use ash::vk;
 use glam::{Mat4, Vec3, Vec4};
@@ -270,8 +269,15 @@ impl GlassPlayer {
         }
     }
 
-    /// The passes drawing what [`GlassPlayer::prepare`] uploaded.
-    pub fn passes<'a>(&'a self, target: Target<'a>, view_proj: Mat4) -> Vec<Box<dyn Pass + 'a>> {
+    /// The passes drawing what [`GlassPlayer::prepare`] uploaded, around
+    /// the room (see [`GlassGeometry::passes`]; `first`: nothing else lays
+    /// the frame's depth before the room).
+    pub fn passes<'a>(
+        &'a self,
+        target: Target<'a>,
+        view_proj: Mat4,
+        first: bool,
+    ) -> AroundRoom<'a> {
         let source = match (&self.samples, self.blend, &self.layers, self.layered_frame) {
             (_, _, Some((image, _)), Some(first)) => {
                 ShellSource::Layers(image, self.layer_blend, first)
@@ -279,7 +285,7 @@ impl GlassPlayer {
             (Some((image, _)), Some(blend), ..) => ShellSource::Samples(image, blend),
             _ => ShellSource::One(&self.cube.color),
         };
-        (self.geometry).passes(source, target, view_proj, &self.bands)
+        (self.geometry).passes(source, target, view_proj, (&self.bands, first))
     }
 
     /// Plays hybrid frames from layered shells: `image` holds `set`'s maps

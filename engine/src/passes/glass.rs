@@ -5,7 +5,7 @@
 //! shells (one array element per layer, nearest first).
 
 use super::glass_deferred::{DeferredGlass, DeferredLens};
-use super::target::Target;
+use super::target::{AroundRoom, Load, Target};
 use crate::backend::{Binding, Buffer, Device, GpuResult, Pipeline, PipelineDesc, Sampler};
 use crate::graph::{Access, Pass};
 use crate::shader_interface::{
@@ -197,21 +197,28 @@ impl GlassGeometry {
     /// [`GlassGeometry::set_samples`] or [`GlassGeometry::set_layers`]):
     /// per-sample maps, where they were set deferred, as a G-buffer and a
     /// composite inside `bands` (the composite's scissors; empty: the
-    /// render area), anything else as one forward pass.
+    /// render area), anything else as one forward pass after the room.
+    /// With `first` (nothing else lays the frame's depth before the room)
+    /// the deferred G-buffer pass goes before the room and clears depth.
     pub fn passes<'a>(
         &'a self,
         source: ShellSource<'a>,
         target: Target<'a>,
         view_proj: Mat4,
-        bands: &'a [vk::Rect2D],
-    ) -> Vec<Box<dyn Pass + 'a>> {
+        (bands, first): (&'a [vk::Rect2D], bool),
+    ) -> AroundRoom<'a> {
+        let after_room = |after_room| AroundRoom {
+            before_room: Vec::new(),
+            room_load: Load::Clear,
+            after_room,
+        };
         if let (ShellSource::Samples(samples, blend), Some(glass)) = (source, &self.deferred)
             && let (Some(vertices), Some(indices)) = (&self.vertices, &self.indices)
         {
             // No lens this frame: no G-buffer, and no composite over the
             // whole area for a stencil that marks nothing.
             if self.index_count == 0 {
-                return Vec::new();
+                return after_room(Vec::new());
             }
             let lens = DeferredLens {
                 vertices,
@@ -219,14 +226,23 @@ impl GlassGeometry {
                 index_count: self.index_count,
                 bands,
             };
-            return glass.passes(lens, target, view_proj, blend, samples).into();
+            let [gbuffer, composite] =
+                glass.passes(lens, target, (view_proj, blend), samples, first);
+            return match first {
+                true => AroundRoom {
+                    before_room: vec![gbuffer],
+                    room_load: Load::ClearColor,
+                    after_room: vec![composite],
+                },
+                false => after_room(vec![gbuffer, composite]),
+            };
         }
-        vec![Box::new(GlassPass {
+        after_room(vec![Box::new(GlassPass {
             geometry: self,
             source,
             target,
             view_proj,
-        })]
+        })])
     }
 
     /// Each draw of `source`: pipeline, set, push `blend`, first index and

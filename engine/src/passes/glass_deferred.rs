@@ -126,16 +126,20 @@ impl DeferredGlass {
         })
     }
 
-    /// The G-buffer pass over `target`'s depth (the room's), then the
-    /// composite into its colour, both inside `target.area`; `blend` is the
-    /// two samples' layers and the second's weight.
+    /// The G-buffer pass, then the composite into `target`'s colour inside
+    /// `target.area`; `blend` is the two samples' layers and the second's
+    /// weight. With `first` the G-buffer pass runs before the room: it
+    /// clears depth and stencil over the whole frame and lays down the
+    /// lens's depth, so the room's depth test skips what the lens covers
+    /// (and the room unmarks what it draws in front of it); otherwise it
+    /// tests against the room's depth.
     pub fn passes<'a>(
         &'a self,
         lens: DeferredLens<'a>,
         target: Target<'a>,
-        view_proj: Mat4,
-        blend: Vec4,
+        (view_proj, blend): (Mat4, Vec4),
         samples: &'a Image,
+        first: bool,
     ) -> [Box<dyn Pass + 'a>; 2] {
         // `Attachments` renders level 0, layer 0, counter-clockwise fronts:
         // the frame's own target, as glass frames give it.
@@ -152,6 +156,7 @@ impl DeferredGlass {
                 target,
                 push,
                 samples,
+                first,
             }),
             Box::new(LensCompositePass {
                 glass: self,
@@ -175,14 +180,16 @@ pub struct DeferredLens<'a> {
     pub bands: &'a [vk::Rect2D],
 }
 
-/// Pass 1: the lens into the G-buffer, depth-tested against the room,
-/// its pixels marked in the stencil.
+/// Pass 1: the lens into the G-buffer, its pixels marked in the stencil;
+/// depth-tested against the room, or (`first`) laying the frame's depth
+/// down before it.
 struct LensGBufferPass<'a> {
     glass: &'a DeferredGlass,
     lens: DeferredLens<'a>,
     target: Target<'a>,
     push: GlassPush,
     samples: &'a Image,
+    first: bool,
 }
 
 impl Pass for LensGBufferPass<'_> {
@@ -207,8 +214,10 @@ impl Pass for LensGBufferPass<'_> {
             load: ColorLoad::Clear(&[None; 4]),
             depth: self.target.depth,
             depth_usage: Usage::DepthTarget,
-            clear_depth: false,
-            area: self.target.area,
+            // First in the frame: depth and stencil cleared everywhere, as
+            // the room pass after it keeps them.
+            clear_depth: self.first,
+            area: if self.first { None } else { self.target.area },
         };
         attachments.render(&g.device, cmd, || {
             if self.lens.index_count == 0 {

@@ -76,11 +76,12 @@ pub(super) fn frame_passes<'a>(
 }
 
 /// The maps' upload (PEM frames), then the reflectors — from
-/// parameterized maps, static EMs or REM — around the lit room, and the
-/// glass. The deferred PEM's G-buffer pass goes first: the depth it lays
+/// parameterized maps, static EMs or REM — and the glass around the lit
+/// room. The deferred PEM's G-buffer pass goes first: the depth it lays
 /// down spares the room's shading behind the reflectors (about a tenth of
 /// the default frame on lavapipe), and its own attachments keep lavapipe
-/// from merging it with the room pass, so the timestamps of both hold.
+/// from merging it with the room pass, so the timestamps of both hold. The
+/// deferred glass's G-buffer goes first in the same way.
 fn lit_passes<'a>(
     parts: &FrameParts<'a>,
     mode: FrameMode,
@@ -104,29 +105,56 @@ fn lit_passes<'a>(
         ..target
     };
     let around = reflector_passes(parts, blend, target, view_proj)?;
+    // The deferred glass lays the frame's depth first when no reflector
+    // pass needs the room before or after it (a mirror drawn over the room
+    // in front of the lens would not unmark the lens's pixels).
+    let first = around.before_room.is_empty() && around.after_room.is_empty();
+    let glass = glass_passes(parts, mode, later, view_proj, first);
     passes.extend(around.before_room);
+    passes.extend(glass.before_room);
+    let room_load = match (glass.room_load, around.room_load) {
+        (Load::ClearColor, _) => Load::ClearColor,
+        (_, load) => load,
+    };
     passes.push(Box::new(parts.room.pass(
         "room",
         parts.gpu,
         Target {
-            load: around.room_load,
+            load: room_load,
             ..target
         },
         view_proj,
     )));
     passes.extend(around.after_room);
-    if let Some(g) = parts
+    passes.extend(glass.after_room);
+    Ok(passes)
+}
+
+/// The glass's passes around the room (none in PEM and REM frames, nor
+/// when the lens lies off the frame: an empty render area is invalid).
+fn glass_passes<'a>(
+    parts: &FrameParts<'a>,
+    mode: FrameMode,
+    later: Target<'a>,
+    view_proj: Mat4,
+    first: bool,
+) -> AroundRoom<'a> {
+    let none = || AroundRoom {
+        before_room: Vec::new(),
+        room_load: Load::Clear,
+        after_room: Vec::new(),
+    };
+    let Some(g) = parts
         .glass
         .filter(|_| !matches!(mode, FrameMode::Pem | FrameMode::Rem))
-    {
-        let area = area_of(view_proj, [g.bounds()], parts.width, parts.height);
-        // Off the frame the area is empty, and an empty render area is
-        // invalid: the lens draws nothing then.
-        if area.is_none_or(|a| a.extent.width > 0 && a.extent.height > 0) {
-            passes.extend(g.passes(Target { area, ..later }, view_proj));
-        }
+    else {
+        return none();
+    };
+    let area = area_of(view_proj, [g.bounds()], parts.width, parts.height);
+    if area.is_some_and(|a| a.extent.width == 0 || a.extent.height == 0) {
+        return none();
     }
-    Ok(passes)
+    g.passes(Target { area, ..later }, view_proj, first)
 }
 
 type Passes<'a> = Vec<Box<dyn Pass + 'a>>;
