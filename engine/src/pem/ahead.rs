@@ -44,7 +44,8 @@ pub struct TexgenInputs<'a> {
     pub positions: &'a [Vec3],
     pub normals: &'a [Vec3],
     pub triangles: &'a [u32],
-    pub edges: &'a MeshEdges,
+    /// The mesh's edges, when the edge filter asks for outline tiles.
+    pub edges: Option<&'a MeshEdges>,
     pub origin: Vec3,
     pub distant: EmGeometry,
     pub local: EmGeometry,
@@ -91,10 +92,10 @@ impl TexgenInputs<'_> {
             &mut pixels,
         );
         let filter = request.settings.edge_filter;
-        let outline = match &bands {
-            Some(_) if filter => self
-                .edges
-                .outline_tiles(&pixels, self.triangles, request.size),
+        let outline = match (&bands, self.edges) {
+            (Some(_), Some(edges)) if filter => {
+                edges.outline_tiles(&pixels, self.triangles, request.size)
+            }
             _ => None,
         };
         // Where no bound holds, the filter runs over the whole frame.
@@ -149,7 +150,7 @@ mod tests {
             positions: &positions,
             normals: &normals,
             triangles: &triangles,
-            edges: &edges,
+            edges: Some(&edges),
             origin: Vec3::ZERO,
             distant: EmGeometry::SphereAtInfinity,
             local: EmGeometry::SphereAtInfinity,
