@@ -18,7 +18,7 @@ use engine::eval::metrics::frame_scores;
 use engine::options::{Mode, PemOptions, RunPlace};
 use engine::play::{Session, compile_context, setup_mode};
 use inference::trace::output::read_exr;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 type Frame = Vec<[f32; 4]>;
 
@@ -42,13 +42,7 @@ fn main() -> Result<()> {
         el.parse().context("ELEVATION: expected degrees")?,
     );
     let layers = read_exr(Path::new(reference))?;
-    let place = RunPlace {
-        scene: scene.clone(),
-        out: Some(PathBuf::from(data)),
-        device: Default::default(),
-        size: (640, 480),
-        recompile: false,
-    };
+    let place = RunPlace::compiled_in(scene, Path::new(data), (640, 480));
     let mut session = Session::open(&place)?;
     let (width, height) = session.renderer.size();
     let traced = target_pixels(&layers, "beauty", false, (width * height) as usize)

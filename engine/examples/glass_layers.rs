@@ -20,7 +20,7 @@ use engine::eval::reference::{References, View};
 use engine::options::{Mode, PemOptions, RunPlace};
 use engine::play::{Session, compile_context, setup_mode};
 use inference::trace::TraceSettings;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 type Frame = Vec<[f32; 4]>;
 
@@ -37,13 +37,7 @@ fn main() -> Result<()> {
         az.parse().context("AZIMUTH: expected degrees")?,
         el.parse().context("ELEVATION: expected degrees")?,
     );
-    let place = RunPlace {
-        scene: scene.clone(),
-        out: Some(PathBuf::from(data)),
-        device: Default::default(),
-        size: (640, 480),
-        recompile: false,
-    };
+    let place = RunPlace::compiled_in(scene, Path::new(data), (640, 480));
     let mut session = Session::open(&place)?;
     let (width, height) = session.renderer.size();
     let lens = session

@@ -58,13 +58,7 @@ fn main() -> Result<()> {
         channel("beauty", "B")?,
     );
     let traced: Frame = (0..r.len()).map(|i| [r[i], g[i], b[i], 1.0]).collect();
-    let place = RunPlace {
-        scene: scene.clone(),
-        out: Some(PathBuf::from(data)),
-        device: Default::default(),
-        size: (640, 480),
-        recompile: false,
-    };
+    let place = RunPlace::compiled_in(scene, Path::new(data), (640, 480));
     let mut session = Session::open(&place)?;
     let (width, height) = session.renderer.size();
     if traced.len() != (width * height) as usize {

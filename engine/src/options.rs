@@ -217,6 +217,19 @@ pub struct RunPlace {
 }
 
 impl RunPlace {
+    /// A run of `scene` playing what is compiled in `out` (or shipped for
+    /// it) at `size`, on the default device, compiling nothing again: what
+    /// the examples that score one view open.
+    pub fn compiled_in(scene: &str, out: &std::path::Path, size: (u32, u32)) -> Self {
+        RunPlace {
+            scene: scene.to_string(),
+            out: Some(out.to_path_buf()),
+            device: Default::default(),
+            size,
+            recompile: false,
+        }
+    }
+
     /// The output folder: as given, else `out/<scene>` under the current
     /// folder.
     pub fn out_dir(&self, scene: &inference::scene::Scene) -> PathBuf {
