@@ -7,8 +7,9 @@
 //! frame, so each frame needs a new sample's maps decoded (ahead, on the
 //! worker) and uploaded: decoding on against resident maps, in one run.
 //! "default, edge filter" adds the film filter along the reflectors'
-//! outlines (`--edge-filter`). "default, bilinear views" blends a view between rings from its grid
-//! cell's four corners instead of the triangle of three that holds it.
+//! outlines (`--edge-filter`). "default, bilinear views" blends a view
+//! between rings from its grid cell's four corners instead of the
+//! triangle of three that holds it.
 //! Each row also reports the compositing passes' fragment-shader
 //! invocations per covered reflector pixel (the overdraw the deferred
 //! design removes). PEM variants light the room as `--room` says (inferred
