@@ -2,9 +2,9 @@
 //! compositing bands and outline tiles, computed on a worker while the
 //! device renders this frame. lavapipe keeps only part of the two cores
 //! busy while it renders (its triangle set-up is one thread), and the
-//! ~1.2 ms of CPU work a PEM
-//! frame needs before it can be recorded fits in what it leaves idle. The
-//! result is used only for exactly the view and settings it was made for.
+//! ~1.2 ms of CPU work a PEM frame needs before it can be recorded fits in
+//! what it leaves idle. The result is used only for exactly the view and
+//! settings it was made for.
 
 use super::settings::{PemKind, PemSettings};
 use crate::passes::outline::MeshEdges;
