@@ -96,12 +96,34 @@ pub fn texgen(
 ) {
     let (eye, origin) = (Vec3A::from(eye), Vec3A::from(origin));
     for ((p, n), o) in positions.iter().zip(normals).zip(out.iter_mut()) {
-        let p = Vec3A::from(*p);
-        let view = (p - eye).try_normalize().unwrap_or(Vec3A::NEG_Z);
-        let (r, cos) = reflect_view(view, Vec3A::from(*n));
-        let l = geometry.lookup(origin, p, r);
-        *o = [l.x, l.y, l.z, cos];
+        *o = texgen_vertex(geometry, origin, eye, *p, *n);
     }
+}
+
+/// [`texgen`] of the vertices whose `used` flag is set; the others' `out`
+/// entries are left as they are (a view that draws only some triangles
+/// reads only their vertices).
+pub fn texgen_where(
+    geometry: &EmGeometry,
+    (origin, eye): (Vec3, Vec3),
+    (positions, normals): (&[Vec3], &[Vec3]),
+    used: &[bool],
+    out: &mut [[f32; 4]],
+) {
+    let (eye, origin) = (Vec3A::from(eye), Vec3A::from(origin));
+    let vertices = positions.iter().zip(normals).zip(used);
+    for (((p, n), _), o) in vertices.zip(out.iter_mut()).filter(|(((_, _), u), _)| **u) {
+        *o = texgen_vertex(geometry, origin, eye, *p, *n);
+    }
+}
+
+#[inline(always)]
+fn texgen_vertex(geometry: &EmGeometry, origin: Vec3A, eye: Vec3A, p: Vec3, n: Vec3) -> [f32; 4] {
+    let p = Vec3A::from(p);
+    let view = (p - eye).try_normalize().unwrap_or(Vec3A::NEG_Z);
+    let (r, cos) = reflect_view(view, Vec3A::from(n));
+    let l = geometry.lookup(origin, p, r);
+    [l.x, l.y, l.z, cos]
 }
 
 /// The smallest axis-aligned ellipsoid centred at `center` containing every
@@ -246,6 +268,26 @@ mod tests {
                 out.iter().flatten().all(|v| v.is_finite()),
                 "{g:?}: {out:?}"
             );
+        }
+    }
+
+    #[test]
+    fn texgen_where_computes_the_used_vertices_as_texgen_does() {
+        let positions: Vec<Vec3> = (0..7)
+            .map(|i| Vec3::new(i as f32 * 0.1 - 0.3, 0.2 + i as f32 * 0.05, 0.1))
+            .collect();
+        let normals: Vec<Vec3> = (0..7)
+            .map(|i| Vec3::new(i as f32 * 0.3 - 1.0, 1.0, 0.5).normalize())
+            .collect();
+        let (origin, eye) = (Vec3::new(0.0, 0.25, 0.0), Vec3::new(0.4, 0.7, 1.5));
+        let mut all = vec![[0.0; 4]; 7];
+        texgen(&ROOM, origin, eye, &positions, &normals, &mut all);
+        let used = [true, false, true, true, false, false, true];
+        let mut some = vec![[9.0; 4]; 7];
+        texgen_where(&ROOM, (origin, eye), (&positions, &normals), &used, &mut some);
+        for (k, u) in used.iter().enumerate() {
+            let expected = if *u { all[k] } else { [9.0; 4] };
+            assert_eq!(some[k], expected, "vertex {k}");
         }
     }
 

@@ -28,9 +28,22 @@ pub fn screen_bands(
     view_proj: Mat4,
     positions: &[Vec3],
     indices: &[u32],
-    (width, height): (u32, u32),
+    size: (u32, u32),
     pixels: &mut Vec<Vec2>,
 ) -> Option<Vec<vk::Rect2D>> {
+    project(view_proj, positions, size, pixels)?;
+    bands_of(pixels, indices, size)
+}
+
+/// Every vertex's screen position in pixels (y down) into `pixels`; None
+/// when one lies at or behind the eye (or is NaN), where no screen bound
+/// holds.
+pub fn project(
+    view_proj: Mat4,
+    positions: &[Vec3],
+    (width, height): (u32, u32),
+    pixels: &mut Vec<Vec2>,
+) -> Option<()> {
     let size = Vec2::new(width as f32, height as f32);
     let [rx, ry, rw] = [view_proj.row(0), view_proj.row(1), view_proj.row(3)];
     pixels.clear();
@@ -44,6 +57,17 @@ pub fn screen_bands(
         let ndc = Vec2::new(rx.dot(p), ry.dot(p)) / w;
         pixels.push((ndc * 0.5 + 0.5) * size);
     }
+    Some(())
+}
+
+/// [`screen_bands`] of triangles whose vertices [`project`] put at
+/// `pixels`; None when an index is out of range.
+pub fn bands_of(
+    pixels: &[Vec2],
+    indices: &[u32],
+    (width, height): (u32, u32),
+) -> Option<Vec<vk::Rect2D>> {
+    let size = Vec2::new(width as f32, height as f32);
     let bands = height.div_ceil(BAND_ROWS) as usize;
     let mut spans = vec![(f32::INFINITY, f32::NEG_INFINITY); bands];
     // y in [0, height] after the clamp, so truncation is floor.

@@ -4,13 +4,16 @@
 //! busy while it renders (its triangle set-up is one thread), and the
 //! ~1.2 ms of CPU work a PEM frame needs before it can be recorded fits in
 //! what it leaves idle. The result is used only for exactly the view and
-//! settings it was made for.
+//! settings it was made for. Texgen runs only on the vertices of the
+//! triangles facing the eye ([`super::facing`]), which the frame draws.
 
+use super::facing::{Facing, FacingMesh};
 use super::settings::{PemKind, PemSettings};
+use crate::passes::bands::{bands_of, project};
 use crate::passes::outline::MeshEdges;
 use ash::vk;
-use glam::{Mat4, Vec3};
-use inference::em_geometry::{EmGeometry, texgen};
+use glam::{Mat4, Vec2, Vec3};
+use inference::em_geometry::{EmGeometry, texgen_where};
 use inference::texgen::TexgenVertex;
 
 /// What one reflector's texgen and bands depend on.
@@ -22,10 +25,12 @@ pub struct TexgenRequest {
     pub settings: PemSettings,
 }
 
-/// One reflector's texgen streams (distant, then local when drawn),
-/// compositing bands and outline tiles for one request.
+/// One reflector's triangles facing the eye, its texgen streams of their
+/// vertices (distant, then local when drawn), compositing bands and
+/// outline tiles for one request.
 pub struct TexgenFrame {
     pub request: TexgenRequest,
+    pub facing: Facing,
     pub streams: Vec<Vec<TexgenVertex>>,
     pub screen: ScreenParts,
 }
@@ -45,6 +50,8 @@ pub struct TexgenInputs<'a> {
     pub positions: &'a [Vec3],
     pub normals: &'a [Vec3],
     pub triangles: &'a [u32],
+    /// Its triangles in draw order with their face normals.
+    pub facing: &'a FacingMesh,
     /// The mesh's edges, when the edge filter asks for outline tiles.
     pub edges: Option<&'a MeshEdges>,
     pub origin: Vec3,
@@ -64,38 +71,38 @@ impl TexgenInputs<'_> {
         }
     }
 
-    /// Texgen of one stream for `eye`.
-    fn stream(&self, geometry: &EmGeometry, eye: Vec3) -> Vec<TexgenVertex> {
+    /// Texgen of one stream for `eye`, on the `used` vertices (the others
+    /// stay zero: no drawn triangle reads them).
+    fn stream(&self, geometry: &EmGeometry, eye: Vec3, used: &[bool]) -> Vec<TexgenVertex> {
         let mut out = vec![[0.0; 4]; self.positions.len()];
-        texgen(
+        texgen_where(
             geometry,
-            self.origin,
-            eye,
-            self.positions,
-            self.normals,
+            (self.origin, eye),
+            (self.positions, self.normals),
+            used,
             &mut out,
         );
         out
     }
 
-    /// The compositing bands and outline tiles of the frame `view_proj`
-    /// (only deferred frames draw by them).
-    fn screen(&self, request: &TexgenRequest) -> ScreenParts {
+    /// The compositing bands (of the triangles `facing` keeps: the others
+    /// are not drawn) and outline tiles of a frame whose vertices land at
+    /// `pixels` (None: no screen bound holds); only deferred frames draw
+    /// by them.
+    fn screen(
+        &self,
+        request: &TexgenRequest,
+        pixels: Option<&[Vec2]>,
+        facing: &Facing,
+    ) -> ScreenParts {
         if !request.settings.deferred() {
             return ScreenParts::default();
         }
-        let mut pixels = Vec::new();
-        let bands = crate::passes::bands::screen_bands(
-            request.view_proj,
-            self.positions,
-            self.triangles,
-            request.size,
-            &mut pixels,
-        );
+        let bands = pixels.and_then(|p| bands_of(p, &facing.indices, request.size));
         let filter = request.settings.edge_filter;
-        let outline = match (&bands, self.edges) {
-            (Some(_), Some(edges)) if filter => {
-                edges.outline_tiles(&pixels, self.triangles, request.size)
+        let outline = match (pixels, &bands, self.edges) {
+            (Some(pixels), Some(_), Some(edges)) if filter => {
+                edges.outline_tiles(pixels, self.triangles, request.size)
             }
             _ => None,
         };
@@ -115,20 +122,27 @@ impl TexgenInputs<'_> {
         }
     }
 
-    /// Everything `request` needs: the streams and, beside them on
-    /// rayon's other thread, the bands and outline tiles.
+    /// Everything `request` needs: where the vertices land on screen, the
+    /// triangles that may face the eye there, then their vertices' streams
+    /// and, beside them on rayon's other thread, the bands and outline
+    /// tiles.
     pub fn compute(&self, request: TexgenRequest) -> TexgenFrame {
+        let mut pixels = Vec::new();
+        let on_screen = project(request.view_proj, self.positions, request.size, &mut pixels);
+        let pixels = on_screen.map(|()| pixels.as_slice());
+        let facing = self.facing.facing(pixels);
         let (streams, screen) = rayon::join(
             || {
                 self.geometries(&request.settings)
                     .iter()
-                    .map(|g| self.stream(g, request.eye))
+                    .map(|g| self.stream(g, request.eye, &facing.used))
                     .collect()
             },
-            || self.screen(&request),
+            || self.screen(&request, pixels, &facing),
         );
         TexgenFrame {
             request,
+            facing,
             streams,
             screen,
         }
@@ -147,10 +161,12 @@ mod tests {
         let normals = vec![Vec3::Z; 4];
         let triangles = vec![0, 1, 2, 0, 2, 3];
         let edges = MeshEdges::new(&positions, &triangles);
+        let facing = FacingMesh::new(positions.len(), triangles.clone(), 0);
         let inputs = TexgenInputs {
             positions: &positions,
             normals: &normals,
             triangles: &triangles,
+            facing: &facing,
             edges: Some(&edges),
             origin: Vec3::ZERO,
             distant: EmGeometry::SphereAtInfinity,
@@ -167,7 +183,7 @@ mod tests {
                 ..PemSettings::new(PemKind::Layered)
             },
         };
-        inputs.screen(&request)
+        inputs.compute(request).screen
     }
 
     #[test]

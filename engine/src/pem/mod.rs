@@ -4,6 +4,7 @@
 //! the default path through the viewpoints.
 
 pub mod ahead;
+pub mod facing;
 mod frame_passes;
 pub mod frame_sets;
 pub mod path;

@@ -1,9 +1,10 @@
 //! One reflector as PEM playback sees it: its EM geometries and origin,
-//! its indices with convex-hull triangles first, its per-frame texgen
-//! streams, and which samples its slots hold (the slots themselves are
+//! its indices with convex-hull triangles first (per frame, those facing
+//! the eye), its per-frame texgen streams, and which samples its slots hold (the slots themselves are
 //! elements of the player's map arrays, from `base` on).
 
 use super::ahead::{ScreenParts, TexgenFrame, TexgenInputs, TexgenRequest};
+use super::facing::FacingMesh;
 use super::residency::{SLOTS, SlotTable};
 use super::settings::{PemKind, PemSettings};
 use crate::backend::{Buffer, Device};
@@ -29,8 +30,11 @@ pub struct PemReflector {
     pub lod_bias: f32,
     positions: Vec<Vec3>,
     normals: Vec<Vec3>,
-    /// The mesh's triangles (the compositing bands' screen bounds).
+    /// The mesh's triangles (the outline's edges index them).
     triangles: Vec<u32>,
+    /// The hull-sorted triangles with their face normals: which of them
+    /// face the eye, per frame.
+    facing: FacingMesh,
     /// Its edges and the triangles beside them (the outline's tiles): only
     /// with the edge filter, which alone reads them (~6 ms to build for
     /// the teapot).
@@ -44,7 +48,8 @@ pub struct PemReflector {
     pub bounds: (Vec3, Vec3),
     distant: EmGeometry,
     local: EmGeometry,
-    /// Triangles on the convex hull first, then the rest.
+    /// The triangles the frame texgen last ran for draws (those facing its
+    /// eye): on the convex hull first, then the rest.
     pub indices: Buffer,
     pub hull_index_count: u32,
     pub index_count: u32,
@@ -111,6 +116,7 @@ impl PemReflector {
             positions: o.mesh.positions.clone(),
             normals: o.mesh.normals.clone(),
             triangles: o.mesh.indices.clone(),
+            facing: FacingMesh::new(o.mesh.positions.len(), indices.clone(), hull_index_count),
             edges: (settings.edge_filter && settings.deferred())
                 .then(|| MeshEdges::new(&o.mesh.positions, &o.mesh.indices)),
             screen: ScreenParts::default(),
@@ -169,6 +175,7 @@ impl PemReflector {
             positions: &self.positions,
             normals: &self.normals,
             triangles: &self.triangles,
+            facing: &self.facing,
             edges: self.edges.as_ref(),
             origin: self.origin,
             distant: self.distant,
@@ -194,6 +201,11 @@ impl PemReflector {
             let bytes: &[u8] = bytemuck::cast_slice(stream);
             buffer.mapped_mut()?[..bytes.len()].copy_from_slice(bytes);
         }
+        // At most every triangle: the buffer holds them all.
+        let bytes: &[u8] = bytemuck::cast_slice(&frame.facing.indices);
+        self.indices.mapped_mut()?[..bytes.len()].copy_from_slice(bytes);
+        self.hull_index_count = frame.facing.hull_index_count;
+        self.index_count = frame.facing.indices.len() as u32;
         self.screen = frame.screen;
         Ok(served)
     }
