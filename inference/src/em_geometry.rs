@@ -284,7 +284,13 @@ mod tests {
         texgen(&ROOM, origin, eye, &positions, &normals, &mut all);
         let used = [true, false, true, true, false, false, true];
         let mut some = vec![[9.0; 4]; 7];
-        texgen_where(&ROOM, (origin, eye), (&positions, &normals), &used, &mut some);
+        texgen_where(
+            &ROOM,
+            (origin, eye),
+            (&positions, &normals),
+            &used,
+            &mut some,
+        );
         for (k, u) in used.iter().enumerate() {
             let expected = if *u { all[k] } else { [9.0; 4] };
             assert_eq!(some[k], expected, "vertex {k}");

@@ -213,6 +213,22 @@ pub fn jobs_for(scene: &Scene, em_size: Option<u32>, sphere: bool) -> Result<Vec
 /// the inference code's version. New kinds of job leave the keys of the
 /// others as they are.
 pub fn map_key(trace: &Key, job: &Job, options: &SolveOptions, size: (u32, u32)) -> Key {
+    keyed_map(trace, map_settings(job, options, size))
+}
+
+/// [`map_key`] from the hash of the map's own inputs ([`map_settings`]),
+/// which every sample of a job shares.
+pub fn keyed_map(trace: &Key, settings: u64) -> Key {
+    trace
+        .clone()
+        .with("inference version", u64::from(INFERENCE_VERSION))
+        .with("map settings", settings)
+}
+
+/// The hash of a map's own inputs: the same for every sample of `job`
+/// (it reads the whole mesh, so a compile hashes it once per job, not per
+/// sample).
+pub fn map_settings(job: &Job, options: &SolveOptions, size: (u32, u32)) -> u64 {
     let mut h = Fnv::default();
     h.str(&job.name());
     h.str(&format!("{:?} {:?}", job.geometry, job.origin));
@@ -279,10 +295,7 @@ pub fn map_key(trace: &Key, job: &Job, options: &SolveOptions, size: (u32, u32))
     for p in &job.object.mesh.positions {
         h.v3(*p);
     }
-    trace
-        .clone()
-        .with("inference version", u64::from(INFERENCE_VERSION))
-        .with("map settings", h.finish())
+    h.finish()
 }
 
 /// Sample `k`'s neighbours on its ring (azimuth line ± 1 of the ring's

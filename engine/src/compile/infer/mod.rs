@@ -21,8 +21,8 @@ pub mod targets;
 
 pub use budget::{Budget, inputs_budget};
 pub use diffuse::{DiffuseRequest, infer_diffuse};
-use jobs::missing_neighbours;
 pub use jobs::{INFERENCE_VERSION, Job, jobs_for, map_key};
+use jobs::{keyed_map, map_settings, missing_neighbours};
 pub use sample::WARM_CHAIN;
 
 use crate::backend::{DeviceOptions, create_device};
@@ -104,6 +104,8 @@ pub const LOCAL_PRIOR: f32 = 0.01;
 pub struct Plan<'a> {
     pub scene: &'a Scene,
     pub jobs: Vec<Job<'a>>,
+    /// Per job, the hash of its maps' own inputs ([`map_settings`]).
+    job_settings: Vec<u64>,
     pub scene_key: Key,
     pub settings: TraceSettings,
     pub options: SolveOptions,
@@ -128,13 +130,19 @@ impl<'a> Plan<'a> {
                 scene.source.display()
             );
         }
-        Ok(Self {
+        let mut plan = Self {
             scene,
             jobs,
+            job_settings: Vec::new(),
             scene_key: cache::scene_key(scene),
             settings: req.trace_settings()?,
             options: req.solve_options(),
-        })
+        };
+        let size = (plan.settings.width, plan.settings.height);
+        plan.job_settings = (plan.jobs.iter())
+            .map(|job| map_settings(job, &plan.options_for(job), size))
+            .collect();
+        Ok(plan)
     }
 
     /// The traced target's key of sample `k`.
@@ -147,7 +155,11 @@ impl<'a> Plan<'a> {
     /// sample `k`'s).
     pub fn key(&self, k: u32, trace_key: &Key, job: &Job) -> Key {
         let size = (self.settings.width, self.settings.height);
-        let key = map_key(trace_key, job, &self.options_for(job), size);
+        let settings = (self.jobs.iter().zip(&self.job_settings))
+            .find(|(j, _)| std::ptr::eq(*j, job))
+            .map(|(_, &h)| h)
+            .unwrap_or_else(|| map_settings(job, &self.options_for(job), size));
+        let key = keyed_map(trace_key, settings);
         // The neighbours' traces are inputs too. Their eyes follow from
         // this sample's (placed lines are all in every trace key), but not
         // whether the arc ends beside it: a 1D orbit's trace keys leave out
@@ -336,6 +348,31 @@ mod tests {
             let layered = long.jobs[job].neighbour_weight() > 0.0;
             assert_eq!(key(&long, 2) != key(&short, 2), layered, "sample 2");
         }
+    }
+
+    #[test]
+    fn the_plan_hashes_each_jobs_settings_once_into_the_same_keys() {
+        let (scene, request) = (scene("samples = 5"), request());
+        let plan = Plan::new(&scene, &request).expect("plan");
+        let size = (plan.settings.width, plan.settings.height);
+        let trace = plan.trace_key(3).expect("trace key");
+        let mut hashes = std::collections::HashSet::new();
+        for job in &plan.jobs {
+            let direct = super::map_key(&trace, job, &plan.options_for(job), size);
+            assert_eq!(plan.key(3, &trace, job), direct, "{}", job.name());
+            // A job that is not the plan's own (a copy) is hashed in full.
+            let copy = super::Job {
+                atlas: job.atlas.clone(),
+                ..*job
+            };
+            assert_eq!(plan.key(3, &trace, &copy), direct, "{}", job.name());
+            hashes.insert(direct.hash());
+        }
+        assert_eq!(
+            hashes.len(),
+            plan.jobs.len(),
+            "every job keys its maps apart"
+        );
     }
 
     /// The keys of sample `k`'s stacking maps on the teapot with
