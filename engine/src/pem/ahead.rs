@@ -1,11 +1,12 @@
 //! Frames in flight for PEM frames: the next frame's texgen streams,
 //! compositing bands and outline tiles, computed on a worker while the
 //! device renders this frame. lavapipe keeps only part of the two cores
-//! busy while it renders (its triangle set-up is one thread), and the
-//! ~1.2 ms of CPU work a PEM frame needs before it can be recorded fits in
-//! what it leaves idle. The result is used only for exactly the view and
-//! settings it was made for. Texgen runs only on the vertices of the
-//! triangles facing the eye ([`super::facing`]), which the frame draws.
+//! busy while it renders (its triangle set-up is one thread), and the CPU
+//! work a PEM frame needs before it can be recorded (about 0.6 ms for the
+//! teapot) fits in what it leaves idle. The result is used only for
+//! exactly the view and settings it was made for. Texgen runs only on the
+//! vertices of the triangles that may face the eye ([`super::facing`]),
+//! the only ones the frame draws.
 
 use super::facing::{Facing, FacingMesh};
 use super::settings::{PemKind, PemSettings};
@@ -50,7 +51,7 @@ pub struct TexgenInputs<'a> {
     pub positions: &'a [Vec3],
     pub normals: &'a [Vec3],
     pub triangles: &'a [u32],
-    /// Its triangles in draw order with their face normals.
+    /// Its triangles in draw order (hull first), which a view culls.
     pub facing: &'a FacingMesh,
     /// The mesh's edges, when the edge filter asks for outline tiles.
     pub edges: Option<&'a MeshEdges>,
