@@ -13,6 +13,8 @@ pub struct PerfLog {
     passes: Vec<(String, Vec<PassTiming>)>,
     frame_ms: Vec<f64>,
     cpu: Vec<CpuTimes>,
+    /// Per frame, submit-to-fence time outside every pass's timestamps.
+    outside_ms: Vec<f64>,
 }
 
 #[derive(Serialize)]
@@ -28,6 +30,11 @@ pub struct CpuReport {
     pub texgen_ms_median: f64,
     pub upload_ms_median: f64,
     pub submit_to_fence_ms_median: f64,
+    /// The part of submit to fence inside no pass's timestamps: the device
+    /// starting the frame, pass boundaries, and time lavapipe's threads
+    /// lose to CPU work on the same cores (a frame's per-pass times can
+    /// grow while this shrinks, README "PEM playback: speed").
+    pub outside_passes_ms_median: f64,
     /// Reading PEM maps into staging (decode or EXR read): a sample's maps
     /// are read once, when the eye first needs it, so the mean and the
     /// count say more than the median.
@@ -62,6 +69,8 @@ pub struct PerfReport {
 impl PerfLog {
     pub fn record(&mut self, frame_ms: f64, passes: &[PassTiming], cpu: CpuTimes) {
         self.frame_ms.push(frame_ms);
+        let inside: f64 = passes.iter().map(|t| t.sample.gpu_ms).sum();
+        self.outside_ms.push((cpu.submit_ms - inside).max(0.0));
         self.cpu.push(cpu);
         for timing in passes {
             match self
@@ -132,6 +141,7 @@ impl PerfLog {
                 texgen_ms_median: cpu_median(|c| c.texgen_ms),
                 upload_ms_median: cpu_median(|c| c.upload_ms),
                 submit_to_fence_ms_median: cpu_median(|c| c.submit_ms),
+                outside_passes_ms_median: median(&self.outside_ms),
                 decode_ms_median: cpu_median(|c| c.decode_ms),
                 decode_ms_mean: cpu_mean(|c| c.decode_ms),
                 maps_decoded: self.cpu.iter().map(|c| u64::from(c.decoded_maps)).sum(),
@@ -178,13 +188,14 @@ impl PerfReport {
             );
         }
         out += &format!(
-            "{:<16} {:>12.3}\n{:<16} {:>12.3}\n{:<16} {:>12.3}\n",
+            "{:<16} {:>12.3}\n{:<16} {:>12.3}\n{:<16} {:>12.3}   ({:.3} outside the passes)\n",
             "cpu texgen",
             self.cpu.texgen_ms_median,
             "cpu upload",
             self.cpu.upload_ms_median,
             "cpu submit→fence",
-            self.cpu.submit_to_fence_ms_median
+            self.cpu.submit_to_fence_ms_median,
+            self.cpu.outside_passes_ms_median
         );
         if self.cpu.maps_decoded > 0 {
             out += &format!(
@@ -197,5 +208,47 @@ impl PerfReport {
             );
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::backend::PassSample;
+
+    fn pass(name: &str, gpu_ms: f64) -> PassTiming {
+        PassTiming {
+            name: name.into(),
+            sample: PassSample {
+                gpu_ms,
+                fragment_invocations: 0,
+            },
+        }
+    }
+
+    #[test]
+    fn time_outside_the_passes_is_submit_to_fence_less_the_passes() {
+        let mut log = PerfLog::default();
+        for (submit_ms, room_ms) in [(10.0, 4.0), (12.0, 5.0), (20.0, 4.5)] {
+            let cpu = CpuTimes {
+                submit_ms,
+                ..Default::default()
+            };
+            log.record(
+                submit_ms,
+                &[pass("gbuffer", 3.0), pass("room", room_ms)],
+                cpu,
+            );
+        }
+        // Timestamps that overrun the fence (clock skew) count as none.
+        let skewed = CpuTimes {
+            submit_ms: 1.0,
+            ..Default::default()
+        };
+        log.record(1.0, &[pass("gbuffer", 3.0)], skewed);
+        let report = log.report("d", "s", "m", [4, 4], &[]);
+        // Per frame 3, 4, 12.5 and 0: the median of four is 3.5.
+        assert_eq!(report.cpu.outside_passes_ms_median, 3.5);
+        assert!(report.table().contains("3.500 outside the passes"));
     }
 }
