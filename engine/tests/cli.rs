@@ -75,6 +75,12 @@ fn validated_run_writes_frames_and_perf_json() {
     assert!(perf["frame_ms_median"].as_f64().is_some_and(|v| v > 0.0));
     assert!(perf["cpu"]["texgen_ms_median"].as_f64().is_some());
     assert!(perf["cpu"]["upload_ms_median"].as_f64().is_some());
+    let submit = perf["cpu"]["submit_to_fence_ms_median"].as_f64();
+    let outside = perf["cpu"]["outside_passes_ms_median"].as_f64();
+    assert!(
+        outside.zip(submit).is_some_and(|(o, s)| o >= 0.0 && o <= s),
+        "{outside:?} outside the passes of {submit:?}"
+    );
     let passes = perf["passes"].as_array().expect("passes");
     let names: Vec<&str> = passes.iter().filter_map(|p| p["name"].as_str()).collect();
     assert_eq!(names, ["room", "mirror", "readback"]);
