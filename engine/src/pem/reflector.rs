@@ -1,7 +1,8 @@
 //! One reflector as PEM playback sees it: its EM geometries and origin,
-//! its indices with convex-hull triangles first (per frame, those facing
-//! the eye), its per-frame texgen streams, and which samples its slots hold (the slots themselves are
-//! elements of the player's map arrays, from `base` on).
+//! its indices with convex-hull triangles first (per frame, those that may
+//! face the eye), its per-frame texgen streams, and which samples its
+//! slots hold (the slots themselves are elements of the player's map
+//! arrays, from `base` on).
 
 use super::ahead::{ScreenParts, TexgenFrame, TexgenInputs, TexgenRequest};
 use super::facing::FacingMesh;
@@ -32,8 +33,8 @@ pub struct PemReflector {
     normals: Vec<Vec3>,
     /// The mesh's triangles (the outline's edges index them).
     triangles: Vec<u32>,
-    /// The hull-sorted triangles with their face normals: which of them
-    /// face the eye, per frame.
+    /// The hull-sorted triangles, of which each frame keeps those that may
+    /// face its eye.
     facing: FacingMesh,
     /// Its edges and the triangles beside them (the outline's tiles): only
     /// with the edge filter, which alone reads them (~6 ms to build for
@@ -48,8 +49,8 @@ pub struct PemReflector {
     pub bounds: (Vec3, Vec3),
     distant: EmGeometry,
     local: EmGeometry,
-    /// The triangles the frame texgen last ran for draws (those facing its
-    /// eye): on the convex hull first, then the rest.
+    /// The triangles the frame texgen last ran for draws (those that may
+    /// face its eye): on the convex hull first, then the rest.
     pub indices: Buffer,
     pub hull_index_count: u32,
     pub index_count: u32,
