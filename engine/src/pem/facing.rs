@@ -38,9 +38,10 @@ impl FacingMesh {
     /// The triangles a frame with its vertices at `pixels` (screen
     /// positions, y down, from [`crate::passes::bands::project`]) may draw
     /// with counter-clockwise front faces: all but those surely seen from
-    /// behind. Every triangle where no screen position holds (None: a
-    /// vertex at or behind the eye, which the rasterizer clips) or where an
-    /// index is out of range (the draw, not this, refuses a bad mesh).
+    /// behind. It keeps every triangle where no screen position holds
+    /// (None: a vertex at or behind the eye, which the rasterizer clips)
+    /// and every one with an index out of range (the draw, not this,
+    /// refuses a bad mesh).
     pub fn facing(&self, pixels: Option<&[Vec2]>) -> Facing {
         let mut used = vec![false; self.vertices];
         let mut indices = Vec::with_capacity(self.indices.len() / 2 + 3);
