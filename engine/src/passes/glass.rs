@@ -207,18 +207,13 @@ impl GlassGeometry {
         view_proj: Mat4,
         (bands, first): (&'a [vk::Rect2D], bool),
     ) -> AroundRoom<'a> {
-        let after_room = |after_room| AroundRoom {
-            before_room: Vec::new(),
-            room_load: Load::Clear,
-            after_room,
-        };
         if let (ShellSource::Samples(samples, blend), Some(glass)) = (source, &self.deferred)
             && let (Some(vertices), Some(indices)) = (&self.vertices, &self.indices)
         {
             // No lens this frame: no G-buffer, and no composite over the
             // whole area for a stencil that marks nothing.
             if self.index_count == 0 {
-                return after_room(Vec::new());
+                return AroundRoom::after_room(Vec::new());
             }
             let lens = DeferredLens {
                 vertices,
@@ -234,10 +229,10 @@ impl GlassGeometry {
                     room_load: Load::ClearColor,
                     after_room: vec![composite],
                 },
-                false => after_room(vec![gbuffer, composite]),
+                false => AroundRoom::after_room(vec![gbuffer, composite]),
             };
         }
-        after_room(vec![Box::new(GlassPass {
+        AroundRoom::after_room(vec![Box::new(GlassPass {
             geometry: self,
             source,
             target,

@@ -29,6 +29,17 @@ pub struct AroundRoom<'a> {
     pub after_room: Vec<Box<dyn Pass + 'a>>,
 }
 
+impl<'a> AroundRoom<'a> {
+    /// Only `passes` after a room that clears its own attachments.
+    pub fn after_room(passes: Vec<Box<dyn Pass + 'a>>) -> Self {
+        Self {
+            before_room: Vec::new(),
+            room_load: Load::Clear,
+            after_room: passes,
+        }
+    }
+}
+
 /// A colour + depth pair to render into (one MIP level, one layer).
 #[derive(Clone, Copy)]
 pub struct Target<'a> {

@@ -20,7 +20,7 @@ use crate::gpu_scene::GpuScene;
 use crate::graph::Executor;
 use crate::maps::ptm_edge;
 use crate::passes::pem_deferred::GBuffer;
-use crate::passes::target::{AroundRoom, Load, Target};
+use crate::passes::target::{AroundRoom, Target};
 use crate::passes::upload::{Upload, UploadPass};
 use anyhow::{Result, bail};
 use ash::vk;
@@ -373,11 +373,8 @@ impl PemPlayer {
         if self.settings.deferred() {
             self.deferred_passes(gpu, gbuffer, blend, &slots, target, view_proj)
         } else {
-            Ok(AroundRoom {
-                before_room: Vec::new(),
-                room_load: Load::Clear,
-                after_room: self.multipass(gpu, blend, &slots, target, view_proj)?,
-            })
+            let passes = self.multipass(gpu, blend, &slots, target, view_proj)?;
+            Ok(AroundRoom::after_room(passes))
         }
     }
 

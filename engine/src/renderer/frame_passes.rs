@@ -139,11 +139,7 @@ fn glass_passes<'a>(
     view_proj: Mat4,
     first: bool,
 ) -> AroundRoom<'a> {
-    let none = || AroundRoom {
-        before_room: Vec::new(),
-        room_load: Load::Clear,
-        after_room: Vec::new(),
-    };
+    let none = || AroundRoom::after_room(Vec::new());
     let Some(g) = parts
         .glass
         .filter(|_| !matches!(mode, FrameMode::Pem | FrameMode::Rem))
