@@ -2,13 +2,18 @@
 //! after another along the orbit come back bit for bit what a read on this
 //! thread gives, while the worker warms the next samples' coarse levels in
 //! between (`MapSource::warm_ahead`); dropping the prefetcher ends the
-//! worker even while it has maps left to warm.
+//! worker even while it has maps left to warm. Playing the main job's path
+//! (along the orbit, then climbing across the rings), every map a frame
+//! needs was decoded ahead for the view the player announced.
 
 mod common;
 
 use engine::backend::Buffer;
+use engine::pem::path::{default_frames, path_view};
+use engine::pem::player::{PemKind, PemSettings};
 use engine::pem::prefetch::{MapKey, Prefetcher};
 use engine::pem::source::{MapLayer, MapSource};
+use engine::renderer::{FrameMode, Renderer};
 use gpu_allocator::MemoryLocation;
 use half::f16;
 use inference::scene::Scene;
@@ -66,5 +71,54 @@ fn maps_decoded_ahead_match_maps_read_in_line() {
     }
     // The worker still has the last maps to warm; dropping it must not hang.
     drop(prefetch);
+    common::assert_no_validation_messages();
+}
+
+/// The main job's path at a small size: after the first frame, no frame
+/// decodes a map on its own thread. Before the player decoded the
+/// announced view's samples ahead, it guessed the next cell from the last
+/// move, and the climb across the rings (azimuth and elevation cells
+/// changing at different frames) missed: 70 of 272 maps were decoded in
+/// line on the main job.
+#[test]
+fn the_paths_maps_are_all_decoded_ahead() {
+    let device = common::validated_device();
+    let scene = Scene::load("teapot").expect("the teapot scene");
+    let container =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/compiled/teapot/teapot.ptxc");
+    let source = MapSource::container(&scene, &container).expect("the shipped container");
+    let mut r = Renderer::new(&device, &scene, 64, 48).expect("renderer");
+    r.set_pem(&scene, PemSettings::new(PemKind::Layered), source)
+        .expect("set-up");
+    let orbit = &scene.orbit;
+    let frames = default_frames(orbit);
+    let eye_of = |i: u32| {
+        let (azimuth, elevation) = path_view(orbit, i, frames);
+        orbit.eye(azimuth, elevation)
+    };
+    let (mut decoded, mut in_line) = (0, Vec::new());
+    for i in 0..frames {
+        if i + 1 < frames {
+            r.set_next_view(eye_of(i + 1), orbit.view(eye_of(i + 1)));
+        }
+        let stats = r
+            .frame(FrameMode::Pem, eye_of(i), orbit.view(eye_of(i)))
+            .expect("frame");
+        let cpu = stats.cpu;
+        if i > 0 {
+            decoded += cpu.decoded_maps;
+            if cpu.prefetched_maps < cpu.decoded_maps {
+                in_line.push((i, cpu.decoded_maps - cpu.prefetched_maps));
+            }
+        }
+    }
+    assert!(
+        decoded >= 200,
+        "the path read {decoded} maps after its first frame"
+    );
+    assert!(
+        in_line.is_empty(),
+        "(frame, maps decoded in line) of {decoded} maps: {in_line:?}"
+    );
     common::assert_no_validation_messages();
 }

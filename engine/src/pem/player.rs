@@ -167,12 +167,15 @@ impl PemPlayer {
     /// CPU work before recording a frame: texgen for `eye`, and the maps of
     /// `blend`'s samples that are not resident into staging. The previous
     /// frame's uploads have run (its fence was waited on), so their
-    /// staging buffers go back to the pool first.
+    /// staging buffers go back to the pool first. `next_eye`, when the
+    /// caller knows it, is where the next frame looks from: its samples
+    /// are decoded ahead first.
     pub fn prepare(
         &mut self,
         eye: Vec3,
         view: (glam::Mat4, (u32, u32)),
         blend: &SampleBlend,
+        next_eye: Option<Vec3>,
     ) -> Result<PemCpu> {
         self.frame += 1;
         for p in self.pending.drain(..) {
@@ -210,6 +213,9 @@ impl PemPlayer {
                 .flat_map(|r| r.outline().iter().copied())
                 .collect();
             edges.set_outline(&outline)?;
+        }
+        if let Some(next) = next_eye {
+            self.prefetch_blend(&self.blend(next));
         }
         self.prefetch_next(eye);
         Ok(cpu)
@@ -294,7 +300,7 @@ impl PemPlayer {
     fn prefetch_next(&mut self, eye: Vec3) {
         let (az, el) = self.orbit.angles(eye);
         let last = self.last_angles.replace((az, el));
-        let (Some((last_az, last_el)), Some(prefetch)) = (last, self.prefetch.as_mut()) else {
+        let Some((last_az, last_el)) = last else {
             return;
         };
         let (da, de) = (az - last_az, el - last_el);
@@ -310,9 +316,18 @@ impl PemPlayer {
             s.blend,
             s.view_blend,
         );
+        self.prefetch_blend(&ahead);
+    }
+
+    /// Asks the worker for `blend`'s samples, every layer, for every
+    /// reflector that does not hold them and has not asked yet.
+    fn prefetch_blend(&mut self, blend: &SampleBlend) {
+        let Some(prefetch) = self.prefetch.as_mut() else {
+            return;
+        };
         for r in &self.reflectors {
-            for sample in ahead.indices().filter(|&k| !r.table.holds(k)) {
-                for layer in s.layers() {
+            for sample in blend.indices().filter(|&k| !r.table.holds(k)) {
+                for layer in self.settings.layers() {
                     let key = MapKey {
                         object: r.name.clone(),
                         layer,

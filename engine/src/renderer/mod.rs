@@ -324,7 +324,10 @@ impl Renderer {
         let glass = self.glass.as_mut();
         crate::glass::prepare_frame(glass, mode, (eye, view_proj), next, size, &mut cpu)?;
         let blend = match mode {
-            FrameMode::Pem => Some(self.prepare_pem(eye, view_proj, &mut cpu)?),
+            FrameMode::Pem => {
+                let next_eye = next.map(|(eye, _)| eye);
+                Some(self.prepare_pem((eye, next_eye), view_proj, &mut cpu)?)
+            }
             _ => None,
         };
         let parts = FrameParts {
@@ -375,10 +378,11 @@ impl Renderer {
     }
 
     /// The samples a PEM frame from `eye` blends, their maps read into
-    /// staging; what that cost on the CPU is added to `cpu`.
+    /// staging (and the next frame's, from `next_eye` when known, decoded
+    /// ahead); what that cost on the CPU is added to `cpu`.
     fn prepare_pem(
         &mut self,
-        eye: Vec3,
+        (eye, next_eye): (Vec3, Option<Vec3>),
         view_proj: Mat4,
         cpu: &mut CpuTimes,
     ) -> Result<SampleBlend, RenderError> {
@@ -386,7 +390,12 @@ impl Renderer {
             return Err(GpuError::Invalid("PEM frame without set_pem()".into()).into());
         };
         let blend = pem.blend(eye);
-        let prepared = pem.prepare(eye, (view_proj, (self.width, self.height)), &blend)?;
+        let prepared = pem.prepare(
+            eye,
+            (view_proj, (self.width, self.height)),
+            &blend,
+            next_eye,
+        )?;
         cpu.texgen_ms += prepared.texgen_ms;
         cpu.decode_ms += prepared.decode_ms;
         cpu.decoded_maps += prepared.decoded_maps;
