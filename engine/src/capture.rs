@@ -31,7 +31,9 @@ pub enum CaptureError {
     },
 }
 
-/// The sRGB transfer function of a linear value, clamped to [0, 1].
+/// The sRGB transfer function of a linear value, clamped to [0, 1]. Its
+/// 8-bit rounding is what PNGs hold; `util::srgb8` gives those bytes
+/// from a table.
 pub fn linear_to_srgb(x: f32) -> f32 {
     let x = if x.is_finite() {
         x.clamp(0.0, 1.0)
@@ -104,11 +106,7 @@ pub fn write_png(
     pixels: &[[f32; 4]],
 ) -> Result<(), CaptureError> {
     check_size(path, width, height, pixels)?;
-    let bytes: Vec<u8> = pixels
-        .iter()
-        .flat_map(|p| [p[0], p[1], p[2]])
-        .map(|c| (linear_to_srgb(c) * 255.0 + 0.5) as u8)
-        .collect();
+    let bytes = crate::util::srgb8::srgb8_rgb(pixels);
     let owned = path.to_path_buf();
     atomically(
         path,

@@ -151,11 +151,7 @@ pub fn flip_error_map(
 /// The frame as the engine writes it to PNG: each linear value clamped to
 /// [0, 1], sRGB-encoded and rounded to 8 bits (`capture::write_png`), RGB.
 pub fn display_bytes(image: &[[f32; 4]]) -> Vec<u8> {
-    image
-        .iter()
-        .flat_map(|p| [p[0], p[1], p[2]])
-        .map(|c| (crate::capture::linear_to_srgb(c) * 255.0 + 0.5) as u8)
-        .collect()
+    crate::util::srgb8::srgb8_rgb(image)
 }
 
 /// Display-referred PSNR in dB over every pixel: both frames through
