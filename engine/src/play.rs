@@ -304,17 +304,35 @@ pub fn frame_stem(out: &Path, i: u32) -> PathBuf {
     out.join(format!("frame_{i:04}"))
 }
 
-/// Encoding PNGs takes longer than a frame: a writer thread does it.
+/// A kept frame on its way to the writer: the device's RGBA16F read-back
+/// (4 halves a pixel), or linear RGBA pixels (the tracer's).
+pub enum Captured {
+    Halves(Vec<half::f16>),
+    Pixels(Vec<[f32; 4]>),
+}
+
+impl Captured {
+    fn into_pixels(self) -> Vec<[f32; 4]> {
+        match self {
+            Captured::Halves(halves) => crate::renderer::half_pixels(&halves),
+            Captured::Pixels(pixels) => pixels,
+        }
+    }
+}
+
+/// Encoding PNGs takes longer than a frame: a writer thread does it, from
+/// converting the read-back on (the frame loop's thread only copies it).
 struct FrameWriter {
-    send: mpsc::Sender<(u32, Vec<[f32; 4]>)>,
+    send: mpsc::Sender<(u32, Captured)>,
     thread: std::thread::JoinHandle<Result<(), capture::CaptureError>>,
 }
 
 impl FrameWriter {
     fn start(dir: PathBuf, (width, height): (u32, u32), exr: bool) -> Self {
-        let (send, receive) = mpsc::channel::<(u32, Vec<[f32; 4]>)>();
+        let (send, receive) = mpsc::channel::<(u32, Captured)>();
         let thread = std::thread::spawn(move || {
-            for (i, pixels) in receive {
+            for (i, captured) in receive {
+                let pixels = captured.into_pixels();
                 let stem = frame_stem(&dir, i);
                 capture::write_png(&stem.with_extension("png"), width, height, &pixels)?;
                 if exr {
@@ -327,8 +345,8 @@ impl FrameWriter {
     }
 
     /// Queues frame `i`; false when the writer has stopped (on an error).
-    fn send(&self, i: u32, pixels: Vec<[f32; 4]>) -> bool {
-        self.send.send((i, pixels)).is_ok()
+    fn send(&self, i: u32, frame: Captured) -> bool {
+        self.send.send((i, frame)).is_ok()
     }
 
     fn finish(self) -> Result<()> {
@@ -364,20 +382,26 @@ impl FrameSource<'_> {
         }
     }
 
-    /// [`FrameSource::frame`] when the pixels are kept (`keep`), else
-    /// [`FrameSource::draw`].
+    /// [`FrameSource::draw`], and the frame as read back when it is kept
+    /// (`keep`): a rasterised frame as half floats, which the writer
+    /// converts on its own thread.
     pub fn frame_if(
         &mut self,
         renderer: &mut Renderer,
         scene: &Scene,
         eye: glam::Vec3,
         keep: bool,
-    ) -> Result<(FrameStats, Option<Vec<[f32; 4]>>)> {
-        if keep {
-            let (stats, pixels) = self.frame(renderer, scene, eye)?;
-            Ok((stats, Some(pixels)))
-        } else {
-            Ok((self.draw(renderer, scene, eye)?, None))
+    ) -> Result<(FrameStats, Option<Captured>)> {
+        match (keep, &self) {
+            (false, _) => Ok((self.draw(renderer, scene, eye)?, None)),
+            (true, FrameSource::Raster(_)) => {
+                let stats = self.draw(renderer, scene, eye)?;
+                Ok((stats, Some(Captured::Halves(renderer.frame_halves()?))))
+            }
+            (true, FrameSource::Trace(..)) => {
+                let (stats, pixels) = self.frame(renderer, scene, eye)?;
+                Ok((stats, Some(Captured::Pixels(pixels))))
+            }
         }
     }
 

@@ -24,6 +24,7 @@ use ash::vk;
 use frame_passes::{FrameParts, frame_passes};
 use glam::{Mat4, Vec3};
 use inference::scene::Scene;
+pub use readback::half_pixels;
 use reflectors::{Reflector, static_em_reflectors};
 use std::time::Instant;
 

@@ -82,11 +82,16 @@ impl Renderer {
     pub fn pixels(&self) -> GpuResult<Vec<[f32; 4]>> {
         let bytes = self.readback.mapped()?;
         let texels = (self.width * self.height) as usize;
-        let mut pixels = rgba16f_to_f32(&bytes[..texels * 8]);
-        for p in &mut pixels {
-            p[3] = p[3].min(1.0);
-        }
-        Ok(pixels)
+        Ok(half_pixels(bytemuck::cast_slice(&bytes[..texels * 8])))
+    }
+
+    /// The last frame as read back, RGBA16F (4 halves a pixel): a copy of
+    /// half the bytes, for a caller that converts with [`half_pixels`] on
+    /// another thread, off the next frame's way.
+    pub fn frame_halves(&self) -> GpuResult<Vec<f16>> {
+        let bytes = self.readback.mapped()?;
+        let texels = (self.width * self.height) as usize;
+        Ok(bytemuck::cast_slice::<u8, f16>(&bytes[..texels * 8]).to_vec())
     }
 
     /// Which pixels of the last frame show a reflector, as its deferred
@@ -99,6 +104,16 @@ impl Renderer {
             .map(|p| p[3] > 0.5 * (1.0 + crate::shader_interface::REFLECTOR_ALPHA))
             .collect())
     }
+}
+
+/// A frame's RGBA16F read-back as [`Renderer::pixels`] gives it: linear
+/// RGBA f32, alpha at most 1.
+pub fn half_pixels(halves: &[f16]) -> Vec<[f32; 4]> {
+    let mut pixels = rgba16f_to_f32(bytemuck::cast_slice(halves));
+    for p in &mut pixels {
+        p[3] = p[3].min(1.0);
+    }
+    pixels
 }
 
 /// RGBA16F texels read back from the device as linear RGBA f32 (`half`'s
