@@ -106,7 +106,37 @@ pub fn write_png(
     pixels: &[[f32; 4]],
 ) -> Result<(), CaptureError> {
     check_size(path, width, height, pixels)?;
-    let bytes = crate::util::srgb8::srgb8_rgb(pixels);
+    write_png_rgb8(path, width, height, crate::util::srgb8::srgb8_rgb(pixels))
+}
+
+/// [`write_png`] of an RGBA16F frame as read back (4 halves a pixel): the
+/// same file as for its pixels as floats.
+pub fn write_png_halves(
+    path: &Path,
+    width: u32,
+    height: u32,
+    halves: &[half::f16],
+) -> Result<(), CaptureError> {
+    let expected = width as usize * height as usize;
+    if halves.len() != expected * 4 {
+        return Err(CaptureError::Size {
+            path: path.into(),
+            width,
+            height,
+            expected,
+            got: halves.len() / 4,
+        });
+    }
+    let bytes = crate::util::srgb8::srgb8_rgb_halves(halves);
+    write_png_rgb8(path, width, height, bytes)
+}
+
+fn write_png_rgb8(
+    path: &Path,
+    width: u32,
+    height: u32,
+    bytes: Vec<u8>,
+) -> Result<(), CaptureError> {
     let owned = path.to_path_buf();
     atomically(
         path,

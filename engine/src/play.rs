@@ -312,11 +312,32 @@ pub enum Captured {
 }
 
 impl Captured {
-    fn into_pixels(self) -> Vec<[f32; 4]> {
+    /// Frame `i` into `dir` as PNG (and EXR when `exr`).
+    fn write(
+        &self,
+        dir: &Path,
+        i: u32,
+        (width, height): (u32, u32),
+        exr: bool,
+    ) -> Result<(), capture::CaptureError> {
+        let stem = frame_stem(dir, i);
+        let (png, exr_path) = (stem.with_extension("png"), stem.with_extension("exr"));
         match self {
-            Captured::Halves(halves) => crate::renderer::half_pixels(&halves),
-            Captured::Pixels(pixels) => pixels,
+            Captured::Halves(halves) => {
+                capture::write_png_halves(&png, width, height, halves)?;
+                if exr {
+                    let pixels = crate::renderer::half_pixels(halves);
+                    capture::write_exr(&exr_path, width, height, &pixels)?;
+                }
+            }
+            Captured::Pixels(pixels) => {
+                capture::write_png(&png, width, height, pixels)?;
+                if exr {
+                    capture::write_exr(&exr_path, width, height, pixels)?;
+                }
+            }
         }
+        Ok(())
     }
 }
 
@@ -332,12 +353,7 @@ impl FrameWriter {
         let (send, receive) = mpsc::channel::<(u32, Captured)>();
         let thread = std::thread::spawn(move || {
             for (i, captured) in receive {
-                let pixels = captured.into_pixels();
-                let stem = frame_stem(&dir, i);
-                capture::write_png(&stem.with_extension("png"), width, height, &pixels)?;
-                if exr {
-                    capture::write_exr(&stem.with_extension("exr"), width, height, &pixels)?;
-                }
+                captured.write(&dir, i, (width, height), exr)?;
             }
             Ok(())
         });

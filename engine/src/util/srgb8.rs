@@ -68,6 +68,29 @@ pub fn srgb8(x: f32) -> u8 {
     byte + u8::from(x >= t.start[byte as usize + 1])
 }
 
+/// Every half float's byte: what the device's RGBA16F frames hold, one
+/// table read a channel.
+static HALF_TABLE: LazyLock<Vec<u8>> = LazyLock::new(|| {
+    (0..=u16::MAX)
+        .map(|bits| srgb8(half::f16::from_bits(bits).to_f32()))
+        .collect()
+});
+
+/// RGB bytes of RGBA16F pixels (4 halves a pixel, alpha dropped): the
+/// same bytes as [`srgb8_rgb`] of the pixels as floats.
+pub fn srgb8_rgb_halves(halves: &[half::f16]) -> Vec<u8> {
+    let table = &*HALF_TABLE;
+    let mut out = Vec::with_capacity(halves.len() / 4 * 3);
+    for p in halves.chunks_exact(4) {
+        out.extend_from_slice(&[
+            table[p[0].to_bits() as usize],
+            table[p[1].to_bits() as usize],
+            table[p[2].to_bits() as usize],
+        ]);
+    }
+    out
+}
+
 /// RGB bytes of linear RGBA pixels (alpha dropped).
 pub fn srgb8_rgb(pixels: &[[f32; 4]]) -> Vec<u8> {
     let mut out = Vec::with_capacity(pixels.len() * 3);
@@ -138,6 +161,17 @@ mod tests {
             let x = f32::from_bits(bits);
             assert_eq!(srgb8(x), reference(x), "{x:e}");
         }
+    }
+
+    /// Half-float frames encode as their float pixels do.
+    #[test]
+    fn halves_encode_as_their_floats() {
+        let halves: Vec<half::f16> = (0..=u16::MAX).map(half::f16::from_bits).collect();
+        let floats: Vec<[f32; 4]> = halves
+            .chunks_exact(4)
+            .map(|p| [p[0].to_f32(), p[1].to_f32(), p[2].to_f32(), p[3].to_f32()])
+            .collect();
+        assert_eq!(srgb8_rgb_halves(&halves), srgb8_rgb(&floats));
     }
 
     #[test]
