@@ -4,7 +4,7 @@
 
 use crate::graph::PassTiming;
 use crate::renderer::CpuTimes;
-use crate::util::stats::median;
+use crate::util::stats::{median, percentile};
 use serde::Serialize;
 
 #[derive(Default)]
@@ -59,6 +59,9 @@ pub struct PerfReport {
     pub size: [u32; 2],
     pub frames: usize,
     pub frame_ms_median: f64,
+    /// The 95th percentile (nearest rank): how smooth a run plays, which
+    /// the median hides and one slow frame's max exaggerates.
+    pub frame_ms_p95: f64,
     pub frame_ms_max: f64,
     pub passes: Vec<PassReport>,
     pub cpu: CpuReport,
@@ -106,6 +109,7 @@ impl PerfLog {
             size,
             frames: self.frame_ms.len(),
             frame_ms_median: median(&self.frame_ms),
+            frame_ms_p95: percentile(&self.frame_ms, 0.95),
             frame_ms_max: self.frame_ms.iter().copied().fold(0.0, f64::max),
             passes: self
                 .passes
@@ -158,7 +162,7 @@ impl PerfReport {
     /// The human-readable table printed at the end of a run.
     pub fn table(&self) -> String {
         let mut out = format!(
-            "{} | {} {}x{} | {} frames | frame {:.2} ms median ({:.1} fps), {:.2} ms max\n",
+            "{} | {} {}x{} | {} frames | frame {:.2} ms median ({:.1} fps), {:.2} ms p95, {:.2} ms max\n",
             self.device,
             self.mode,
             self.size[0],
@@ -166,6 +170,7 @@ impl PerfReport {
             self.frames,
             self.frame_ms_median,
             1e3 / self.frame_ms_median,
+            self.frame_ms_p95,
             self.frame_ms_max
         );
         out += &format!(

@@ -73,6 +73,15 @@ fn validated_run_writes_frames_and_perf_json() {
     assert_eq!(perf["frames"], 3);
     assert!(perf["device"].as_str().is_some_and(|d| !d.is_empty()));
     assert!(perf["frame_ms_median"].as_f64().is_some_and(|v| v > 0.0));
+    let (median, p95, max) = (
+        perf["frame_ms_median"].as_f64(),
+        perf["frame_ms_p95"].as_f64(),
+        perf["frame_ms_max"].as_f64(),
+    );
+    assert!(
+        p95 >= median && p95 <= max,
+        "p95 {p95:?} against median {median:?} and max {max:?}"
+    );
     assert!(perf["cpu"]["texgen_ms_median"].as_f64().is_some());
     assert!(perf["cpu"]["upload_ms_median"].as_f64().is_some());
     let submit = perf["cpu"]["submit_to_fence_ms_median"].as_f64();
