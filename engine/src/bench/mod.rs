@@ -262,8 +262,10 @@ impl Run<'_> {
             let eye = view_eye(v);
             for i in 0..frames {
                 // Frames in flight, as in playback: each renderer's next
-                // frame is this view again, or the next view's first.
-                let next = if i + 1 < frames { eye } else { view_eye(v + 1) };
+                // frame is this view again. Not the next view's first
+                // (a warm-up frame): announced, its maps would be decoded
+                // ahead behind this view's last timed frame.
+                let next = eye;
                 if i == self.warmup {
                     // Decoding ahead, started by the new view, must not run
                     // behind the timed frames.
