@@ -198,3 +198,32 @@ pub fn read_png(path: &Path) -> Result<(u32, u32, Vec<[f32; 4]>), CaptureError> 
         .collect();
     Ok((image.width(), image.height(), pixels))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use half::f16;
+
+    /// A frame read back as half floats writes the PNG its floats write,
+    /// byte for byte; a frame of the wrong size is refused, nothing written.
+    #[test]
+    fn half_float_frames_write_the_same_png() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let values = [0.0f32, 0.002, 0.18, 0.5, 0.99, 1.0, 7.5, -0.25];
+        let halves: Vec<f16> = (0..6 * 4)
+            .map(|i| f16::from_f32(values[i % values.len()] * (1.0 + i as f32 / 64.0)))
+            .collect();
+        let floats: Vec<[f32; 4]> = halves
+            .chunks_exact(4)
+            .map(|p| [p[0].to_f32(), p[1].to_f32(), p[2].to_f32(), p[3].to_f32()])
+            .collect();
+        let (a, b) = (dir.path().join("a.png"), dir.path().join("b.png"));
+        write_png(&a, 3, 2, &floats).expect("floats");
+        write_png_halves(&b, 3, 2, &halves).expect("halves");
+        assert_eq!(std::fs::read(&a).ok(), std::fs::read(&b).ok());
+        let short = dir.path().join("short.png");
+        let err = write_png_halves(&short, 3, 2, &halves[..20]).expect_err("too short");
+        assert!(matches!(err, CaptureError::Size { got: 5, .. }), "{err}");
+        assert!(!short.exists());
+    }
+}
