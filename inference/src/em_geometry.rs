@@ -10,6 +10,7 @@
 
 use crate::texgen::reflect_view;
 use glam::{Vec3, Vec3A};
+use rayon::prelude::*;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum EmGeometry {
@@ -147,15 +148,25 @@ pub fn bounding_ellipsoid(center: Vec3, points: &[Vec3]) -> Vec3 {
     let (mut best_ly, mut best_lz, mut span) = (0.0f32, 0.0f32, 3.0f32);
     for _ in 0..3 {
         let steps = 16;
-        let (mut best, mut by, mut bz) = (f32::INFINITY, best_ly, best_lz);
-        for i in 0..=steps {
-            for j in 0..=steps {
+        // Each grid point's volume on any thread (each is the same
+        // sequential sum), then the first smallest in scan order: the
+        // same radii as one thread finds, on every machine.
+        let grid: Vec<(f32, f32)> = (0..=steps)
+            .flat_map(|i| (0..=steps).map(move |j| (i, j)))
+            .map(|(i, j)| {
                 let ly = best_ly + span * (2.0 * i as f32 / steps as f32 - 1.0);
                 let lz = best_lz + span * (2.0 * j as f32 / steps as f32 - 1.0);
-                let (volume, _) = cost(ly.exp(), lz.exp());
-                if volume < best {
-                    (best, by, bz) = (volume, ly, lz);
-                }
+                (ly, lz)
+            })
+            .collect();
+        let volumes: Vec<f32> = grid
+            .par_iter()
+            .map(|&(ly, lz)| cost(ly.exp(), lz.exp()).0)
+            .collect();
+        let (mut best, mut by, mut bz) = (f32::INFINITY, best_ly, best_lz);
+        for (&(ly, lz), &volume) in grid.iter().zip(&volumes) {
+            if volume < best {
+                (best, by, bz) = (volume, ly, lz);
             }
         }
         (best_ly, best_lz) = (by, bz);
