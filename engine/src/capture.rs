@@ -55,20 +55,21 @@ pub fn srgb_to_linear(v: f32) -> f32 {
     }
 }
 
+/// `values` (`per_pixel` a pixel) must fill `width × height` exactly.
 fn check_size(
     path: &Path,
-    width: u32,
-    height: u32,
-    pixels: &[[f32; 4]],
+    (width, height): (u32, u32),
+    values: usize,
+    per_pixel: usize,
 ) -> Result<(), CaptureError> {
     let expected = width as usize * height as usize;
-    if pixels.len() != expected {
+    if values != expected * per_pixel {
         return Err(CaptureError::Size {
             path: path.into(),
             width,
             height,
             expected,
-            got: pixels.len(),
+            got: values / per_pixel,
         });
     }
     Ok(())
@@ -105,7 +106,7 @@ pub fn write_png(
     height: u32,
     pixels: &[[f32; 4]],
 ) -> Result<(), CaptureError> {
-    check_size(path, width, height, pixels)?;
+    check_size(path, (width, height), pixels.len(), 1)?;
     write_png_rgb8(path, width, height, crate::util::srgb8::srgb8_rgb(pixels))
 }
 
@@ -117,16 +118,7 @@ pub fn write_png_halves(
     height: u32,
     halves: &[half::f16],
 ) -> Result<(), CaptureError> {
-    let expected = width as usize * height as usize;
-    if halves.len() != expected * 4 {
-        return Err(CaptureError::Size {
-            path: path.into(),
-            width,
-            height,
-            expected,
-            got: halves.len() / 4,
-        });
-    }
+    check_size(path, (width, height), halves.len(), 4)?;
     let bytes = crate::util::srgb8::srgb8_rgb_halves(halves);
     write_png_rgb8(path, width, height, bytes)
 }
@@ -164,7 +156,7 @@ pub fn write_exr(
     height: u32,
     pixels: &[[f32; 4]],
 ) -> Result<(), CaptureError> {
-    check_size(path, width, height, pixels)?;
+    check_size(path, (width, height), pixels.len(), 1)?;
     let owned = path.to_path_buf();
     atomically(
         path,

@@ -80,29 +80,33 @@ impl Renderer {
     /// The last frame's pixels as linear RGBA f32, row-major from the top
     /// (alpha at most 1: the deferred composite marks its pixels above it).
     pub fn pixels(&self) -> GpuResult<Vec<[f32; 4]>> {
-        let bytes = self.readback.mapped()?;
-        let texels = (self.width * self.height) as usize;
-        Ok(half_pixels(bytemuck::cast_slice(&bytes[..texels * 8])))
+        Ok(half_pixels(self.frame_read_back()?))
     }
 
     /// The last frame as read back, RGBA16F (4 halves a pixel): a copy of
     /// half the bytes, for a caller that converts with [`half_pixels`] on
     /// another thread, off the next frame's way.
     pub fn frame_halves(&self) -> GpuResult<Vec<f16>> {
-        let bytes = self.readback.mapped()?;
-        let texels = (self.width * self.height) as usize;
-        Ok(bytemuck::cast_slice::<u8, f16>(&bytes[..texels * 8]).to_vec())
+        Ok(self.frame_read_back()?.to_vec())
     }
 
     /// Which pixels of the last frame show a reflector, as its deferred
     /// composite marked them (an object in front of one hides it).
     pub fn reflector_pixels(&self) -> GpuResult<Vec<bool>> {
+        // Unclamped: the composite's mark lies above an alpha of 1.
+        Ok(
+            rgba16f_to_f32(bytemuck::cast_slice(self.frame_read_back()?))
+                .iter()
+                .map(|p| p[3] > 0.5 * (1.0 + crate::shader_interface::REFLECTOR_ALPHA))
+                .collect(),
+        )
+    }
+
+    /// The last frame's RGBA16F texels in the read-back buffer.
+    fn frame_read_back(&self) -> GpuResult<&[f16]> {
         let bytes = self.readback.mapped()?;
         let texels = (self.width * self.height) as usize;
-        Ok(rgba16f_to_f32(&bytes[..texels * 8])
-            .iter()
-            .map(|p| p[3] > 0.5 * (1.0 + crate::shader_interface::REFLECTOR_ALPHA))
-            .collect())
+        Ok(bytemuck::cast_slice(&bytes[..texels * 8]))
     }
 }
 
