@@ -19,13 +19,19 @@ use half::f16;
 use inference::scene::Scene;
 use std::path::Path;
 
-#[test]
-fn maps_decoded_ahead_match_maps_read_in_line() {
-    let device = common::validated_device();
+/// The teapot scene and its shipped container's maps.
+fn shipped_teapot() -> (Scene, MapSource) {
     let scene = Scene::load("teapot").expect("the teapot scene");
     let container =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/compiled/teapot/teapot.ptxc");
-    let mut here = MapSource::container(&scene, &container).expect("the shipped container");
+    let source = MapSource::container(&scene, &container).expect("the shipped container");
+    (scene, source)
+}
+
+#[test]
+fn maps_decoded_ahead_match_maps_read_in_line() {
+    let device = common::validated_device();
+    let (_, mut here) = shipped_teapot();
     let mut prefetch = Prefetcher::new(here.reopen().expect("a second handle"));
     let resolution = 256;
     let layers = [MapLayer::Distant, MapLayer::Local];
@@ -83,10 +89,7 @@ fn maps_decoded_ahead_match_maps_read_in_line() {
 #[test]
 fn the_paths_maps_are_all_decoded_ahead() {
     let device = common::validated_device();
-    let scene = Scene::load("teapot").expect("the teapot scene");
-    let container =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/compiled/teapot/teapot.ptxc");
-    let source = MapSource::container(&scene, &container).expect("the shipped container");
+    let (scene, source) = shipped_teapot();
     let mut r = Renderer::new(&device, &scene, 64, 48).expect("renderer");
     r.set_pem(&scene, PemSettings::new(PemKind::Layered), source)
         .expect("set-up");

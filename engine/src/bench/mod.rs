@@ -265,7 +265,6 @@ impl Run<'_> {
                 // frame is this view again. Not the next view's first
                 // (a warm-up frame): announced, its maps would be decoded
                 // ahead behind this view's last timed frame.
-                let next = eye;
                 if i == self.warmup {
                     // Decoding ahead, started by the new view, must not run
                     // behind the timed frames.
@@ -275,7 +274,7 @@ impl Run<'_> {
                 for (index, (_, draws)) in self.variants.iter().enumerate().take(moving) {
                     let start = Instant::now();
                     let r = &mut renderers[self.which[index]];
-                    r.set_next_view(next, o.view(next));
+                    r.set_next_view(eye, o.view(eye));
                     let stats = r.frame(mode(draws), eye, o.view(eye))?;
                     if i >= self.warmup {
                         let ms = start.elapsed().as_secs_f64() * 1e3;
