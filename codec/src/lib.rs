@@ -55,7 +55,9 @@ pub mod sparse;
 pub mod synth;
 
 pub use container::{Container, FORMAT_VERSION, TextureInfo};
-pub use decode::{CacheStats, DecodeCache, LOOKAHEAD, Lifetimes, OutTexel, decode_leaf_all};
+pub use decode::{
+    CacheStats, DecodeCache, LOOKAHEAD, LeafSink, Lifetimes, OutTexel, decode_leaf_all,
+};
 pub use encode::{EncodeOptions, EncodeReport, Target, encode, encode_targets, encode_to_file};
 pub use error::{CodecError, Result};
 pub use input::{EncodeInput, LeafLayout, ParamGrid, ParamTexture, TextureId};

@@ -1,7 +1,7 @@
 //! Decoding one face of a leaf: the block and its level images, from the
 //! cache or the stream, summed and written by [`super::mips`].
 
-use super::{CachedBlock, DecodeCache, Entry, ImageKey, OutTexel};
+use super::{CachedBlock, DecodeCache, Entry, ImageKey, LeafSink, OutTexel};
 use crate::coefs::{Contexts, decode_image, step_of};
 use crate::container::{BlockView, Container, TextureInfo};
 use crate::dct::Dct8;
@@ -12,17 +12,14 @@ use crate::sparse::SparseImage;
 
 impl DecodeCache {
     /// Finds or decodes the level images of one face's path, sums them,
-    /// then writes the MIP levels for which `dest` gives a range of `out`.
-    #[allow(clippy::too_many_arguments)]
+    /// then writes the MIP levels `sink` asks for.
     pub(super) fn decode_face<T: OutTexel>(
         &mut self,
         c: &Container,
         tex: &TextureInfo,
-        sample: [u32; 2],
-        face: u32,
+        (sample, face): ([u32; 2], u32),
         last_mip: u32,
-        dest: impl Fn(u32) -> Option<std::ops::Range<usize>>,
-        out: &mut [T],
+        sink: &mut impl LeafSink<T>,
     ) -> Result<()> {
         let (block, local) = tex.locate(sample)?;
         let path = self.level_path(c, tex, block, local, face)?;
@@ -38,7 +35,7 @@ impl DecodeCache {
             .ok_or_else(vanished)?;
         let gamma = Gamma(c.gamma);
         self.scratch
-            .write_mips(gamma, &tex.layout, &levels, last_mip, dest, out)
+            .write_mips(gamma, &tex.layout, &levels, last_mip, face, sink)
     }
 
     /// The image keys of `local`'s path through the block's pyramid, root

@@ -2,8 +2,7 @@
 //! by strips of one block row where it can, the others whole, each MIP
 //! above 0 plus the decimated finest level.
 
-use std::ops::Range;
-
+use super::LeafSink;
 use super::texel::{OutTexel, write_rgba};
 use crate::domain::Gamma;
 use crate::error::{CodecError, Result};
@@ -76,15 +75,16 @@ pub(super) struct Scratch {
 
 impl Scratch {
     /// Sums `levels` (root first) for MIP levels `0..=last_mip` and writes
-    /// those for which `dest` gives a range of `out`.
+    /// those of `face` that `sink` asks for.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn write_mips<T: OutTexel>(
         &mut self,
         gamma: Gamma,
         l: &LeafLayout,
         levels: &[&SparseImage],
         last_mip: u32,
-        dest: impl Fn(u32) -> Option<Range<usize>>,
-        out: &mut [T],
+        face: u32,
+        sink: &mut impl LeafSink<T>,
     ) -> Result<()> {
         let ch = l.channels as usize;
         let len: usize = (0..l.mips).map(|m| l.face_texels(m) * ch).sum();
@@ -95,19 +95,22 @@ impl Scratch {
         for mip in 0..=last_mip {
             let (w, h) = l.mip_size(mip);
             let n = w * h;
-            let dst = dest(mip);
+            let dst = sink.level(face, mip, n);
+            if let Some(d) = &dst
+                && d.len() != n * 4
+            {
+                return Err(CodecError::OutputSize {
+                    got: d.len(),
+                    expected: n * 4,
+                });
+            }
             // MIP 0 is needed for the prediction of the others.
             let needed = dst.is_some() || (mip == 0 && last_mip > 0);
             if mip == 0 && needed && (last_mip == 0 || (w % 2 == 0 && h % 2 == 0)) {
-                let o = match dst {
-                    Some(r) => Some(out_range(out, r, n)?),
-                    None => None,
-                };
-                self.mip0_by_strips(gamma, l, levels, last_mip, o);
+                self.mip0_by_strips(gamma, l, levels, last_mip, dst);
             } else {
                 self.sum_mip(l, levels, mip, last_mip, needed, off);
-                if let Some(r) = dst {
-                    let o = out_range(out, r, n)?;
+                if let Some(o) = dst {
                     let pred = (mip > 0).then(|| &self.pred[..n * ch]);
                     write_rgba(gamma, &self.sum[off..off + n * ch], pred, n, ch, o);
                 }
@@ -186,12 +189,4 @@ impl Scratch {
             std::mem::swap(&mut self.pred, &mut self.pred_next);
         }
     }
-}
-
-/// `out[r]`, `n` texels of one MIP level.
-fn out_range<T>(out: &mut [T], r: Range<usize>, n: usize) -> Result<&mut [T]> {
-    out.get_mut(r).ok_or(CodecError::OutputSize {
-        got: 0,
-        expected: n * 4,
-    })
 }

@@ -197,21 +197,35 @@ impl DecodeCache {
                 expected,
             });
         }
+        let layout = tex.layout;
+        let mut sink = RangeSink {
+            out,
+            dest: |face, mip| {
+                let o = layout.texel_offset(face, mip) * 4;
+                Some(o..o + layout.face_texels(mip) * 4)
+            },
+        };
+        self.decode_leaf_into(c, object, layer, sample, &mut sink)
+    }
+
+    /// Decodes the whole leaf of one parameter sample — every face and MIP
+    /// level — into `sink`, level by level (texels as
+    /// [`Self::decode_leaf_all`] writes them, one face and MIP at a time):
+    /// for a caller whose memory is not one tight leaf, e.g. a texture
+    /// whose rows are padded.
+    pub fn decode_leaf_into<T: OutTexel>(
+        &mut self,
+        c: &Container,
+        object: u32,
+        layer: u32,
+        sample: [u32; 2],
+        sink: &mut impl LeafSink<T>,
+    ) -> Result<()> {
+        let ti = c.texture_index(object, layer)?;
+        let tex = &c.textures()[ti];
         self.motion.entry(ti).or_default().note(sample);
         for face in 0..tex.layout.faces {
-            self.decode_face(
-                c,
-                tex,
-                sample,
-                face,
-                tex.layout.mips - 1,
-                |mip| {
-                    let o = tex.layout.texel_offset(face, mip) * 4;
-                    let n = tex.layout.face_texels(mip) * 4;
-                    Some(o..o + n)
-                },
-                out,
-            )?;
+            self.decode_face(c, tex, (sample, face), tex.layout.mips - 1, sink)?;
         }
         Ok(())
     }
@@ -254,15 +268,33 @@ impl DecodeCache {
             });
         }
         self.motion.entry(ti).or_default().note(sample);
-        self.decode_face(
-            c,
-            tex,
-            sample,
-            face,
-            mip,
-            |m| (m == mip).then_some(0..expected),
+        let mut sink = RangeSink {
             out,
-        )
+            dest: |_, m| (m == mip).then_some(0..expected),
+        };
+        self.decode_face(c, tex, (sample, face), mip, &mut sink)
+    }
+}
+
+/// Where a leaf's decoded texels go, one face and MIP level at a time.
+pub trait LeafSink<T> {
+    /// The tight RGBA slice (`texels × 4` components, rows top to bottom)
+    /// `face`'s MIP level `mip` is written into; None when that level is
+    /// not wanted.
+    fn level(&mut self, face: u32, mip: u32, texels: usize) -> Option<&mut [T]>;
+}
+
+/// A sink inside one slice: `dest` gives each wanted level's range.
+struct RangeSink<'a, T, F> {
+    out: &'a mut [T],
+    dest: F,
+}
+
+impl<T, F: Fn(u32, u32) -> Option<std::ops::Range<usize>>> LeafSink<T> for RangeSink<'_, T, F> {
+    fn level(&mut self, face: u32, mip: u32, _texels: usize) -> Option<&mut [T]> {
+        // A range outside `out` gives an empty slice: the caller then
+        // reports the size it expected.
+        (self.dest)(face, mip).map(|r| self.out.get_mut(r).unwrap_or_default())
     }
 }
 
