@@ -29,6 +29,11 @@ pub struct ImageDesc {
     pub usage: vk::ImageUsageFlags,
     /// Elements of an array kind (1 otherwise).
     pub array: u32,
+    /// Written by the host through mapped memory (linear tiling, sampled
+    /// in the GENERAL layout) instead of by transfers: on a CPU device a
+    /// decoder then writes texels where the sampler reads them, with no
+    /// staging copy. See [`Image::host_writable`] and [`super::host_image`].
+    pub host_written: bool,
 }
 
 impl ImageDesc {
@@ -41,6 +46,7 @@ impl ImageDesc {
             mip_levels: 1,
             usage: vk::ImageUsageFlags::empty(),
             array: 1,
+            host_written: false,
         }
     }
     pub fn new_1d(format: vk::Format, width: u32) -> Self {
@@ -75,6 +81,11 @@ impl ImageDesc {
         self.mip_levels = 32 - self.width.max(self.height).max(1).leading_zeros();
         self
     }
+    /// See [`ImageDesc::host_written`].
+    pub fn host_written(mut self) -> Self {
+        self.host_written = true;
+        self
+    }
     pub fn usage(mut self, usage: vk::ImageUsageFlags) -> Self {
         self.usage |= usage;
         self
@@ -101,6 +112,32 @@ impl ImageDesc {
     pub fn mip_extent(&self, level: u32) -> (u32, u32) {
         ((self.width >> level).max(1), (self.height >> level).max(1))
     }
+    /// PREINITIALIZED for host-written images (the host may write before
+    /// the first barrier, which then keeps the texels), else UNDEFINED.
+    pub fn initial_layout(&self) -> vk::ImageLayout {
+        match self.host_written {
+            true => vk::ImageLayout::PREINITIALIZED,
+            false => vk::ImageLayout::UNDEFINED,
+        }
+    }
+    fn tiling(&self) -> vk::ImageTiling {
+        match self.host_written {
+            true => vk::ImageTiling::LINEAR,
+            false => vk::ImageTiling::OPTIMAL,
+        }
+    }
+    fn image_type_and_flags(&self) -> (vk::ImageType, vk::ImageCreateFlags) {
+        match self.kind {
+            ImageKind::D1 => (vk::ImageType::TYPE_1D, vk::ImageCreateFlags::empty()),
+            ImageKind::D2 | ImageKind::D2Array => {
+                (vk::ImageType::TYPE_2D, vk::ImageCreateFlags::empty())
+            }
+            ImageKind::Cube | ImageKind::CubeArray => (
+                vk::ImageType::TYPE_2D,
+                vk::ImageCreateFlags::CUBE_COMPATIBLE,
+            ),
+        }
+    }
     pub fn full_range(&self) -> vk::ImageSubresourceRange {
         vk::ImageSubresourceRange {
             aspect_mask: self.aspect(),
@@ -124,20 +161,46 @@ pub struct Image {
     /// `target_views[level * layers + layer]`: a 2D view to render into.
     target_views: Vec<vk::ImageView>,
     allocation: Option<Allocation>,
+    /// Host-written images: which array elements are lent to a writer
+    /// ([`super::host_image::HostElement`]), one writer each at a time.
+    pub(super) lent: Vec<std::sync::atomic::AtomicBool>,
 }
 
 impl Image {
-    pub fn new(device: &Device, name: &str, desc: ImageDesc) -> GpuResult<Self> {
-        let (image_type, flags) = match desc.kind {
-            ImageKind::D1 => (vk::ImageType::TYPE_1D, vk::ImageCreateFlags::empty()),
-            ImageKind::D2 | ImageKind::D2Array => {
-                (vk::ImageType::TYPE_2D, vk::ImageCreateFlags::empty())
-            }
-            ImageKind::Cube | ImageKind::CubeArray => (
-                vk::ImageType::TYPE_2D,
-                vk::ImageCreateFlags::CUBE_COMPATIBLE,
-            ),
+    /// Whether `device` can make `desc` as a host-written image: linear
+    /// tiling with its levels, layers and usage, and filtered sampling
+    /// (lavapipe can; GPUs mostly allow only single-level linear images).
+    pub fn host_writable(device: &Device, desc: ImageDesc) -> bool {
+        let desc = desc.host_written();
+        let (image_type, flags) = desc.image_type_and_flags();
+        // SAFETY: queries on the physical device this device was made from.
+        let (props, features) = unsafe {
+            (
+                device.instance.get_physical_device_image_format_properties(
+                    device.physical,
+                    desc.format,
+                    image_type,
+                    desc.tiling(),
+                    desc.usage,
+                    flags,
+                ),
+                device
+                    .instance
+                    .get_physical_device_format_properties(device.physical, desc.format),
+            )
         };
+        let filtered = vk::FormatFeatureFlags::SAMPLED_IMAGE
+            | vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR;
+        props.is_ok_and(|p| {
+            p.max_mip_levels >= desc.mip_levels
+                && p.max_array_layers >= desc.layers()
+                && p.max_extent.width >= desc.width
+                && p.max_extent.height >= desc.height
+        }) && features.linear_tiling_features.contains(filtered)
+    }
+
+    pub fn new(device: &Device, name: &str, desc: ImageDesc) -> GpuResult<Self> {
+        let (image_type, flags) = desc.image_type_and_flags();
         let info = vk::ImageCreateInfo::default()
             .flags(flags)
             .image_type(image_type)
@@ -150,9 +213,9 @@ impl Image {
             .mip_levels(desc.mip_levels)
             .array_layers(desc.layers())
             .samples(vk::SampleCountFlags::TYPE_1)
-            .tiling(vk::ImageTiling::OPTIMAL)
+            .tiling(desc.tiling())
             .usage(desc.usage)
-            .initial_layout(vk::ImageLayout::UNDEFINED);
+            .initial_layout(desc.initial_layout());
         // SAFETY: valid device and create info; destroyed in Drop.
         let raw = unsafe { device.device.create_image(&info, None) }.vk("vkCreateImage")?;
         static NEXT_UID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
@@ -164,6 +227,9 @@ impl Image {
             view: vk::ImageView::null(),
             target_views: Vec::new(),
             allocation: None,
+            lent: (0..if desc.host_written { desc.array } else { 0 })
+                .map(|_| std::sync::atomic::AtomicBool::new(false))
+                .collect(),
         };
         image.bind_memory(name)?;
         image.make_views()?;
@@ -180,8 +246,12 @@ impl Image {
             .allocate(&AllocationCreateDesc {
                 name,
                 requirements,
-                location: MemoryLocation::GpuOnly,
-                linear: false,
+                location: if self.desc.host_written {
+                    MemoryLocation::CpuToGpu
+                } else {
+                    MemoryLocation::GpuOnly
+                },
+                linear: self.desc.host_written,
                 allocation_scheme: AllocationScheme::GpuAllocatorManaged,
             })
             .map_err(|source| GpuError::Allocation {
@@ -257,6 +327,40 @@ impl Image {
                     self.desc
                 ))
             })
+    }
+}
+
+impl Image {
+    /// The mapped memory of a host-written image (None otherwise).
+    pub(super) fn mapped_ptr(&self) -> Option<std::ptr::NonNull<u8>> {
+        if !self.desc.host_written {
+            return None;
+        }
+        self.allocation
+            .as_ref()
+            .and_then(Allocation::mapped_ptr)
+            .map(|p| p.cast())
+    }
+
+    /// Bytes of the mapped allocation (0 when not mapped).
+    pub(super) fn mapped_len(&self) -> usize {
+        self.allocation.as_ref().map_or(0, |a| a.size() as usize)
+    }
+
+    /// Where `level` of array layer `layer` lies in the mapped memory.
+    pub(super) fn subresource_layout(&self, level: u32, layer: u32) -> vk::SubresourceLayout {
+        let sub = vk::ImageSubresource {
+            aspect_mask: self.desc.aspect(),
+            mip_level: level,
+            array_layer: layer,
+        };
+        // SAFETY: a linear image of this device (callers check
+        // `host_written`); level and layer lie inside it.
+        unsafe {
+            self.device
+                .device
+                .get_image_subresource_layout(self.raw, sub)
+        }
     }
 }
 

@@ -5,6 +5,7 @@ pub mod buffer;
 pub mod commands;
 pub mod device;
 pub mod error;
+pub mod host_image;
 pub mod image;
 pub mod pipeline;
 mod pipeline_state;

@@ -72,11 +72,23 @@ pub enum StencilTest {
 #[derive(Clone, Copy)]
 pub enum Binding<'a> {
     Image(vk::ImageView, vk::Sampler),
+    /// A host-written image: sampled in the GENERAL layout ([`Binding::sampled`]).
+    HostImage(vk::ImageView, vk::Sampler),
     Uniform(&'a super::buffer::Buffer),
     /// A read-only storage buffer (`std430`), for data a shader indexes freely.
     Storage(&'a super::buffer::Buffer),
     /// A buffer read as typed texels (`usamplerBuffer`, `texelFetch`).
     Texels(&'a super::texel_view::TexelView),
+}
+
+impl Binding<'_> {
+    /// `image` sampled through `sampler`, in the layout frames sample it in.
+    pub fn sampled(image: &super::Image, sampler: vk::Sampler) -> Self {
+        match image.desc.host_written {
+            true => Binding::HostImage(image.view, sampler),
+            false => Binding::Image(image.view, sampler),
+        }
+    }
 }
 
 pub struct Pipeline {
@@ -255,6 +267,11 @@ impl Pipeline {
                     image_view,
                     image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
                 }],
+                Binding::HostImage(image_view, sampler) => [vk::DescriptorImageInfo {
+                    sampler,
+                    image_view,
+                    image_layout: vk::ImageLayout::GENERAL,
+                }],
                 Binding::Uniform(_) | Binding::Storage(_) | Binding::Texels(_) => {
                     [vk::DescriptorImageInfo::default()]
                 }
@@ -268,7 +285,9 @@ impl Pipeline {
                     offset: 0,
                     range: vk::WHOLE_SIZE,
                 }],
-                Binding::Image(..) | Binding::Texels(_) => [vk::DescriptorBufferInfo::default()],
+                Binding::Image(..) | Binding::HostImage(..) | Binding::Texels(_) => {
+                    [vk::DescriptorBufferInfo::default()]
+                }
             })
             .collect();
         let texel_views: Vec<[vk::BufferView; 1]> = resources
@@ -286,7 +305,7 @@ impl Pipeline {
                     .dst_set(set)
                     .dst_binding(i as u32);
                 match r {
-                    Binding::Image(..) => write
+                    Binding::Image(..) | Binding::HostImage(..) => write
                         .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
                         .image_info(&image_infos[i]),
                     Binding::Uniform(_) => write

@@ -84,11 +84,18 @@ impl ImageStates {
         let mut barriers = Vec::new();
         for a in accesses {
             let desc = a.image.desc;
-            let levels = self
-                .levels
-                .entry(a.image.uid)
-                .or_insert_with(|| vec![UNTOUCHED; desc.mip_levels as usize]);
-            let wanted = target_state(a.usage);
+            let levels = self.levels.entry(a.image.uid).or_insert_with(|| {
+                let initial = LevelState {
+                    layout: desc.initial_layout(),
+                    ..UNTOUCHED
+                };
+                vec![initial; desc.mip_levels as usize]
+            });
+            let mut wanted = target_state(a.usage);
+            if desc.host_written && a.usage == Usage::Sampled {
+                // The host writes it between frames: sampled in GENERAL.
+                wanted.layout = vk::ImageLayout::GENERAL;
+            }
             for level in a.levels.clone() {
                 let Some(current) = levels.get_mut(level as usize) else {
                     continue;
