@@ -135,7 +135,7 @@ pub fn bench(
         frames_per_view: per_view,
         covered_pixels: None,
         moving_covered_pixels: None,
-        rows: rows(reports, 0.0, 0.0),
+        rows: rows(reports, 0.0, (0, 0.0)),
         room_pass: None,
     })
 }

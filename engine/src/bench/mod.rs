@@ -3,9 +3,11 @@
 //! pass, the static EM, the default PEM frame (deferred compositing of the
 //! blended samples) and its variants, and the papers' multipass. Views sit
 //! half-way between samples so every blend is drawn; maps are resident.
-//! The last row then runs alone with its eye one sample further every
-//! frame, so each frame needs a new sample's maps decoded (ahead, on the
-//! worker) and uploaded: decoding on against resident maps, in one run.
+//! The last two rows then run, each alone, with the eye one sample further
+//! every frame, so each frame needs a new sample's maps decoded (ahead, on
+//! the worker): decoding on against resident maps, in one run — the last
+//! decoding straight into the slots frames sample (lavapipe), the one
+//! before it through staging buffers and an upload pass (what a GPU does).
 //! "default, edge filter" adds the film filter along the reflectors'
 //! outlines (`--edge-filter`). "default, bilinear views" blends a view
 //! between rings from its grid cell's four corners instead of the
@@ -45,7 +47,7 @@ enum Draws {
     Rem,
 }
 
-/// The variants, in table order; the last one moves (decoding on).
+/// The variants, in table order; the last [`MOVING`] move (decoding on).
 fn variants() -> Vec<(&'static str, Draws)> {
     let default = PemSettings::new(PemKind::Layered);
     let multipass = PemSettings {
@@ -87,9 +89,20 @@ fn variants() -> Vec<(&'static str, Draws)> {
         ("default, analytic room", Draws::Pem(default)),
         ("multipass", Draws::Pem(multipass)),
         ("rem", Draws::Rem),
+        (
+            "default, decoding, staging uploads",
+            Draws::Pem(PemSettings {
+                staging_uploads: true,
+                ..default
+            }),
+        ),
         ("default, decoding", Draws::Pem(default)),
     ]
 }
+
+/// The last variants, which move one sample a frame (each alone, in
+/// turn); the others draw resident maps.
+const MOVING: usize = 2;
 
 /// How long to measure, and where the maps come from.
 #[derive(Clone, Debug)]
@@ -135,7 +148,7 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
     let views = 8u32;
     let per_view = opts.frames_per_view.max(1);
     let mut logs: Vec<PerfLog> = variants.iter().map(|_| PerfLog::default()).collect();
-    let progress = indicatif::ProgressBar::new(u64::from(2 * views * per_view));
+    let progress = indicatif::ProgressBar::new(u64::from((1 + MOVING as u32) * views * per_view));
     let run = Run {
         orbit: &scene.orbit,
         elevation,
@@ -154,7 +167,7 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
         .zip(&variants)
         .map(|(log, (name, _))| log.report(&device.name, &scene.name, name, [width, height], &[]))
         .collect();
-    let rows = rows(reports, covered, moving_covered);
+    let rows = rows(reports, covered, (MOVING, moving_covered));
     let passes: Vec<(&str, &[PassReport])> = rows
         .iter()
         .map(|r| (r.name.as_str(), &r.report.passes[..]))
@@ -246,11 +259,11 @@ fn between_rings(orbit: &inference::scene::Orbit) -> f32 {
 }
 
 impl Run<'_> {
-    /// Every variant but the last, interleaved view by view with the maps
-    /// resident; returns the median covered reflector pixels.
+    /// Every variant but the moving ones, interleaved view by view with the
+    /// maps resident; returns the median covered reflector pixels.
     fn resident(&self, renderers: &mut [Renderer], logs: &mut [PerfLog]) -> Result<f64> {
         let o = &self.orbit;
-        let moving = self.variants.len() - 1;
+        let moving = self.variants.len() - MOVING;
         let mut covered = Vec::new();
         let view_eye = |v: u32| {
             let k =
@@ -289,31 +302,36 @@ impl Run<'_> {
         Ok(median(&covered))
     }
 
-    /// The last variant alone: one sample further every frame, its maps
-    /// decoded ahead while the previous frame draws; returns the median
-    /// covered reflector pixels at its timed frames' views.
+    /// The moving variants, each alone in turn: one sample further every
+    /// frame, its maps decoded ahead while the previous frame draws;
+    /// returns the median covered reflector pixels at the timed views.
     fn moving(&self, renderers: &mut [Renderer], logs: &mut [PerfLog]) -> Result<f64> {
         let o = &self.orbit;
-        let moving = self.variants.len() - 1;
         let last = o.samples.saturating_sub(1).max(1);
-        let mut eyes = Vec::new();
         let eye_of = |i: u32| o.eye(o.between_deg(i % last, 0.5), self.elevation);
-        for i in 0..self.warmup + self.views * self.per_view {
-            let eye = eye_of(i);
-            let start = Instant::now();
-            let r = &mut renderers[self.which[moving]];
-            r.set_next_view(eye_of(i + 1), o.view(eye_of(i + 1)));
-            let stats = r.frame(FrameMode::Pem, eye, o.view(eye))?;
-            if i >= self.warmup {
-                let ms = start.elapsed().as_secs_f64() * 1e3;
-                logs[moving].record(ms, &stats.passes, stats.cpu);
-                eyes.push(eye);
-                self.progress.inc(1);
+        let mut eyes = Vec::new();
+        let first = self.variants.len() - MOVING;
+        for index in first..self.variants.len() {
+            let r = &mut renderers[self.which[index]];
+            eyes.clear();
+            for i in 0..self.warmup + self.views * self.per_view {
+                let eye = eye_of(i);
+                let start = Instant::now();
+                r.set_next_view(eye_of(i + 1), o.view(eye_of(i + 1)));
+                let stats = r.frame(FrameMode::Pem, eye, o.view(eye))?;
+                if i >= self.warmup {
+                    let ms = start.elapsed().as_secs_f64() * 1e3;
+                    logs[index].record(ms, &stats.passes, stats.cpu);
+                    eyes.push(eye);
+                    self.progress.inc(1);
+                }
             }
+            // Its worker must not decode behind the next variant's frames.
+            r.settle();
         }
         // Counted after the timed frames, so the read-backs do not give
         // the decoding worker time the timed frames would not have had.
-        let r = &mut renderers[self.which[moving]];
+        let r = &mut renderers[self.which[self.variants.len() - 1]];
         let mut covered = Vec::with_capacity(eyes.len());
         for eye in eyes {
             r.frame(FrameMode::Pem, eye, o.view(eye))?;

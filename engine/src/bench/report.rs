@@ -48,7 +48,7 @@ pub struct BenchReport {
     /// reflector benches only.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub covered_pixels: Option<u64>,
-    /// The same at the last row's views (it moves along the samples).
+    /// The same at the moving rows' views (they move along the samples).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub moving_covered_pixels: Option<u64>,
     pub rows: Vec<BenchRow>,
@@ -87,7 +87,7 @@ impl BenchReport {
         let (what, cpu, last) = match self.kind {
             BenchKind::Reflectors => (
                 format!(
-                    "maps resident but in the last row; {} reflector pixels",
+                    "maps resident but in the last two rows; {} reflector pixels",
                     self.covered_pixels.unwrap_or(0)
                 ),
                 "texgen",
@@ -96,8 +96,15 @@ impl BenchReport {
             // The CPU column: the wait for the next frame's ray paths.
             BenchKind::Glass => ("CPU paths traced ahead".into(), "paths", "glass ms"),
         };
+        let name_w = self
+            .rows
+            .iter()
+            .map(|r| r.name.len())
+            .max()
+            .unwrap_or(0)
+            .max(28);
         let mut out = format!(
-            "{} views between samples at {:+.1}° x {} frames; {what}\n{:<28} {:>9} {:>7} {:>9} {:>8} {:>7} {:>9} {:>10}\n",
+            "{} views between samples at {:+.1}° x {} frames; {what}\n{:<name_w$} {:>9} {:>7} {:>9} {:>8} {:>7} {:>9} {:>10}\n",
             self.views,
             self.elevation_deg,
             self.frames_per_view,
@@ -116,7 +123,7 @@ impl BenchReport {
                 BenchKind::Glass => r.glass_ms_median,
             };
             out += &format!(
-                "{:<28} {:>9.2} {:>7.1} {:>9.2} {:>8.3} {:>7.2} {:>9.2} {:>10}\n",
+                "{:<name_w$} {:>9.2} {:>7.1} {:>9.2} {:>8.3} {:>7.2} {:>9.2} {:>10}\n",
                 r.name,
                 r.frame_ms_median,
                 r.fps,
@@ -144,17 +151,25 @@ fn glass_ms(passes: &[PassReport]) -> Option<f64> {
 }
 
 /// The table's rows: ratios to the bare and static-EM frames (rows 0, 1),
-/// compositing invocations per covered pixel (the last row's at its own
-/// views).
-pub(super) fn rows(reports: Vec<PerfReport>, covered: f64, moving_covered: f64) -> Vec<BenchRow> {
+/// compositing invocations per covered pixel (the last `moving` rows' at
+/// their own views, `moving_covered`).
+pub(super) fn rows(
+    reports: Vec<PerfReport>,
+    covered: f64,
+    (moving, moving_covered): (usize, f64),
+) -> Vec<BenchRow> {
     let bare_ms = reports[0].frame_ms_median;
     let static_ms = reports[1].frame_ms_median;
-    let last = reports.len().saturating_sub(1);
+    let first_moving = reports.len().saturating_sub(moving);
     reports
         .into_iter()
         .enumerate()
         .map(|(i, r)| {
-            let covered = if i == last { moving_covered } else { covered };
+            let covered = if i >= first_moving {
+                moving_covered
+            } else {
+                covered
+            };
             let invocations: u64 = r
                 .passes
                 .iter()

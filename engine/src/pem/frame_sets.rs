@@ -13,6 +13,7 @@ use crate::passes::pem::{PemPipelines, Shading};
 use crate::passes::pem_deferred::{DeferredPipelines, GBuffer};
 use anyhow::Result;
 use ash::vk;
+use std::sync::Arc;
 
 /// The maps of every reflector that plays at one EM resolution: one array
 /// per layer (each such reflector's slots side by side) and the descriptor
@@ -22,7 +23,7 @@ pub struct MapClass {
     pub resolution: u32,
     /// One per layer of `settings.layers()`: the distant (or sphere, or
     /// PTM) maps, then the local maps.
-    pub arrays: Vec<Image>,
+    pub arrays: Vec<Arc<Image>>,
     pub layered_set: vk::DescriptorSet,
     pub single_set: vk::DescriptorSet,
     pub ptm_set: vk::DescriptorSet,
@@ -49,7 +50,7 @@ impl FrameSets {
         device: &Device,
         executor: &mut Executor,
         settings: &PemSettings,
-        classes: Vec<(u32, Vec<Image>)>,
+        classes: Vec<(u32, Vec<Arc<Image>>)>,
         gbuffer: &GBuffer,
         (color, depth): (vk::Format, vk::Format),
     ) -> Result<Self> {
@@ -103,7 +104,9 @@ impl FrameSets {
 
     /// Every map array of every class.
     pub fn arrays(&self) -> impl Iterator<Item = &Image> {
-        self.classes.iter().flat_map(|c| c.arrays.iter())
+        self.classes
+            .iter()
+            .flat_map(|c| c.arrays.iter().map(|a| &**a))
     }
 
     /// What a multipass draw samples (for barriers).
@@ -137,7 +140,7 @@ impl FrameSets {
 fn map_class(
     (forward, deferred): (&PemPipelines, &DeferredPipelines),
     settings: &PemSettings,
-    (resolution, arrays): (u32, Vec<Image>),
+    (resolution, arrays): (u32, Vec<Arc<Image>>),
     (lut, gbuffer): (&Image, &GBuffer),
     [cube, flat, texel]: &[Sampler; 3],
 ) -> Result<MapClass> {
@@ -146,14 +149,14 @@ fn map_class(
     };
     // Without a local layer its bindings see the first array (unused).
     let second = arrays.get(1).unwrap_or(first);
-    let map = |i: &Image| Binding::Image(i.view, cube.raw);
+    let map = |i: &Image| Binding::sampled(i, cube.raw);
     let lut_b = Binding::Image(lut.view, cube.raw);
     let null = vk::DescriptorSet::null();
     let [layered_set, single_set, ptm_set, gbuffer_set, composite_set] =
         if settings.kind == PemKind::Ptm {
             let ptm = forward
                 .get(Shading::Ptm, false)
-                .descriptor_set(&[Binding::Image(first.view, flat.raw)])?;
+                .descriptor_set(&[Binding::sampled(first, flat.raw)])?;
             [null, null, ptm, null, null]
         } else {
             let g = |i: usize| Binding::Image(gbuffer.images[i].view, texel.raw);

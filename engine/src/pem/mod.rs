@@ -5,6 +5,7 @@
 
 pub mod ahead;
 pub mod facing;
+mod filling;
 mod frame_passes;
 pub mod frame_sets;
 pub mod path;

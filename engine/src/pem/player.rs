@@ -6,35 +6,25 @@
 //! sample exactly on a grid line.
 
 use super::ahead::{TexgenFrame, TexgenInputs, TexgenRequest};
+use super::filling::{MakeHostReadable, Pending, map_arrays};
 use super::frame_sets::FrameSets;
-use super::prefetch::{MapKey, Prefetcher, decode_into};
+use super::prefetch::Prefetcher;
 use super::reflector::PemReflector;
 use super::residency::SLOTS;
 use super::samples::{SampleBlend, ViewGrid};
 pub use super::settings::{Compositing, PemKind, PemSettings};
 use super::source::{MapLayer, MapSource};
 use super::staging::StagingPool;
-use crate::backend::upload::level_regions;
-use crate::backend::{Buffer, Device, GpuError, GpuResult, Image, ImageDesc};
+use crate::backend::{Device, GpuError, GpuResult};
 use crate::gpu_scene::GpuScene;
 use crate::graph::Executor;
-use crate::maps::ptm_edge;
 use crate::passes::pem_deferred::GBuffer;
 use crate::passes::target::{AroundRoom, Target};
-use crate::passes::upload::{Upload, UploadPass};
 use anyhow::{Result, bail};
 use ash::vk;
 use glam::{Mat4, Vec3};
 use inference::scene::{Material, Orbit, Scene};
 use std::time::Instant;
-
-/// A map read into staging this frame, waiting for its upload pass.
-struct Pending {
-    class: usize,
-    layer: usize,
-    element: u32,
-    buffer: Buffer,
-}
 
 /// CPU costs of preparing one PEM frame, in milliseconds.
 #[derive(Clone, Copy, Debug, Default)]
@@ -43,7 +33,8 @@ pub struct PemCpu {
     /// Decoding on the frame (maps not decoded ahead).
     pub decode_ms: f64,
     pub decoded_maps: u32,
-    /// Maps the worker had decoded ahead, straight into staging.
+    /// Maps the worker had decoded ahead, straight into their slots or
+    /// into staging.
     pub prefetched_maps: u32,
     /// Waiting for the worker to finish a map it was decoding.
     pub prefetch_wait_ms: f64,
@@ -57,14 +48,17 @@ pub struct PemPlayer {
     pub settings: PemSettings,
     pub(super) sets: FrameSets,
     pub(super) reflectors: Vec<PemReflector>,
-    pool: StagingPool,
-    pending: Vec<Pending>,
-    source: MapSource,
-    prefetch: Option<Prefetcher>,
-    grid: ViewGrid,
-    orbit: Orbit,
-    last_angles: Option<(f32, f32)>,
-    frame: u64,
+    pub(super) pool: StagingPool,
+    pub(super) pending: Vec<Pending>,
+    pub(super) source: MapSource,
+    pub(super) prefetch: Option<Prefetcher>,
+    pub(super) grid: ViewGrid,
+    pub(super) orbit: Orbit,
+    pub(super) last_angles: Option<(f32, f32)>,
+    pub(super) frame: u64,
+    /// Maps are decoded straight into host-written slot arrays (the device
+    /// samples linear images: lavapipe), not uploaded from staging.
+    pub(super) host_slots: bool,
 }
 
 impl PemPlayer {
@@ -103,17 +97,12 @@ impl PemPlayer {
             reflectors.push(PemReflector::new(device, scene, (index, o), f0, &settings)?);
         }
         let resolutions = assign_classes(&mut reflectors)?;
-        let classes = resolutions
-            .iter()
-            .map(|&(resolution, members)| {
-                let arrays = layers
-                    .iter()
-                    .map(|&l| map_array(device, l, (resolution, settings.drop_levels), members))
-                    .collect::<Result<Vec<_>>>()?;
-                Ok((resolution, arrays))
-            })
-            .collect::<Result<Vec<_>>>()?;
+        let (classes, host_slots) = map_arrays(device, &settings, &resolutions)?;
         let sets = FrameSets::new(device, executor, &settings, classes, gbuffer, formats)?;
+        if host_slots {
+            // Before any host write (the worker starts with the first frame).
+            executor.run(&[&MakeHostReadable(sets.arrays().collect())])?;
+        }
         let leaf_bytes = layers
             .iter()
             .flat_map(|l| resolutions.iter().map(|&(r, _)| l.layout(r).len() * 8))
@@ -133,6 +122,7 @@ impl PemPlayer {
             orbit: scene.orbit.clone(),
             last_angles: None,
             frame: 0,
+            host_slots,
         })
     }
 
@@ -165,9 +155,9 @@ impl PemPlayer {
     }
 
     /// CPU work before recording a frame: texgen for `eye`, and the maps of
-    /// `blend`'s samples that are not resident into staging. The previous
-    /// frame's uploads have run (its fence was waited on), so their
-    /// staging buffers go back to the pool first. `next_eye`, when the
+    /// `blend`'s samples that are not resident into their slots (or
+    /// staging). The previous frame has run (its fence was waited on), so
+    /// its staging buffers go back to the pool first. `next_eye`, when the
     /// caller knows it, is where the next frame looks from: its samples
     /// are decoded ahead first.
     pub fn prepare(
@@ -196,6 +186,7 @@ impl PemPlayer {
                 cpu.texgen_ahead += 1;
             }
             cpu.texgen_ms += start.elapsed().as_secs_f64() * 1e3;
+            self.settle_ahead(ri, &needed, &mut cpu);
             let Some(fills) = self.reflectors[ri].table.assign(&needed, self.frame) else {
                 bail!(
                     "internal: {} samples do not fit {SLOTS} slots",
@@ -215,9 +206,9 @@ impl PemPlayer {
             edges.set_outline(&outline)?;
         }
         if let Some(next) = next_eye {
-            self.prefetch_blend(&self.blend(next));
+            self.prefetch_blend(&self.blend(next), &needed);
         }
-        self.prefetch_next(eye);
+        self.prefetch_next(eye, &needed);
         Ok(cpu)
     }
 
@@ -255,123 +246,6 @@ impl PemPlayer {
         for (r, frame) in self.reflectors.iter_mut().zip(frames) {
             r.set_ahead(frame);
         }
-    }
-
-    /// Every layer of `sample` into staging for slot `slot` of reflector `ri`.
-    fn fill_slot(&mut self, ri: usize, slot: usize, sample: u32, cpu: &mut PemCpu) -> Result<()> {
-        let r = &self.reflectors[ri];
-        for (layer_index, &layer) in self.settings.layers().iter().enumerate() {
-            let key = MapKey {
-                object: r.name.clone(),
-                layer,
-                resolution: r.resolution,
-                sample,
-            };
-            let start = Instant::now();
-            let taken = self.prefetch.as_mut().and_then(|p| p.take(&key));
-            // Counted whether the worker's decode succeeded or not.
-            cpu.prefetch_wait_ms += start.elapsed().as_secs_f64() * 1e3;
-            let buffer = match taken {
-                Some((buffer, _)) => {
-                    cpu.prefetched_maps += 1;
-                    buffer
-                }
-                None => {
-                    let start = Instant::now();
-                    let mut buffer = self.pool.take()?;
-                    decode_into(&mut self.source, &key, &mut buffer)?;
-                    cpu.decode_ms += start.elapsed().as_secs_f64() * 1e3;
-                    buffer
-                }
-            };
-            cpu.decoded_maps += 1;
-            self.pending.push(Pending {
-                class: r.class,
-                layer: layer_index,
-                element: r.base + slot as u32,
-                buffer,
-            });
-        }
-        Ok(())
-    }
-
-    /// Asks the worker for the samples of the next cell in the direction
-    /// the eye moves, for every reflector that does not hold them yet.
-    fn prefetch_next(&mut self, eye: Vec3) {
-        let (az, el) = self.orbit.angles(eye);
-        let last = self.last_angles.replace((az, el));
-        let Some((last_az, last_el)) = last else {
-            return;
-        };
-        let (da, de) = (az - last_az, el - last_el);
-        if da == 0.0 && de == 0.0 {
-            return;
-        }
-        let s = &self.settings;
-        let (cell_a, cell_e) = self.grid.cell_size(az, el, s.spacing);
-        let ahead = self.grid.blend_by(
-            az + da.signum() * cell_a * f32::from(da != 0.0),
-            el + de.signum() * cell_e * f32::from(de != 0.0),
-            s.spacing,
-            s.blend,
-            s.view_blend,
-        );
-        self.prefetch_blend(&ahead);
-    }
-
-    /// Asks the worker for `blend`'s samples, every layer, for every
-    /// reflector that does not hold them and has not asked yet.
-    fn prefetch_blend(&mut self, blend: &SampleBlend) {
-        let Some(prefetch) = self.prefetch.as_mut() else {
-            return;
-        };
-        for r in &self.reflectors {
-            for sample in blend.indices().filter(|&k| !r.table.holds(k)) {
-                for layer in self.settings.layers() {
-                    let key = MapKey {
-                        object: r.name.clone(),
-                        layer,
-                        resolution: r.resolution,
-                        sample,
-                    };
-                    if prefetch.has(&key) {
-                        continue;
-                    }
-                    let Ok(buffer) = self.pool.take() else { return };
-                    if let Some(unused) = prefetch.request(key, buffer) {
-                        self.pool.give(unused);
-                    }
-                }
-            }
-        }
-    }
-
-    /// The upload pass for what `prepare` read (None when all was resident).
-    pub fn upload_pass(&self) -> GpuResult<Option<UploadPass<'_>>> {
-        if self.pending.is_empty() {
-            return Ok(None);
-        }
-        let mut uploads = Vec::new();
-        for p in &self.pending {
-            let class =
-                self.sets.classes.get(p.class).ok_or_else(|| {
-                    GpuError::Invalid(format!("internal: no map class {}", p.class))
-                })?;
-            let image = &class.arrays[p.layer];
-            // Skip the dropped finest levels: they lead the staging layout.
-            let layer = self.settings.layers()[p.layer];
-            let offset = dropped_bytes(layer, class.resolution, self.settings.drop_levels)?;
-            uploads.push(Upload {
-                buffer: &p.buffer,
-                offset,
-                image,
-                element: Some(p.element),
-            });
-        }
-        Ok(Some(UploadPass {
-            device: &self.device,
-            uploads,
-        }))
     }
 
     /// The passes that draw `blend`'s samples, before and after the room
@@ -447,48 +321,4 @@ fn assign_classes(reflectors: &mut [PemReflector]) -> Result<Vec<(u32, usize)>> 
         classes[class].1 += 1;
     }
     Ok(classes)
-}
-
-/// The array a `layer`'s maps play from: one element per slot of every
-/// reflector, RGBA16F, full MIP chain from the level `drop` below the
-/// finest of a reflector with `resolution`² EMs.
-fn map_array(
-    device: &Device,
-    layer: MapLayer,
-    (resolution, drop): (u32, u32),
-    reflectors: usize,
-) -> Result<Image> {
-    let format = vk::Format::R16G16B16A16_SFLOAT;
-    let count = (reflectors * SLOTS) as u32;
-    let desc = match layer {
-        MapLayer::Ptm => {
-            let edge = ptm_edge(resolution) >> drop;
-            ImageDesc::new_2d_array(format, edge, edge, count)
-        }
-        _ => ImageDesc::new_cube_array(format, resolution >> drop, count),
-    }
-    .all_mip_levels()
-    .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST);
-    Ok(Image::new(
-        device,
-        &format!("{} maps", layer.file_part()),
-        desc,
-    )?)
-}
-
-/// Bytes of the `drop` finest levels in the staging layout.
-fn dropped_bytes(layer: MapLayer, resolution: u32, drop: u32) -> GpuResult<u64> {
-    if drop == 0 {
-        return Ok(0);
-    }
-    let desc = match layer {
-        MapLayer::Ptm => {
-            let edge = ptm_edge(resolution);
-            ImageDesc::new_2d(vk::Format::R16G16B16A16_SFLOAT, edge, edge)
-        }
-        _ => ImageDesc::new_cube(vk::Format::R16G16B16A16_SFLOAT, resolution),
-    }
-    .all_mip_levels();
-    let (regions, _) = level_regions(&desc)?;
-    Ok(regions.get(drop as usize).map_or(0, |r| r.buffer_offset))
 }

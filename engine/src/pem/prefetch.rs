@@ -1,11 +1,14 @@
 //! Decoding ahead on a worker thread: while the device draws the current
 //! frame, the maps of the sample the eye is moving towards are decoded
-//! straight into staging buffers the worker borrows from the pool, so the
-//! frame that needs them only records their upload. The worker owns its
-//! own map source (and decode cache); buffers travel by channel.
+//! straight into the slot the sample will play from (host-written arrays,
+//! lavapipe: no copy at all) or into staging buffers the worker borrows
+//! from the pool (the frame that needs them then records their upload).
+//! The worker owns its own map source (and decode cache); buffers and
+//! lent slots travel by channel.
 
 use super::source::{MapLayer, MapSource};
 use crate::backend::Buffer;
+use crate::backend::host_image::HostElement;
 use half::f16;
 use std::sync::mpsc::{Receiver, Sender, TryRecvError, channel};
 use std::thread::JoinHandle;
@@ -40,28 +43,67 @@ pub fn decode_into(
     source.read(&key.object, key.layer, key.resolution, key.sample, out)
 }
 
+/// Work for the decode worker.
+pub enum Job {
+    /// One map into a staging buffer.
+    Staging(MapKey, Buffer),
+    /// Every layer of one sample straight into its slot: each map's key
+    /// and lent array element, the finest `drop` levels left out.
+    Slot {
+        maps: Vec<(MapKey, HostElement)>,
+        drop: u32,
+    },
+}
+
+impl Job {
+    /// The key a job is known by (a slot job by its first map's).
+    fn key(&self) -> Option<&MapKey> {
+        match self {
+            Job::Staging(key, _) => Some(key),
+            Job::Slot { maps, .. } => maps.first().map(|(k, _)| k),
+        }
+    }
+
+    fn run(&mut self, source: &mut MapSource) -> anyhow::Result<f64> {
+        match self {
+            Job::Staging(key, buffer) => {
+                decode_into(source, key, buffer)?;
+                Ok(source.last_read_ms)
+            }
+            Job::Slot { maps, drop } => {
+                let mut ms = 0.0;
+                for (key, slot) in maps {
+                    let k = (key.object.as_str(), key.layer, key.resolution, key.sample);
+                    source.read_into_slot(k, slot, *drop)?;
+                    ms += source.last_read_ms;
+                }
+                Ok(ms)
+            }
+        }
+    }
+}
+
 struct Decoded {
-    key: MapKey,
-    buffer: Buffer,
+    job: Job,
     ok: bool,
     ms: f64,
 }
 
 pub struct Prefetcher {
-    jobs: Option<Sender<(MapKey, Buffer)>>,
+    jobs: Option<Sender<Job>>,
     results: Receiver<Decoded>,
     worker: Option<JoinHandle<()>>,
     in_flight: Vec<MapKey>,
-    ready: Vec<(MapKey, Buffer, f64)>,
+    ready: Vec<Decoded>,
     /// Buffers back from failed decodes or dropped results, for the pool.
     spare: Vec<Buffer>,
 }
 
-/// The worker's loop: decode each request into its buffer and hand it
-/// back; when no request waits, warm the coarse levels of the next samples
-/// of the maps it handed over (`MapSource::warm_ahead`), one map per turn,
-/// so warming never delays a request.
-fn worker(source: &mut MapSource, inbox: &Receiver<(MapKey, Buffer)>, outbox: &Sender<Decoded>) {
+/// The worker's loop: run each job and hand it back; when no job waits,
+/// warm the coarse levels of the next samples of the maps it handed over
+/// (`MapSource::warm_ahead`), one map per turn, so warming never delays a
+/// job.
+fn worker(source: &mut MapSource, inbox: &Receiver<Job>, outbox: &Sender<Decoded>) {
     let mut to_warm: Vec<(String, MapLayer)> = Vec::new();
     loop {
         let job = match to_warm.is_empty() {
@@ -76,35 +118,39 @@ fn worker(source: &mut MapSource, inbox: &Receiver<(MapKey, Buffer)>, outbox: &S
                 Err(TryRecvError::Disconnected) => None,
             },
         };
-        let Some((key, mut buffer)) = job else { return };
-        // A failed prefetch is simply not used: the frame reads the map
-        // itself and reports the error there.
-        let ok = decode_into(source, &key, &mut buffer).is_ok();
-        let map = (key.object.clone(), key.layer);
-        if ok && !to_warm.contains(&map) {
-            to_warm.push(map);
+        let Some(mut job) = job else { return };
+        // A failed job is simply not used: the frame reads the map itself
+        // and reports the error there.
+        let result = job.run(source);
+        let ok = result.is_ok();
+        if ok {
+            let maps: Vec<(String, MapLayer)> = match &job {
+                Job::Staging(key, _) => vec![(key.object.clone(), key.layer)],
+                Job::Slot { maps, .. } => maps
+                    .iter()
+                    .map(|(k, _)| (k.object.clone(), k.layer))
+                    .collect(),
+            };
+            for map in maps {
+                if !to_warm.contains(&map) {
+                    to_warm.push(map);
+                }
+            }
         }
-        let ms = source.last_read_ms;
-        if outbox
-            .send(Decoded {
-                key,
-                buffer,
-                ok,
-                ms,
-            })
-            .is_err()
-        {
+        let ms = result.unwrap_or(0.0);
+        if outbox.send(Decoded { job, ok, ms }).is_err() {
             return;
         }
     }
 }
 
-/// Decoded maps kept waiting at most (older ones are dropped).
+/// Decoded staging maps kept waiting at most (older ones are dropped;
+/// slot jobs are never dropped: their slots wait for them).
 const READY_MAX: usize = 8;
 
 impl Prefetcher {
     pub fn new(mut source: MapSource) -> Self {
-        let (jobs, inbox) = channel::<(MapKey, Buffer)>();
+        let (jobs, inbox) = channel::<Job>();
         let (outbox, results) = channel();
         let worker = std::thread::Builder::new()
             .name("map-prefetch".into())
@@ -127,32 +173,58 @@ impl Prefetcher {
                 _ => self.results.try_recv().ok(),
             };
             let Some(done) = next else { return };
-            self.in_flight.retain(|k| *k != done.key);
-            if !done.ok {
-                self.spare.push(done.buffer);
-                continue;
+            if let Some(key) = done.job.key() {
+                self.in_flight.retain(|k| k != key);
             }
-            self.ready.push((done.key, done.buffer, done.ms));
-            if self.ready.len() > READY_MAX {
-                let (_, buffer, _) = self.ready.remove(0);
+            match done.job {
+                Job::Staging(_, buffer) if !done.ok => self.spare.push(buffer),
+                _ => self.ready.push(done),
+            }
+            let staged = |d: &Decoded| matches!(d.job, Job::Staging(..));
+            if self.ready.iter().filter(|d| staged(d)).count() > READY_MAX
+                && let Some(i) = self.ready.iter().position(staged)
+                && let Job::Staging(_, buffer) = self.ready.remove(i).job
+            {
                 self.spare.push(buffer);
             }
         }
     }
 
+    /// Takes the finished job known by `key`, waiting for it when it is
+    /// still running (`wait`), with whether it succeeded and the worker's
+    /// time.
+    fn take_job(&mut self, key: &MapKey, wait: bool) -> Option<Decoded> {
+        self.collect(wait.then_some(key));
+        let i = self.ready.iter().position(|d| d.job.key() == Some(key))?;
+        Some(self.ready.swap_remove(i))
+    }
+
     /// The staging buffer holding `key` if it was decoded ahead (waiting
     /// for it when it is still being decoded), with the worker's time.
     pub fn take(&mut self, key: &MapKey) -> Option<(Buffer, f64)> {
-        self.collect(Some(key));
-        let i = self.ready.iter().position(|(k, ..)| k == key)?;
-        let (_, buffer, ms) = self.ready.swap_remove(i);
-        Some((buffer, ms))
+        match self.take_job(key, true)? {
+            Decoded {
+                job: Job::Staging(_, buffer),
+                ms,
+                ..
+            } => Some((buffer, ms)),
+            _ => None,
+        }
+    }
+
+    /// Whether the slot job known by `key` (its first map) finished, and
+    /// how: `Some(Ok(ms))` filled, `Some(Err(()))` failed, None still
+    /// running (never with `wait`, unless the worker is gone). Its slots
+    /// are given back either way.
+    pub fn take_slot(&mut self, key: &MapKey, wait: bool) -> Option<Result<f64, ()>> {
+        let done = self.take_job(key, wait)?;
+        Some(if done.ok { Ok(done.ms) } else { Err(()) })
     }
 
     /// Whether `key` is decoded or on its way.
     pub fn has(&mut self, key: &MapKey) -> bool {
         self.collect(None);
-        self.in_flight.contains(key) || self.ready.iter().any(|(k, ..)| k == key)
+        self.in_flight.contains(key) || self.ready.iter().any(|d| d.job.key() == Some(key))
     }
 
     /// Waits until the worker has finished every request (so it no longer
@@ -168,18 +240,18 @@ impl Prefetcher {
         }
     }
 
-    /// Decodes `key` into `buffer` ahead of need; returns the buffer when
-    /// the worker cannot take it.
-    pub fn request(&mut self, key: MapKey, buffer: Buffer) -> Option<Buffer> {
-        let Some(jobs) = &self.jobs else {
-            return Some(buffer);
+    /// Hands `job` to the worker; gives it back when the worker cannot
+    /// take it.
+    pub fn request(&mut self, job: Job) -> Option<Job> {
+        let (Some(jobs), Some(key)) = (&self.jobs, job.key().cloned()) else {
+            return Some(job);
         };
-        match jobs.send((key.clone(), buffer)) {
+        match jobs.send(job) {
             Ok(()) => {
                 self.in_flight.push(key);
                 None
             }
-            Err(e) => Some(e.0.1),
+            Err(e) => Some(e.0),
         }
     }
 

@@ -25,6 +25,10 @@ pub struct PemSettings {
     /// outlines (`passes::edge_filter`; off by default: +0.2 dB over the
     /// frame for 1.06–1.09× its time).
     pub edge_filter: bool,
+    /// Decoded maps go through staging buffers and an upload pass even
+    /// where the device could sample them where they are decoded (host-
+    /// written slot arrays, lavapipe): what a GPU does, kept for comparison.
+    pub staging_uploads: bool,
 }
 
 /// How a frame composites its EM layers and blended samples.
@@ -62,6 +66,7 @@ impl PemSettings {
             filtering: Filtering::Trilinear,
             compositing: Compositing::Deferred,
             edge_filter: false,
+            staging_uploads: false,
         }
     }
 

@@ -3,9 +3,11 @@
 //! files themselves. Both write the same layout: RGBA f16, MIP-major, then
 //! face, then rows — what `level_regions` uploads.
 
+use crate::backend::host_image::HostElement;
 pub use crate::maps::MapLayer;
 use crate::maps::{map_path, map_specs};
 use anyhow::{Context, Result, bail};
+use codec::LeafSink;
 use half::f16;
 use inference::infer::maps::read_map;
 use inference::scene::Scene;
@@ -215,21 +217,9 @@ impl MapSource {
                 cache,
                 index,
             } => {
-                let Some(&(_, _, texture)) = index
-                    .iter()
-                    .find(|(o, l, _)| o == object && *l == layer.file_part())
-                else {
-                    bail!(
-                        "{}: holds no {object}.{} maps",
-                        path.display(),
-                        layer.file_part()
-                    );
-                };
-                let Some(grid) = container.textures().get(texture as usize).map(|t| t.grid) else {
-                    bail!("{}: holds no texture {texture}", path.display());
-                };
+                let (texture, at) = locate((path, container, index), object, layer, sample)?;
                 cache
-                    .decode_leaf_all(container, texture, 0, grid.sample_at(sample), out)
+                    .decode_leaf_all(container, texture, 0, at, out)
                     .with_context(|| {
                         format!(
                             "{}: decoding {object}.{} of sample {sample}",
@@ -259,5 +249,106 @@ impl MapSource {
         }
         self.last_read_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(())
+    }
+
+    /// [`Self::read`] straight into a slot's texels: levels below `drop`
+    /// (the finest, which the slot's arrays leave out) are not written.
+    pub fn read_into_slot(
+        &mut self,
+        key: (&str, MapLayer, u32, u32),
+        slot: &mut HostElement,
+        drop: u32,
+    ) -> Result<()> {
+        let (object, layer, resolution, sample) = key;
+        let start = std::time::Instant::now();
+        let mut sink = SlotSink { slot, drop };
+        if let Kind::Container {
+            path,
+            container,
+            cache,
+            index,
+        } = &mut self.kind
+        {
+            let (texture, at) = locate((path, container, index), object, layer, sample)?;
+            cache
+                .decode_leaf_into(container, texture, 0, at, &mut sink)
+                .with_context(|| {
+                    format!(
+                        "{}: decoding {object}.{} of sample {sample} into its slot",
+                        path.display(),
+                        layer.file_part()
+                    )
+                })?;
+            cache.end_frame();
+        } else {
+            // EXR maps: read whole, then level by level into the slot.
+            let layout = TextureLayout::full_chain(layer.shape(resolution));
+            let mut leaf = vec![f16::ZERO; layout.len() * 4];
+            self.read(object, layer, resolution, sample, &mut leaf)?;
+            for level in drop..layout.levels() {
+                for face in 0..layout.faces() {
+                    let (w, h) = layout.level_size(level);
+                    let n = (w * h) as usize * 4;
+                    let at = layout.block_offset(face, level) * 4;
+                    let Some(dst) = sink.level(face, level, n / 4) else {
+                        continue;
+                    };
+                    let src = leaf.get(at..at + n).unwrap_or_default();
+                    if dst.len() != src.len() {
+                        bail!(
+                            "{object}.{}: level {level} does not fit its slot",
+                            layer.file_part()
+                        );
+                    }
+                    dst.copy_from_slice(src);
+                }
+            }
+        }
+        self.last_read_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok(())
+    }
+}
+
+/// The container texture holding `object`'s `layer`, and where `sample`
+/// lies on its grid.
+fn locate(
+    (path, container, index): (&Path, &codec::Container, &[(String, &'static str, u32)]),
+    object: &str,
+    layer: MapLayer,
+    sample: u32,
+) -> Result<(u32, [u32; 2])> {
+    let Some(&(_, _, texture)) = index
+        .iter()
+        .find(|(o, l, _)| o == object && *l == layer.file_part())
+    else {
+        bail!(
+            "{}: holds no {object}.{} maps",
+            path.display(),
+            layer.file_part()
+        );
+    };
+    let Some(grid) = container.textures().get(texture as usize).map(|t| t.grid) else {
+        bail!("{}: holds no texture {texture}", path.display());
+    };
+    Ok((texture, grid.sample_at(sample)))
+}
+
+/// The decoder's levels into a lent slot, the `drop` finest skipped.
+struct SlotSink<'a> {
+    slot: &'a mut HostElement,
+    drop: u32,
+}
+
+impl LeafSink<f16> for SlotSink<'_> {
+    fn level(&mut self, face: u32, mip: u32, texels: usize) -> Option<&mut [f16]> {
+        let level = mip.checked_sub(self.drop)?;
+        // A level that will not fit (or is misaligned) gives an empty
+        // slice, which the decoder reports as the wrong size.
+        let bytes = self.slot.level_mut(face, level, texels * 8);
+        Some(
+            bytes
+                .and_then(|b| bytemuck::try_cast_slice_mut(b).ok())
+                .unwrap_or_default(),
+        )
     }
 }
