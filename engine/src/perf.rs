@@ -15,6 +15,8 @@ pub struct PerfLog {
     cpu: Vec<CpuTimes>,
     /// Per frame, submit-to-fence time outside every pass's timestamps.
     outside_ms: Vec<f64>,
+    /// Each map the decode worker finished (PEM playback).
+    ahead_decode_ms: Vec<f64>,
 }
 
 #[derive(Serialize)]
@@ -49,6 +51,13 @@ pub struct CpuReport {
     /// Reflector texgens computed during the previous frame (frames in
     /// flight), summed over the frames.
     pub texgen_ahead: u64,
+    /// Maps (one cube map or PTM each) the decode worker finished, and
+    /// their decode's wall time on the worker while frames rendered on the
+    /// same cores: median and 95th percentile (nearest rank; null when the
+    /// worker decoded nothing).
+    pub ahead_decodes: u64,
+    pub ahead_decode_ms_p50: Option<f64>,
+    pub ahead_decode_ms_p95: Option<f64>,
 }
 
 #[derive(Serialize)]
@@ -89,6 +98,11 @@ impl PerfLog {
         }
     }
 
+    /// Adds maps the decode worker finished (`Renderer::drain_ahead_decode_ms`).
+    pub fn add_ahead_decodes(&mut self, ms: Vec<f64>) {
+        self.ahead_decode_ms.extend(ms);
+    }
+
     pub fn report(
         &self,
         device: &str,
@@ -99,6 +113,8 @@ impl PerfLog {
     ) -> PerfReport {
         let cpu_median =
             |f: fn(&CpuTimes) -> f64| median(&self.cpu.iter().map(f).collect::<Vec<_>>());
+        let ahead = &self.ahead_decode_ms;
+        let ahead_quantile = |q| (!ahead.is_empty()).then(|| percentile(ahead, q));
         let cpu_mean = |f: fn(&CpuTimes) -> f64| {
             self.cpu.iter().map(f).sum::<f64>() / self.cpu.len().max(1) as f64
         };
@@ -153,6 +169,9 @@ impl PerfLog {
                 prefetch_wait_ms_median: cpu_median(|c| c.prefetch_wait_ms),
                 prefetch_wait_ms_mean: cpu_mean(|c| c.prefetch_wait_ms),
                 texgen_ahead: self.cpu.iter().map(|c| u64::from(c.texgen_ahead)).sum(),
+                ahead_decodes: self.ahead_decode_ms.len() as u64,
+                ahead_decode_ms_p50: ahead_quantile(0.5),
+                ahead_decode_ms_p95: ahead_quantile(0.95),
             },
         }
     }
@@ -212,6 +231,13 @@ impl PerfReport {
                 self.cpu.decode_ms_mean * self.frames as f64 / self.cpu.maps_decoded as f64
             );
         }
+        if let (Some(p50), Some(p95)) = (self.cpu.ahead_decode_ms_p50, self.cpu.ahead_decode_ms_p95)
+        {
+            out += &format!(
+                "{:<16} {:>12.3}   (p50 per map on the worker while frames rendered; p95 {:.3} ms, {} maps)\n",
+                "cpu decode ahead", p50, p95, self.cpu.ahead_decodes
+            );
+        }
         out
     }
 }
@@ -255,5 +281,25 @@ mod tests {
         // Per frame 3, 4, 12.5 and 0: the median of four is 3.5.
         assert_eq!(report.cpu.outside_passes_ms_median, 3.5);
         assert!(report.table().contains("3.500 outside the passes"));
+    }
+
+    #[test]
+    fn the_workers_decodes_are_reported_by_quantile() {
+        let mut log = PerfLog::default();
+        log.record(1.0, &[pass("gbuffer", 0.5)], CpuTimes::default());
+        let none = log.report("d", "s", "m", [4, 4], &[]);
+        assert_eq!(
+            (none.cpu.ahead_decodes, none.cpu.ahead_decode_ms_p50),
+            (0, None)
+        );
+        assert!(!none.table().contains("decode ahead"));
+        // Twenty maps: 1..=20 ms over two drains.
+        log.add_ahead_decodes((1..=12).map(f64::from).collect());
+        log.add_ahead_decodes((13..=20).map(f64::from).collect());
+        let r = log.report("d", "s", "m", [4, 4], &[]);
+        assert_eq!(r.cpu.ahead_decodes, 20);
+        assert_eq!(r.cpu.ahead_decode_ms_p50, Some(10.0));
+        assert_eq!(r.cpu.ahead_decode_ms_p95, Some(19.0));
+        assert!(r.table().contains("p95 19.000 ms, 20 maps"));
     }
 }

@@ -235,6 +235,7 @@ pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<Played> {
     }
     progress.finish_and_clear();
     writer.finish()?;
+    log.add_ahead_decodes(renderer.drain_ahead_decode_ms());
     let report = log.report(
         &device.name,
         &scene.name,

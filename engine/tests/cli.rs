@@ -82,6 +82,9 @@ fn validated_run_writes_frames_and_perf_json() {
         p95 >= median && p95 <= max,
         "p95 {p95:?} against median {median:?} and max {max:?}"
     );
+    // No maps to decode in this mode: no worker times, said as null.
+    assert_eq!(perf["cpu"]["ahead_decodes"], 0);
+    assert!(perf["cpu"]["ahead_decode_ms_p95"].is_null());
     assert!(perf["cpu"]["texgen_ms_median"].as_f64().is_some());
     assert!(perf["cpu"]["upload_ms_median"].as_f64().is_some());
     let submit = perf["cpu"]["submit_to_fence_ms_median"].as_f64();

@@ -75,6 +75,23 @@ fn assert_first_run_compiles(scene: &Path, out: &Path) {
     for pass in ["pem_blend", "upload"] {
         assert!(!names.iter().any(|n| n == pass), "{names:?}");
     }
+    // The decode worker's own times, per map, while the frames rendered.
+    let perf: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("perf.json")).expect("perf.json"))
+            .expect("JSON");
+    let cpu = &perf["cpu"];
+    let (p50, p95) = (
+        cpu["ahead_decode_ms_p50"].as_f64(),
+        cpu["ahead_decode_ms_p95"].as_f64(),
+    );
+    assert!(
+        cpu["ahead_decodes"].as_u64().is_some_and(|n| n > 0),
+        "{cpu}"
+    );
+    assert!(
+        p50.zip(p95).is_some_and(|(a, b)| 0.0 < a && a <= b),
+        "{cpu}"
+    );
 }
 
 /// An edited scene (the light's colour) is never played from old maps:

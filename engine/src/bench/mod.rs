@@ -328,6 +328,7 @@ impl Run<'_> {
             }
             // Its worker must not decode behind the next variant's frames.
             r.settle();
+            logs[index].add_ahead_decodes(r.drain_ahead_decode_ms());
         }
         // Counted after the timed frames, so the read-backs do not give
         // the decoding worker time the timed frames would not have had.

@@ -294,6 +294,14 @@ impl PemPlayer {
         }
     }
 
+    /// Each map the worker decoded since the last call: its wall time,
+    /// while the device rendered on the same cores.
+    pub fn drain_ahead_decode_ms(&mut self) -> Vec<f64> {
+        self.prefetch
+            .as_mut()
+            .map_or_else(Vec::new, |p| p.drain_decode_ms())
+    }
+
     /// Staging buffers made so far.
     pub fn staging_buffers(&self) -> usize {
         self.pool.made()

@@ -64,18 +64,19 @@ impl Job {
         }
     }
 
-    fn run(&mut self, source: &mut MapSource) -> anyhow::Result<f64> {
+    /// Runs the job; each map's decode time (wall clock, ms).
+    fn run(&mut self, source: &mut MapSource) -> anyhow::Result<Vec<f64>> {
         match self {
             Job::Staging(key, buffer) => {
                 decode_into(source, key, buffer)?;
-                Ok(source.last_read_ms)
+                Ok(vec![source.last_read_ms])
             }
             Job::Slot { maps, drop } => {
-                let mut ms = 0.0;
+                let mut ms = Vec::with_capacity(maps.len());
                 for (key, slot) in maps {
                     let k = (key.object.as_str(), key.layer, key.resolution, key.sample);
                     source.read_into_slot(k, slot, *drop)?;
-                    ms += source.last_read_ms;
+                    ms.push(source.last_read_ms);
                 }
                 Ok(ms)
             }
@@ -86,7 +87,8 @@ impl Job {
 struct Decoded {
     job: Job,
     ok: bool,
-    ms: f64,
+    /// Each map's decode time.
+    ms: Vec<f64>,
 }
 
 pub struct Prefetcher {
@@ -97,6 +99,9 @@ pub struct Prefetcher {
     ready: Vec<Decoded>,
     /// Buffers back from failed decodes or dropped results, for the pool.
     spare: Vec<Buffer>,
+    /// Each map decoded since [`Prefetcher::drain_decode_ms`] last ran: its
+    /// wall time on the worker, beside whatever else the cores ran.
+    decode_ms: Vec<f64>,
 }
 
 /// The worker's loop: run each job and hand it back; when no job waits,
@@ -137,7 +142,7 @@ fn worker(source: &mut MapSource, inbox: &Receiver<Job>, outbox: &Sender<Decoded
                 }
             }
         }
-        let ms = result.unwrap_or(0.0);
+        let ms = result.unwrap_or_default();
         if outbox.send(Decoded { job, ok, ms }).is_err() {
             return;
         }
@@ -163,6 +168,7 @@ impl Prefetcher {
             in_flight: Vec::new(),
             ready: Vec::new(),
             spare: Vec::new(),
+            decode_ms: Vec::new(),
         }
     }
 
@@ -175,6 +181,9 @@ impl Prefetcher {
             let Some(done) = next else { return };
             if let Some(key) = done.job.key() {
                 self.in_flight.retain(|k| k != key);
+            }
+            if done.ok {
+                self.decode_ms.extend(&done.ms);
             }
             match done.job {
                 Job::Staging(_, buffer) if !done.ok => self.spare.push(buffer),
@@ -207,7 +216,7 @@ impl Prefetcher {
                 job: Job::Staging(_, buffer),
                 ms,
                 ..
-            } => Some((buffer, ms)),
+            } => Some((buffer, ms.iter().sum())),
             _ => None,
         }
     }
@@ -218,7 +227,17 @@ impl Prefetcher {
     /// are given back either way.
     pub fn take_slot(&mut self, key: &MapKey, wait: bool) -> Option<Result<f64, ()>> {
         let done = self.take_job(key, wait)?;
-        Some(if done.ok { Ok(done.ms) } else { Err(()) })
+        Some(if done.ok {
+            Ok(done.ms.iter().sum())
+        } else {
+            Err(())
+        })
+    }
+
+    /// The decode times of the maps finished since the last call.
+    pub fn drain_decode_ms(&mut self) -> Vec<f64> {
+        self.collect(None);
+        std::mem::take(&mut self.decode_ms)
     }
 
     /// Whether `key` is decoded or on its way.

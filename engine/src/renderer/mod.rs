@@ -239,6 +239,14 @@ impl Renderer {
         }
     }
 
+    /// Each map decoded ahead since the last call (PEM playback): its wall
+    /// time on the worker while frames rendered.
+    pub fn drain_ahead_decode_ms(&mut self) -> Vec<f64> {
+        self.pem
+            .as_mut()
+            .map_or_else(Vec::new, |p| p.drain_ahead_decode_ms())
+    }
+
     /// Waits for the glass's paths traced for an announced next view and
     /// drops them (that view will not be drawn next): `engine bench` ends
     /// each row's run with it, so no worker runs into another row.
