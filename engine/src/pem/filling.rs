@@ -139,13 +139,14 @@ impl PemPlayer {
         Ok(HostElement::lend(array, element)?)
     }
 
-    /// Asks the worker for the samples of the next cell in the direction
-    /// the eye moves, for every reflector that does not hold them yet.
-    /// `keep`: what the frame being prepared reads.
-    pub(super) fn prefetch_next(&mut self, eye: glam::Vec3, keep: &[u32]) {
+    /// Notes where the eye moved and, with `guess`, asks the worker for
+    /// the samples of the next cell in that direction, for every reflector
+    /// that does not hold them yet. `keep`: what the frame being prepared
+    /// reads.
+    pub(super) fn prefetch_next(&mut self, eye: glam::Vec3, keep: &[u32], guess: bool) {
         let (az, el) = self.orbit.angles(eye);
         let last = self.last_angles.replace((az, el));
-        let Some((last_az, last_el)) = last else {
+        let Some((last_az, last_el)) = last.filter(|_| guess) else {
             return;
         };
         let (da, de) = (az - last_az, el - last_el);
