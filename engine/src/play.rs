@@ -235,6 +235,8 @@ pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<Played> {
     }
     progress.finish_and_clear();
     writer.finish()?;
+    // Decodes still running count too: they ran while frames rendered.
+    renderer.settle();
     log.add_ahead_decodes(renderer.drain_ahead_decode_ms());
     let report = log.report(
         &device.name,

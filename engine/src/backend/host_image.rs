@@ -22,22 +22,27 @@ struct Level {
     rows: usize,
 }
 
+/// The mapped memory's start.
+struct Mapped(NonNull<u8>);
+
+// SAFETY: the pointer is into the mapped allocation of the image the
+// owning HostElement keeps alive (its Arc) wherever it goes; writes
+// through it stay inside that element's subresources, which the `lent`
+// flag gives to one HostElement at a time, so no other Rust code writes
+// them meanwhile.
+unsafe impl Send for Mapped {}
+
 pub struct HostElement {
     image: Arc<Image>,
     element: u32,
-    base: NonNull<u8>,
+    base: Mapped,
     /// `levels[level * element_layers + layer]`.
     levels: Vec<Level>,
-    scratch: Vec<u8>,
+    /// Texel components (2 bytes each, so aligned for f16 views).
+    scratch: Vec<u16>,
     /// A level with padded rows, written into scratch, copied on flush.
     pending: Option<Level>,
 }
-
-// SAFETY: `base` points into the mapped allocation of `image`, which the
-// Arc keeps alive wherever this goes; writes through it stay inside this
-// element's subresources, which the `lent` flag gives to one HostElement
-// at a time, so no other Rust code writes them meanwhile.
-unsafe impl Send for HostElement {}
 
 impl HostElement {
     /// Lends array element `element` of `image` (host-written): fails when
@@ -73,7 +78,7 @@ impl HostElement {
         let element = Self {
             image: image.clone(),
             element,
-            base,
+            base: Mapped(base),
             levels,
             scratch: Vec::new(),
             pending: None,
@@ -111,17 +116,18 @@ impl HostElement {
         if bytes != l.row * l.rows {
             return None;
         }
-        if l.row == l.row_pitch {
+        if l.row == l.row_pitch && bytes % 2 == 0 {
             // SAFETY: the level lies inside the mapped allocation (checked in
             // `lend`), belongs to this lent element, and `&mut self` keeps
             // this the only slice of it.
             return Some(unsafe {
-                std::slice::from_raw_parts_mut(self.base.as_ptr().add(l.offset), bytes)
+                std::slice::from_raw_parts_mut(self.base.0.as_ptr().add(l.offset), bytes)
             });
         }
-        self.scratch.resize(bytes, 0);
+        self.scratch.resize(bytes.div_ceil(2), 0);
         self.pending = Some(l);
-        Some(&mut self.scratch[..])
+        let scratch: &mut [u8] = bytemuck::cast_slice_mut(&mut self.scratch[..]);
+        Some(&mut scratch[..bytes])
     }
 
     /// Copies a padded level written into scratch to its rows.
@@ -129,13 +135,14 @@ impl HostElement {
         let Some(l) = self.pending.take() else {
             return;
         };
-        for (y, src) in self.scratch.chunks_exact(l.row).take(l.rows).enumerate() {
+        let scratch: &[u8] = bytemuck::cast_slice(&self.scratch[..]);
+        for (y, src) in scratch.chunks_exact(l.row).take(l.rows).enumerate() {
             // SAFETY: as in `level_mut`; row y lies inside the level
             // (checked in `lend`) and no slice of the element is alive.
             unsafe {
                 std::ptr::copy_nonoverlapping(
                     src.as_ptr(),
-                    self.base.as_ptr().add(l.offset + y * l.row_pitch),
+                    self.base.0.as_ptr().add(l.offset + y * l.row_pitch),
                     l.row,
                 );
             }
@@ -145,6 +152,11 @@ impl HostElement {
     /// The array element this writes.
     pub fn element(&self) -> u32 {
         self.element
+    }
+
+    /// Its subresources: every (level, layer) a full write covers.
+    pub fn subresources(&self) -> usize {
+        self.levels.len()
     }
 }
 

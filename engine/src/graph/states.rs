@@ -54,6 +54,16 @@ fn target_state(usage: Usage) -> LevelState {
     }
 }
 
+/// [`target_state`], but a host-written image is sampled in GENERAL: the
+/// host writes it between frames, which only GENERAL allows.
+fn wanted_state(desc: &crate::backend::ImageDesc, usage: Usage) -> LevelState {
+    let mut state = target_state(usage);
+    if desc.host_written && usage == Usage::Sampled {
+        state.layout = vk::ImageLayout::GENERAL;
+    }
+    state
+}
+
 /// Keyed by [`Image::uid`](crate::backend::Image::uid), not by handle: an
 /// image dropped without [`ImageStates::forget`] must not lend its layout
 /// to a new image that gets the same handle.
@@ -66,14 +76,14 @@ impl ImageStates {
     /// Declares that set-up work (an upload) left the whole image in the
     /// state `usage` implies, so the first pass needs no transition.
     pub fn assume(&mut self, image: &crate::backend::Image, usage: Usage) {
-        let mut state = target_state(usage);
+        let mut state = wanted_state(&image.desc, usage);
         state.wrote = true; // the upload's write is made visible by the next barrier
         self.levels
             .insert(image.uid, vec![state; image.desc.mip_levels as usize]);
     }
 
     /// Drops what is known of an image about to be destroyed (keeps the
-    /// map small; a new image starts from UNDEFINED either way).
+    /// map small; a new image starts from its initial layout either way).
     pub fn forget(&mut self, image: &crate::backend::Image) {
         self.levels.remove(&image.uid);
     }
@@ -91,11 +101,7 @@ impl ImageStates {
                 };
                 vec![initial; desc.mip_levels as usize]
             });
-            let mut wanted = target_state(a.usage);
-            if desc.host_written && a.usage == Usage::Sampled {
-                // The host writes it between frames: sampled in GENERAL.
-                wanted.layout = vk::ImageLayout::GENERAL;
-            }
+            let wanted = wanted_state(&desc, a.usage);
             for level in a.levels.clone() {
                 let Some(current) = levels.get_mut(level as usize) else {
                     continue;

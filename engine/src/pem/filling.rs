@@ -172,17 +172,20 @@ impl PemPlayer {
         if self.prefetch.is_none() {
             return;
         }
+        // Neither what this frame reads nor what `blend` finds resident
+        // may make room for the rest of `blend`.
+        let keep: Vec<u32> = keep.iter().copied().chain(blend.indices()).collect();
         for ri in 0..self.reflectors.len() {
             for sample in blend.indices() {
                 if self.reflectors[ri].table.holds(sample) {
                     continue;
                 }
                 let asked = match self.host_slots {
-                    true => self.prefetch_into_slot(ri, sample, keep),
+                    true => self.prefetch_into_slot(ri, sample, &keep),
                     false => self.prefetch_staging(ri, sample),
                 };
                 if !asked {
-                    return;
+                    break; // no room left in this reflector's slots
                 }
             }
         }

@@ -188,7 +188,18 @@ impl PemPlayer {
             }
             cpu.texgen_ms += start.elapsed().as_secs_f64() * 1e3;
             self.settle_ahead(ri, &needed, &mut cpu);
-            let Some(fills) = self.reflectors[ri].table.assign(&needed, self.frame) else {
+            let mut fills = self.reflectors[ri].table.assign(&needed, self.frame);
+            if fills.is_none() {
+                // Slots filled ahead for other samples hold the room this
+                // frame needs: let them finish, then they may go.
+                let filling: Vec<u32> = (self.reflectors[ri].table.filling_slots())
+                    .into_iter()
+                    .map(|(_, k)| k)
+                    .collect();
+                self.settle_ahead(ri, &filling, &mut cpu);
+                fills = self.reflectors[ri].table.assign(&needed, self.frame);
+            }
+            let Some(fills) = fills else {
                 bail!(
                     "internal: {} samples do not fit {SLOTS} slots",
                     needed.len()

@@ -164,9 +164,14 @@ impl PemReflector {
         &self.screen.outline
     }
 
-    /// The array element holding `sample`, if it is resident.
+    /// The array element holding `sample`, if it is resident (not still
+    /// being filled ahead).
     pub fn element(&self, sample: u32) -> Option<u32> {
-        self.table.find(sample).map(|slot| self.base + slot as u32)
+        let slot = self
+            .table
+            .find(sample)
+            .filter(|&s| !self.table.filling(s))?;
+        Some(self.base + slot as u32)
     }
 
     /// What this reflector's texgen reads, for a worker computing the

@@ -261,7 +261,11 @@ impl MapSource {
     ) -> Result<()> {
         let (object, layer, resolution, sample) = key;
         let start = std::time::Instant::now();
-        let mut sink = SlotSink { slot, drop };
+        let mut sink = SlotSink {
+            slot,
+            drop,
+            written: 0,
+        };
         if let Kind::Container {
             path,
             container,
@@ -304,6 +308,15 @@ impl MapSource {
                 }
             }
         }
+        // Maps with fewer levels or faces than the slot would leave the
+        // last sample's texels in the rest.
+        let (written, wanted) = (sink.written, sink.slot.subresources());
+        if written != wanted {
+            bail!(
+                "{object}.{} of sample {sample} filled {written} of its slot's {wanted} levels × faces",
+                layer.file_part()
+            );
+        }
         self.last_read_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(())
     }
@@ -337,6 +350,8 @@ fn locate(
 struct SlotSink<'a> {
     slot: &'a mut HostElement,
     drop: u32,
+    /// Levels × faces handed out.
+    written: usize,
 }
 
 impl LeafSink<f16> for SlotSink<'_> {
@@ -345,10 +360,8 @@ impl LeafSink<f16> for SlotSink<'_> {
         // A level that will not fit (or is misaligned) gives an empty
         // slice, which the decoder reports as the wrong size.
         let bytes = self.slot.level_mut(face, level, texels * 8);
-        Some(
-            bytes
-                .and_then(|b| bytemuck::try_cast_slice_mut(b).ok())
-                .unwrap_or_default(),
-        )
+        let halves = bytes.and_then(|b| bytemuck::try_cast_slice_mut(b).ok());
+        self.written += usize::from(halves.is_some());
+        Some(halves.unwrap_or_default())
     }
 }
