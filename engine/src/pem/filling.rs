@@ -368,14 +368,7 @@ fn dropped_bytes(layer: MapLayer, resolution: u32, drop: u32) -> GpuResult<u64> 
     if drop == 0 {
         return Ok(0);
     }
-    let desc = match layer {
-        MapLayer::Ptm => {
-            let edge = ptm_edge(resolution);
-            ImageDesc::new_2d(vk::Format::R16G16B16A16_SFLOAT, edge, edge)
-        }
-        _ => ImageDesc::new_cube(vk::Format::R16G16B16A16_SFLOAT, resolution),
-    }
-    .all_mip_levels();
-    let (regions, _) = level_regions(&desc)?;
+    // One undropped element: the staging layout of one map.
+    let (regions, _) = level_regions(&map_array_desc(layer, (resolution, 0), 1))?;
     Ok(regions.get(drop as usize).map_or(0, |r| r.buffer_offset))
 }

@@ -56,12 +56,17 @@ pub enum Job {
 }
 
 impl Job {
+    /// The maps a job decodes.
+    fn keys(&self) -> Vec<&MapKey> {
+        match self {
+            Job::Staging(key, _) => vec![key],
+            Job::Slot { maps, .. } => maps.iter().map(|(k, _)| k).collect(),
+        }
+    }
+
     /// The key a job is known by (a slot job by its first map's).
     fn key(&self) -> Option<&MapKey> {
-        match self {
-            Job::Staging(key, _) => Some(key),
-            Job::Slot { maps, .. } => maps.first().map(|(k, _)| k),
-        }
+        self.keys().first().copied()
     }
 
     /// Runs the job; each map's decode time (wall clock, ms).
@@ -129,14 +134,8 @@ fn worker(source: &mut MapSource, inbox: &Receiver<Job>, outbox: &Sender<Decoded
         let result = job.run(source);
         let ok = result.is_ok();
         if ok {
-            let maps: Vec<(String, MapLayer)> = match &job {
-                Job::Staging(key, _) => vec![(key.object.clone(), key.layer)],
-                Job::Slot { maps, .. } => maps
-                    .iter()
-                    .map(|(k, _)| (k.object.clone(), k.layer))
-                    .collect(),
-            };
-            for map in maps {
+            for key in job.keys() {
+                let map = (key.object.clone(), key.layer);
                 if !to_warm.contains(&map) {
                     to_warm.push(map);
                 }
