@@ -284,6 +284,14 @@ fn encode_and_report_an_inferred_pem() {
     ];
     let report = codec_report(container_s, &dir.path().join("report.json"), &inputs);
     assert_codec_report(&report, ffmpeg);
+    // Frames turned off say so, rather than that the traces are missing.
+    let no_frames = [&inputs[..inputs.len() - 1], &["0"]].concat();
+    let report = codec_report(container_s, &dir.path().join("no_frames.json"), &no_frames);
+    let notes = report["notes"].to_string();
+    assert!(
+        report["frames_psnr_db"].is_null() && notes.contains("skipped (--frames-every 0)"),
+        "{notes}"
+    );
     let curve_args = [&inputs[..], &["--curve", "--curve-ratios", "8,16"]].concat();
     let report = codec_report(container_s, &dir.path().join("curve.json"), &curve_args);
     assert_curves(&report, ffmpeg);

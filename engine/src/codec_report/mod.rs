@@ -78,7 +78,7 @@ pub fn codec_report(scene: &Scene, req: &CodecReportRequest) -> Result<String> {
     })?;
     say("rendered frames".into());
     let mut bench = FrameBench::new(req, scene)?;
-    add_rendered_frames(&mut report, bench.as_mut(), &container)?;
+    add_rendered_frames(&mut report, bench.as_mut(), &container, req.frames_every)?;
     if let Some(b) = bench.as_mut() {
         say("decode under load".into());
         access::add_decode_under_load(&mut report, b, &container)?;
@@ -117,11 +117,13 @@ pub fn codec_report(scene: &Scene, req: &CodecReportRequest) -> Result<String> {
 }
 
 /// The rendered-frame PSNR of the container's distant layer against the
-/// traced layer, when traced targets exist.
+/// traced layer, when traced targets exist (none are read with
+/// `--frames-every 0`).
 fn add_rendered_frames(
     report: &mut codec::report::CodecReport,
     bench: Option<&mut FrameBench>,
     container: &codec::Container,
+    frames_every: u32,
 ) -> Result<()> {
     match bench {
         Some(b) => {
@@ -134,6 +136,9 @@ fn add_rendered_frames(
                 "rendered frames: distant layer at {n} samples, decoded {decoded:.2} dB vs uncompressed {raw:.2} dB (medians, against the traced layer); decoded against uncompressed rendered the same way: {vs_raw:.2} dB (compression alone); pixels: {FRAME_PIXELS}"
             ));
         }
+        None if frames_every == 0 => report
+            .notes
+            .push("rendered frames: skipped (--frames-every 0)".into()),
         None => report
             .notes
             .push("rendered frames: no traced targets found (see --trace-dir, --size)".into()),

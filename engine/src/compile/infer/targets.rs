@@ -19,13 +19,19 @@ pub fn target_pixels(
     let (Some(r), Some(g), Some(b)) = (get("R"), get("G"), get("B")) else {
         bail!("layer {name:?}: expected channels R, G, B");
     };
-    if r.len() != pixel_count {
-        bail!(
-            "layer {name:?}: {} pixels, the probe renders have {pixel_count} (trace at the same --size)",
-            r.len()
-        );
-    }
     let a = get("A");
+    // Every channel, not only R: a file may hold channels of other sizes.
+    for (c, v) in [("R", r), ("G", g), ("B", b)]
+        .into_iter()
+        .chain(a.map(|a| ("A", a)))
+    {
+        if v.len() != pixel_count {
+            bail!(
+                "layer {name:?} channel {c}: {} pixels, the probe renders have {pixel_count} (trace at the same --size)",
+                v.len()
+            );
+        }
+    }
     Ok((0..pixel_count)
         .map(|i| {
             let alpha = a.map_or(1.0, |a| a[i]);
@@ -158,5 +164,22 @@ mod tests {
         let err = specular_pixels(&layers[..2], "pot", 2).expect_err("no local layer");
         assert!(format!("{err:#}").contains("pot.specular_local"), "{err:#}");
         assert!(specular_pixels(&layers, "pot", 3).is_err(), "pixel count");
+    }
+
+    #[test]
+    fn a_channel_shorter_than_the_image_is_an_error_not_a_panic() {
+        for short in ["G", "B", "A"] {
+            let channels: Vec<(String, Vec<f32>)> = ["R", "G", "B", "A"]
+                .iter()
+                .map(|c| (c.to_string(), vec![1.0; if *c == short { 1 } else { 2 }]))
+                .collect();
+            let layers = vec![("pot.specular_local".to_string(), channels)];
+            let err =
+                target_pixels(&layers, "pot.specular_local", true, 2).expect_err("short channel");
+            assert!(
+                format!("{err:#}").contains(&format!("channel {short}")),
+                "{err:#}"
+            );
+        }
     }
 }
