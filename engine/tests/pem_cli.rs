@@ -174,6 +174,17 @@ fn assert_bench_rows(scene: &Path, out: &Path) {
     );
     assert!(i > 0.0 && a > 0.0 && (r - i / a).abs() < 1e-9, "{room}");
     assert!(text(&o).contains("room pass: inferred"), "{}", text(&o));
+    // Each row's passes printed with their device times: the default's
+    // three passes on its own line.
+    let printed = text(&o);
+    let default_line = printed
+        .lines()
+        .skip_while(|l| !l.starts_with("device ms per pass"))
+        .find(|l| l.starts_with("default ") && l.contains("| outside"))
+        .unwrap_or_else(|| panic!("no pass line for the default row: {printed}"));
+    for pass in ["pem_gbuffer", "room", "pem_composite"] {
+        assert!(default_line.contains(&format!("{pass} ")), "{default_line}");
+    }
 }
 
 /// Every mode and knob plays cleanly (sphere PEMs are inferred on first

@@ -134,10 +134,33 @@ impl BenchReport {
                 last.map_or("-".into(), |v| format!("{v:.2}"))
             );
         }
+        out += &self.pass_lines(name_w);
         if let Some(r) = &self.room_pass {
             out += &format!(
                 "room pass: inferred {:.2} ms, analytic {:.2} ms ({:.3}x the analytic)\n",
                 r.inferred_ms, r.analytic_ms, r.ratio
+            );
+        }
+        out
+    }
+
+    /// Where each row's frame goes: every pass's median device time in
+    /// recording order, then the time between them (submit to fence less
+    /// the passes: barriers, clears, the queue's own work).
+    fn pass_lines(&self, name_w: usize) -> String {
+        let mut out = "device ms per pass (medians), then outside the passes:\n".to_string();
+        for r in &self.rows {
+            let passes: Vec<String> = r
+                .report
+                .passes
+                .iter()
+                .map(|p| format!("{} {:.2}", p.name, p.gpu_ms_median))
+                .collect();
+            out += &format!(
+                "{:<name_w$} {}  | outside {:.2}\n",
+                r.name,
+                passes.join("  "),
+                r.report.cpu.outside_passes_ms_median
             );
         }
         out
