@@ -157,7 +157,7 @@ impl BenchReport {
                 .map(|p| format!("{} {:.2}", p.name, p.gpu_ms_median))
                 .collect();
             out += &format!(
-                "{:<name_w$} {}  | outside {:.2}\n",
+                "{:<name_w$}  {}  | outside {:.2}\n",
                 r.name,
                 passes.join("  "),
                 r.report.cpu.outside_passes_ms_median
