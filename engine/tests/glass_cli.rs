@@ -161,6 +161,13 @@ fn assert_glass_bench(scene: &str, out: &Path) {
     assert!(!passes(6).contains(&"glass_gbuffer"), "{:?}", passes(6));
     assert!(log.contains("glass ms"), "{log}");
     assert!(bench.get("covered_pixels").is_none(), "{bench}");
+    // Where each row's frame goes, as a picture: a bar per row.
+    let chart = image::open(out.join("bench.png")).expect("bench.png");
+    assert!(
+        chart.height() >= 120 + 34 * rows.len() as u32,
+        "{}",
+        chart.height()
+    );
     // The rows set τ and the shells themselves: flags that would are refused.
     let flagged = engine(&[
         "bench",

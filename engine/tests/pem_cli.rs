@@ -185,6 +185,13 @@ fn assert_bench_rows(scene: &Path, out: &Path) {
     for pass in ["pem_gbuffer", "room", "pem_composite"] {
         assert!(default_line.contains(&format!("{pass} ")), "{default_line}");
     }
+    // The same as a picture: a bar per row.
+    let chart = image::open(out.join("bench.png")).expect("bench.png");
+    assert!(
+        chart.height() >= 120 + 34 * rows.len() as u32,
+        "{}",
+        chart.height()
+    );
 }
 
 /// Every mode and knob plays cleanly (sphere PEMs are inferred on first

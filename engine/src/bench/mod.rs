@@ -132,7 +132,7 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
         .unwrap_or_else(|| between_rings(&scene.orbit));
     if scene.objects.iter().any(|o| o.glass.is_some()) {
         let report = glass::bench(&ctx, &device, opts, renderer, elevation)?;
-        crate::util::files::write_json(&out.join("bench.json"), &report)?;
+        write(&out, &report)?;
         return Ok(report);
     }
     // Before any compiling: the variants draw reflectors' maps.
@@ -183,8 +183,14 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
         rows,
         room_pass,
     };
-    crate::util::files::write_json(&out.join("bench.json"), &report)?;
+    write(&out, &report)?;
     Ok(report)
+}
+
+/// `bench.json`, and `bench.png`: where each row's frame goes.
+fn write(out: &std::path::Path, report: &BenchReport) -> Result<()> {
+    crate::util::files::write_json(&out.join("bench.json"), report)?;
+    crate::eval::bars::stacked_bars(&out.join("bench.png"), &report.chart())
 }
 
 /// One renderer per PEM variant (switching settings re-creates slots),

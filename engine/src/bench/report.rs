@@ -2,6 +2,7 @@
 //! ratios to the bare and static-EM frames, the compositing overdraw or
 //! the glass passes' time), the room passes compared, and the table.
 
+use crate::eval::bars::{Bar, BarChart};
 use crate::perf::{PassReport, PerfReport};
 use serde::Serialize;
 
@@ -142,6 +143,40 @@ impl BenchReport {
             );
         }
         out
+    }
+
+    /// The picture of [`Self::pass_lines`]: a bar per row, its passes'
+    /// median device times, the time outside them and the CPU's before
+    /// the submit (frame less submit-to-fence), so a bar is about its frame.
+    pub fn chart(&self) -> BarChart {
+        let bars = self
+            .rows
+            .iter()
+            .map(|r| {
+                let cpu = &r.report.cpu;
+                let mut segments: Vec<(String, f64)> = r
+                    .report
+                    .passes
+                    .iter()
+                    .map(|p| (p.name.clone(), p.gpu_ms_median))
+                    .collect();
+                segments.push(("outside the passes".into(), cpu.outside_passes_ms_median));
+                let before = r.frame_ms_median - cpu.submit_to_fence_ms_median;
+                segments.push(("CPU before the submit".into(), before.max(0.0)));
+                Bar {
+                    label: format!("{} ({:.1} ms)", r.name, r.frame_ms_median),
+                    segments,
+                }
+            })
+            .collect();
+        BarChart {
+            title: format!(
+                "engine bench: where each frame goes ({} views at {:+.1}°, medians)",
+                self.views, self.elevation_deg
+            ),
+            x_label: "ms per frame".into(),
+            bars,
+        }
     }
 
     /// Where each row's frame goes: every pass's median device time in

@@ -3,6 +3,7 @@
 //! the table, its chart and pictures, and the driver; and the relighting
 //! measurement (`engine relight`, and its rows in the table).
 
+pub mod bars;
 pub mod chart;
 pub mod metrics;
 pub mod noise;

@@ -18,12 +18,12 @@ use std::sync::OnceLock;
 /// DejaVu Sans 2.37 (Debian's fonts-dejavu-core); licence beside it.
 const FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
 /// The family plotters asks for by default, so every text uses [`FONT`].
-const FAMILY: &str = "sans-serif";
+pub(super) const FAMILY: &str = "sans-serif";
 const MAX_SIDE: u32 = 8192;
 const MIN_SIDE: u32 = 200;
 
 /// Tableau 10: distinct, colour-blind-friendlier than plotters' palettes.
-const COLORS: [RGBColor; 10] = [
+pub(super) const COLORS: [RGBColor; 10] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),
@@ -156,15 +156,20 @@ pub fn xy_chart(path: &Path, spec: &ChartSpec) -> Result<()> {
         )
     };
     drawn.with_context(|| format!("drawing {}", path.display()))?;
+    encode_png(path, &rgb, (w, h))
+}
+
+/// Encodes an RGB buffer of `(w, h)` as PNG into `path`, atomically.
+pub(super) fn encode_png(path: &Path, rgb: &[u8], (w, h): (u32, u32)) -> Result<()> {
     let mut png = Vec::new();
     image::codecs::png::PngEncoder::new(&mut png)
-        .write_image(&rgb, w, h, image::ExtendedColorType::Rgb8)
+        .write_image(rgb, w, h, image::ExtendedColorType::Rgb8)
         .with_context(|| format!("encoding {}", path.display()))?;
     write_atomically(path, &png)
 }
 
 /// Registers [`FONT`] with plotters once per process.
-fn register_font() -> Result<()> {
+pub(super) fn register_font() -> Result<()> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
     let ok = *REGISTERED
         .get_or_init(|| plotters::style::register_font(FAMILY, FontStyle::Normal, FONT).is_ok());
