@@ -158,9 +158,14 @@ impl BenchReport {
                     .report
                     .passes
                     .iter()
-                    .map(|p| (p.name.clone(), p.gpu_ms_median))
+                    // A device that reported a negative or NaN time would
+                    // otherwise cost the picture of an hour's measuring.
+                    .map(|p| (p.name.clone(), p.gpu_ms_median.max(0.0)))
                     .collect();
-                segments.push(("outside the passes".into(), cpu.outside_passes_ms_median));
+                segments.push((
+                    "outside the passes".into(),
+                    cpu.outside_passes_ms_median.max(0.0),
+                ));
                 let before = r.frame_ms_median - cpu.submit_to_fence_ms_median;
                 segments.push(("CPU before the submit".into(), before.max(0.0)));
                 Bar {
@@ -262,6 +267,66 @@ mod tests {
             gpu_ms_max: ms,
             fragment_invocations: 0,
         }
+    }
+
+    /// A row whose frames took `frame_ms`, `submit_ms` of it from submit to
+    /// fence, in `passes`.
+    fn row(name: &str, frame_ms: f64, submit_ms: f64, passes: &[(&str, f64)]) -> PerfReport {
+        let mut log = crate::perf::PerfLog::default();
+        let timings: Vec<_> = passes
+            .iter()
+            .map(|&(name, gpu_ms)| crate::graph::PassTiming {
+                name: name.into(),
+                sample: crate::backend::PassSample {
+                    gpu_ms,
+                    fragment_invocations: 0,
+                },
+            })
+            .collect();
+        let cpu = crate::renderer::CpuTimes {
+            submit_ms,
+            ..Default::default()
+        };
+        log.record(frame_ms, &timings, cpu);
+        log.report("d", "s", name, [4, 4], &[])
+    }
+
+    #[test]
+    fn a_bar_per_row_sums_to_its_frame_and_every_pass_is_printed() {
+        let reports = vec![
+            row("bare", 10.0, 9.5, &[("bare", 8.0)]),
+            row("static-em", 12.0, 12.0, &[("room", 5.0), ("mirror", 5.0)]),
+            // A device time that went wrong draws as nothing, not an error.
+            row(
+                "default",
+                16.0,
+                15.0,
+                &[("pem_gbuffer", 4.0), ("room", f64::NAN)],
+            ),
+        ];
+        let report = BenchReport {
+            kind: BenchKind::Reflectors,
+            views: 8,
+            elevation_deg: 5.0,
+            frames_per_view: 1,
+            covered_pixels: Some(100),
+            moving_covered_pixels: Some(100),
+            rows: rows(reports, 100.0, (0, 100.0)),
+            room_pass: None,
+        };
+        let chart = report.chart();
+        chart.validate().expect("drawable");
+        let sum = |i: usize| chart.bars[i].segments.iter().map(|(_, v)| v).sum::<f64>();
+        // Passes + outside (9.5 − 8) + before the submit (10 − 9.5).
+        assert!((sum(0) - 10.0).abs() < 1e-9, "{:?}", chart.bars[0]);
+        assert!((sum(1) - 12.0).abs() < 1e-9, "{:?}", chart.bars[1]);
+        assert!(chart.bars[2].label.starts_with("default (16.0 ms)"));
+        let table = report.table();
+        assert!(table.contains("pem_gbuffer 4.00"), "{table}");
+        assert!(
+            table.contains("room 5.00  mirror 5.00  | outside 2.00"),
+            "{table}"
+        );
     }
 
     #[test]
