@@ -101,6 +101,7 @@ fn draw(rgb: &mut [u8], size: (u32, u32), chart: &BarChart, names: &[&str]) -> R
         .label_style((FAMILY, 14))
         .axis_desc_style((FAMILY, 16))
         .light_line_style(RGBColor(235, 235, 235))
+        .max_light_lines(4)
         .draw()?;
     let color = |name: &str| palette(names.iter().position(|n| *n == name).unwrap_or(0));
     for (i, bar) in chart.bars.iter().enumerate() {
