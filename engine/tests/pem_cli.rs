@@ -185,7 +185,13 @@ fn assert_bench_rows(scene: &Path, out: &Path) {
     for pass in ["pem_gbuffer", "room", "pem_composite"] {
         assert!(default_line.contains(&format!("{pass} ")), "{default_line}");
     }
-    // The same as a picture: a bar per row.
+    // The same as a picture: a bar per row, named at the table's end.
+    assert!(
+        printed
+            .lines()
+            .any(|l| l.starts_with("wrote ") && l.ends_with("bench.png")),
+        "{printed}"
+    );
     let chart = image::open(out.join("bench.png")).expect("bench.png");
     assert!(
         chart.height() >= 120 + 34 * rows.len() as u32,

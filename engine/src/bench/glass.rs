@@ -137,6 +137,7 @@ pub fn bench(
         moving_covered_pixels: None,
         rows: rows(reports, 0.0, (0, 0.0)),
         room_pass: None,
+        written: Vec::new(),
     })
 }
 

@@ -131,8 +131,8 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
         .elevation_deg
         .unwrap_or_else(|| between_rings(&scene.orbit));
     if scene.objects.iter().any(|o| o.glass.is_some()) {
-        let report = glass::bench(&ctx, &device, opts, renderer, elevation)?;
-        write(&out, &report)?;
+        let mut report = glass::bench(&ctx, &device, opts, renderer, elevation)?;
+        write(&out, &mut report)?;
         return Ok(report);
     }
     // Before any compiling: the variants draw reflectors' maps.
@@ -173,7 +173,7 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
         .map(|r| (r.name.as_str(), &r.report.passes[..]))
         .collect();
     let room_pass = room_pass(&passes);
-    let report = BenchReport {
+    let mut report = BenchReport {
         kind: BenchKind::Reflectors,
         views,
         elevation_deg: elevation,
@@ -182,15 +182,19 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
         moving_covered_pixels: Some(moving_covered as u64),
         rows,
         room_pass,
+        written: Vec::new(),
     };
-    write(&out, &report)?;
+    write(&out, &mut report)?;
     Ok(report)
 }
 
 /// `bench.json`, and `bench.png`: where each row's frame goes.
-fn write(out: &std::path::Path, report: &BenchReport) -> Result<()> {
-    crate::util::files::write_json(&out.join("bench.json"), report)?;
-    crate::eval::bars::stacked_bars(&out.join("bench.png"), &report.chart())
+fn write(out: &std::path::Path, report: &mut BenchReport) -> Result<()> {
+    let (json, png) = (out.join("bench.json"), out.join("bench.png"));
+    crate::util::files::write_json(&json, &*report)?;
+    crate::eval::bars::stacked_bars(&png, &report.chart())?;
+    report.written = vec![json, png];
+    Ok(())
 }
 
 /// One renderer per PEM variant (switching settings re-creates slots),

@@ -56,6 +56,10 @@ pub struct BenchReport {
     /// The inferred room pass against the analytic one, from the default
     /// rows with each room (the whole-frame issue's cost goal).
     pub room_pass: Option<RoomPass>,
+    /// The files the bench wrote (`bench.json`, `bench.png`), named at the
+    /// table's end.
+    #[serde(skip)]
+    pub written: Vec<std::path::PathBuf>,
 }
 
 /// One run's room passes, median GPU times.
@@ -141,6 +145,14 @@ impl BenchReport {
                 "room pass: inferred {:.2} ms, analytic {:.2} ms ({:.3}x the analytic)\n",
                 r.inferred_ms, r.analytic_ms, r.ratio
             );
+        }
+        let written: Vec<String> = self
+            .written
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect();
+        if !written.is_empty() {
+            out += &format!("wrote {}\n", written.join(" and "));
         }
         out
     }
@@ -313,6 +325,7 @@ mod tests {
             moving_covered_pixels: Some(100),
             rows: rows(reports, 100.0, (0, 100.0)),
             room_pass: None,
+            written: Vec::new(),
         };
         let chart = report.chart();
         chart.validate().expect("drawable");
