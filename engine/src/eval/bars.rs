@@ -108,20 +108,18 @@ fn draw(rgb: &mut [u8], size: (u32, u32), chart: &BarChart, names: &[&str]) -> R
         let y = n - 1 - i as i32;
         let mut x = 0.0;
         let rects = bar.segments.iter().map(|(name, v)| {
-            let r = Rectangle::new(
+            let mut r = Rectangle::new(
                 [
                     (x, SegmentValue::Exact(y)),
                     (x + v, SegmentValue::Exact(y + 1)),
                 ],
                 color(name).filled(),
             );
+            r.set_margin(4, 4, 0, 0); // a gap between bars
             x += v;
             r
         });
-        c.draw_series(rects.map(|mut r| {
-            r.set_margin(4, 4, 0, 0);
-            r
-        }))?;
+        c.draw_series(rects)?;
     }
     for &name in names {
         let col = color(name);
