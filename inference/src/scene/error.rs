@@ -15,6 +15,9 @@ pub enum SceneError {
     /// The scene file does not exist; `available` lists the scenes beside where it was sought.
     #[error("{}: no such scene file (available: {available})", path.display())]
     NoScene { path: PathBuf, available: String },
+    /// A folder was given where a scene file was expected.
+    #[error("{}: a folder, expected a .toml scene file (scenes in it: {available})", path.display())]
+    Folder { path: PathBuf, available: String },
     /// TOML syntax or type error; `toml`'s message carries line and column.
     #[error("{}: {cause}", path.display())]
     Toml {

@@ -160,6 +160,12 @@ impl Scene {
     pub fn text(name_or_path: &str) -> Result<(String, PathBuf), SceneError> {
         let p = Path::new(name_or_path);
         let is_path = p.extension().is_some_and(|e| e == "toml") || p.components().count() > 1;
+        if p.is_dir() && (is_path || shipped(name_or_path).is_none()) {
+            return Err(SceneError::Folder {
+                path: p.to_owned(),
+                available: available_scenes(&p.join("scene.toml")),
+            });
+        }
         if !is_path {
             let Some(text) = shipped(name_or_path) else {
                 return Err(SceneError::NoScene {
@@ -224,10 +230,18 @@ impl Scene {
     }
 }
 
+/// The folder a file path lies in: "." for a bare file name (whose
+/// `parent()` is empty, which `read_dir` refuses).
+fn folder_of(path: &Path) -> &Path {
+    path.parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
+}
+
 /// Stems of the `.toml` files beside `path` and the built-in scenes, for
 /// "did you mean" messages.
 fn available_scenes(path: &Path) -> String {
-    let dir = path.parent().unwrap_or(Path::new("."));
+    let dir = folder_of(path);
     let mut names: Vec<String> = std::fs::read_dir(dir)
         .into_iter()
         .flatten()

@@ -63,6 +63,7 @@ fn bad_lines_name_the_field() {
         "azimuths_deg = [0.0, inf]\n",
         "azimuths_deg = [0.0, 10.0]\nsamples = 2\n",
         "azimuths_deg = [0.0, 10.0]\nstep_deg = 1.0\n",
+        "azimuths_deg = [0.0, 180.0, 360.0]\n",
     ] {
         let e = with_lines(bad).expect_err(bad).to_string();
         assert!(
@@ -70,6 +71,44 @@ fn bad_lines_name_the_field() {
             "{bad}: {e}"
         );
     }
+}
+
+#[test]
+fn even_lines_increase_within_one_turn() {
+    for bad in [
+        "start_deg = 0.0\nstep_deg = 0.0\nsamples = 100\n",
+        "start_deg = 0.0\nstep_deg = -1.0\nsamples = 100\n",
+        "start_deg = 0.0\nstep_deg = 10.0\nsamples = 100\n",
+        "start_deg = 0.0\nstep_deg = 3.6\nsamples = 101\n",
+    ] {
+        let e = with_lines(bad).expect_err(bad).to_string();
+        assert!(
+            e.contains("orbit.step_deg") && e.contains("less than 360"),
+            "{bad}: {e}"
+        );
+    }
+    for good in [
+        "start_deg = 0.0\nstep_deg = 3.6\nsamples = 100\n",
+        // One sample has no step to check.
+        "start_deg = 0.0\nstep_deg = 0.0\nsamples = 1\n",
+    ] {
+        assert!(with_lines(good).is_ok(), "{good}");
+    }
+}
+
+#[test]
+fn an_eye_outside_the_room_names_the_sample() {
+    let text = super::shipped::shipped("teapot").expect("shipped teapot");
+    let e = edited(text, "height = 0.7 ", "height = 100.0 ").expect_err("eye above the room");
+    let e = e.to_string();
+    assert!(
+        e.contains("orbit") && e.contains("sample 0's eye") && e.contains("outside the room"),
+        "{e}"
+    );
+    // An orbit 3.9 m up stays under the 4 m ceiling, but the ring 10°
+    // above it (samples 100 on) rises through it.
+    let e = edited(text, "height = 0.7 ", "height = 3.9 ").expect_err("a ring above the room");
+    assert!(e.to_string().contains("sample 100's eye"), "{e}");
 }
 
 const EVEN_RINGS: &str = "rings = 4\nring_step_deg = 10.0\n";

@@ -330,6 +330,14 @@ fn missing_scene_file_is_named() {
         e.contains("available: other; built-in scenes: teapot"),
         "{e}"
     );
+    let e = Scene::load(&dir.path().to_string_lossy()).expect_err("a folder");
+    let e = e.to_string();
+    assert!(
+        e.contains("a folder, expected a .toml scene file (scenes in it: other;"),
+        "{e}"
+    );
+    assert_eq!(super::folder_of(Path::new("glass.toml")), Path::new("."));
+    assert_eq!(super::folder_of(Path::new("a/glass.toml")), Path::new("a"));
     let e = Scene::load("no_such_scene_name").expect_err("missing");
     let e = e.to_string();
     assert!(e.contains("no_such_scene_name: no such scene"), "{e}");

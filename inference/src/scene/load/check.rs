@@ -67,4 +67,28 @@ impl Loader<'_> {
         }
         Ok(x)
     }
+
+    /// Every viewpoint sample's eye lies inside the room box: from outside,
+    /// the room's walls (drawn from inside) would hide the scene.
+    pub(super) fn check_eyes_in_room(
+        &self,
+        orbit: &crate::scene::Orbit,
+        (min, max): (Vec3, Vec3),
+    ) -> Result<(), SceneError> {
+        for k in 0..orbit.sample_count() {
+            let eye = orbit.sample_eye(k)?;
+            if !(eye.cmpgt(min).all() && eye.cmplt(max).all()) {
+                return Err(self.err(
+                    "orbit",
+                    format!(
+                        "sample {k}'s eye at [{:.3}, {:.3}, {:.3}] lies outside the room \
+                         [{:.3}, {:.3}, {:.3}]..[{:.3}, {:.3}, {:.3}] (expected center, radius, \
+                         height and rings that keep every eye inside it)",
+                        eye.x, eye.y, eye.z, min.x, min.y, min.z, max.x, max.y, max.z
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
 }

@@ -56,6 +56,7 @@ impl Loader<'_> {
             |field: &str, wanted: &str| self.material_index(&declared.names, field, wanted);
 
         let room = self.room_box(&file.room)?;
+        self.check_eyes_in_room(&orbit, room)?;
         let mut parts = SceneParts {
             material_names: declared.names.clone(),
             materials: declared.materials.clone(),
@@ -289,9 +290,22 @@ impl Loader<'_> {
                     format!("{samples} (expected 1 to {MAX_SAMPLES})"),
                 ));
             }
+            let step = self.finite("orbit.step_deg", o.step_deg.unwrap_or(1.0))?;
+            // Lines increase and stay within one turn (the blend brackets a
+            // view between increasing azimuths); one sample needs no step.
+            let span = (samples - 1) as f32 * step;
+            if samples > 1 && !(step > 0.0 && span < 360.0) {
+                return Err(self.err(
+                    "orbit.step_deg",
+                    format!(
+                        "{step} with {samples} samples (expected a step above 0 whose lines \
+                         span less than 360°, here {span}°)"
+                    ),
+                ));
+            }
             return Ok(AzimuthLines {
                 start_deg: self.finite("orbit.start_deg", o.start_deg.unwrap_or(0.0))?,
-                step_deg: self.finite("orbit.step_deg", o.step_deg.unwrap_or(1.0))?,
+                step_deg: step,
                 samples,
                 azimuths: None,
             });
@@ -317,6 +331,12 @@ impl Loader<'_> {
             ));
         }
         let (first, last) = (list[0], list[list.len() - 1]);
+        if last - first >= 360.0 {
+            return Err(self.err(
+                "orbit.azimuths_deg",
+                format!("{first}° to {last}° (expected lines spanning less than 360°: one turn)"),
+            ));
+        }
         Ok(AzimuthLines {
             start_deg: first,
             step_deg: if n > 1 {
