@@ -124,6 +124,18 @@ fn help_documents_every_flag() {
     ] {
         assert!(text.contains(flag), "--help lacks {flag}");
     }
+    // Every built-in scene is named where --scene is described, in every
+    // command that takes one.
+    for cmd in [&["--help"][..], &["bench", "--help"], &["eval", "--help"]] {
+        let o = engine(cmd, &[]);
+        let text = String::from_utf8_lossy(&o.stdout);
+        for (name, _) in inference::scene::SHIPPED {
+            assert!(
+                text.contains(name),
+                "{cmd:?} lacks the built-in scene {name}"
+            );
+        }
+    }
 }
 
 #[test]
@@ -304,6 +316,120 @@ fn bad_angles_and_tau_fail_before_any_work() {
         // Refused by the parser: nothing traced, compiled or written.
         assert!(!out.exists(), "{args:?} wrote {}", out.display());
     }
+}
+
+/// Mistakes found before any tracing, compiling or writing: flags that
+/// cannot go together or out of range, a report whose folder is missing,
+/// a scene placement cannot refine.
+#[test]
+fn mistakes_are_refused_before_any_work_and_leave_nothing() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out");
+    let out_s = out.to_str().expect("utf-8");
+    let json = dir.path().join("missing").join("r.json");
+    let json_s = json.to_str().expect("utf-8");
+    for (args, needles) in [
+        (
+            vec![
+                "trace",
+                "--sample",
+                "0",
+                "--elevation",
+                "10",
+                "--out",
+                out_s,
+            ],
+            vec!["--elevation", "needs --view-angle"],
+        ),
+        (
+            vec!["relight", "--grid", "0x0", "--out", out_s],
+            vec!["RINGSxAZIMUTHS", "azimuths 1 to 128"],
+        ),
+        (
+            vec!["relight", "--ratio", "0", "--out", out_s],
+            vec!["--ratio 0", "compression ratio"],
+        ),
+        (
+            vec!["relight", "--json", json_s, "--out", out_s],
+            vec!["r.json", "does not exist"],
+        ),
+        (
+            vec!["encode", "--bytes", "0", "--out", json_s],
+            vec!["--bytes 0", "above 0 bytes"],
+        ),
+        (
+            vec!["encode", "--out", json_s],
+            vec!["r.json", "does not exist"],
+        ),
+        (
+            vec!["place", "--scene", "teapot", "--data", out_s],
+            vec!["ring_line_every = 4", "rings = 1"],
+        ),
+        (
+            vec![
+                "trace",
+                "--sample",
+                "0",
+                "--threads",
+                "100000",
+                "--out",
+                out_s,
+            ],
+            vec!["1 to 256"],
+        ),
+        (vec!["eval", "--spp", "0", "--out", out_s], vec!["1..=4096"]),
+        // A negative number reaches its flag's parser, which names the flag.
+        (
+            vec!["bench", "--frames", "-1", "--out", out_s],
+            vec!["'--frames <FRAMES>'", "1..=100000"],
+        ),
+        (
+            vec!["trace", "--sample", "-1", "--out", out_s],
+            vec!["'--sample <SAMPLE>'", "0..4096"],
+        ),
+    ] {
+        let o = engine(&args, &[]);
+        let err = stderr(&o);
+        assert!(
+            !o.status.success() && !err.contains("panicked"),
+            "{args:?}: {err}"
+        );
+        for n in needles {
+            assert!(err.contains(n), "{args:?} lacks {n:?}: {err}");
+        }
+        assert!(!out.exists(), "{args:?} wrote {}", out.display());
+    }
+}
+
+/// "lavapipe", the default the help names, finds Mesa's llvmpipe device.
+#[test]
+fn the_device_the_help_names_is_found() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out");
+    let out_s = out.to_str().expect("utf-8");
+    let args = [
+        "--device",
+        "lavapipe",
+        "--frames",
+        "1",
+        "--size",
+        "96x64",
+        "--warmup",
+        "1",
+        "--mode",
+        "static-em",
+        "--no-capture",
+        "--validate",
+        "--out",
+        out_s,
+    ];
+    let o = engine(&args, &[]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout.lines().any(|l| l == "validation messages: 0"),
+        "{stdout}"
+    );
 }
 
 /// A scene with neither a reflector's maps nor glass has nothing to bench:

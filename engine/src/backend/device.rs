@@ -260,7 +260,7 @@ fn pick_physical(
     let chosen = match &options.device_name {
         Some(wanted) => candidates
             .iter()
-            .find(|c| c.2.to_lowercase().contains(&wanted.to_lowercase()))
+            .find(|c| named_like(&c.2, wanted))
             .ok_or_else(|| {
                 GpuError::NoDevice(format!(" named like {wanted:?} (available: {names:?})"))
             })?,
@@ -271,6 +271,14 @@ fn pick_physical(
             .ok_or_else(|| GpuError::NoDevice(String::new()))?,
     };
     Ok(chosen.clone())
+}
+
+/// Whether a device called `name` answers to `wanted` (a case-insensitive
+/// substring). Mesa's lavapipe calls itself "llvmpipe (LLVM …)", so
+/// "lavapipe" — the name the help gives as the default — answers too.
+fn named_like(name: &str, wanted: &str) -> bool {
+    let (name, wanted) = (name.to_lowercase(), wanted.trim().to_lowercase());
+    name.contains(&wanted) || ("lavapipe".contains(&wanted) && name.contains("llvmpipe"))
 }
 
 /// Fails, naming the first one missing, unless `physical` supports every
@@ -332,4 +340,20 @@ fn create_logical_device(
         .push_next(&mut features13);
     // SAFETY: every feature enabled was checked as supported (require_features).
     unsafe { instance.create_device(physical, &info, None) }.vk("vkCreateDevice")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::named_like;
+
+    #[test]
+    fn lavapipe_answers_to_its_own_name_and_to_llvmpipe() {
+        let lavapipe = "llvmpipe (LLVM 15.0.6, 256 bits)";
+        for wanted in ["lavapipe", "LavaPipe", " lavapipe ", "llvmpipe", "LLVM"] {
+            assert!(named_like(lavapipe, wanted), "{wanted:?}");
+        }
+        assert!(!named_like(lavapipe, "radv"));
+        assert!(!named_like("AMD Radeon RX 6600 (RADV NAVI23)", "lavapipe"));
+        assert!(named_like("AMD Radeon RX 6600 (RADV NAVI23)", "radv"));
+    }
 }

@@ -131,21 +131,18 @@ impl Planned {
 /// Places the samples of `place`'s scene (compiled there densely first if
 /// missing); writes the report and chart; returns the printed summary.
 pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
+    // Checked before the session claims a folder or compiles anything.
+    let mut planned = {
+        let scene = inference::scene::Scene::load(&place.scene)?;
+        check_dense(&scene)?;
+        Planned::new(&scene, opts)?
+    };
     let Session {
         scene,
         out: data,
         mut renderer,
         ..
     } = Session::open(place)?;
-    if !scene.orbit.is_tensor() {
-        bail!(
-            "{}: orbit.ring_line_every = {}: engine place refines a full grid of lines × \
-             rings (expected ring_line_every = 1 in the dense scene it starts from)",
-            scene.source.display(),
-            scene.orbit.ring_line_every
-        );
-    }
-    let mut planned = Planned::new(&scene, opts)?;
     let out = opts.out.clone().unwrap_or_else(|| data.join("place"));
     crate::util::files::claim_dir(&out)?;
     let reflectors = crate::eval::reflector_names(&scene)?;
@@ -190,6 +187,23 @@ pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
     report.write(&out)?;
     let scene_file = placed_scene(&place.scene, &scene, &report, &out);
     Ok(report.summary(&out) + &scene_file)
+}
+
+/// Placement refines a full grid of lines × rings: a scene whose rings
+/// keep only every n-th line (the default teapot's) is refused, saying
+/// how to make a dense one.
+fn check_dense(scene: &inference::scene::Scene) -> Result<()> {
+    if scene.orbit.is_tensor() {
+        return Ok(());
+    }
+    bail!(
+        "{}: orbit.ring_line_every = {}: engine place refines a full grid of lines × rings \
+         (expected ring_line_every = 1 in the dense scene it starts from; for the orbit's lines \
+         alone, a copy of the scene with `rings = 1`, or with `ring_line_every = 1` for the \
+         whole grid)",
+        scene.source.display(),
+        scene.orbit.ring_line_every
+    )
 }
 
 /// One axis's lines, refined, and an even placement of as many.

@@ -77,6 +77,14 @@ fn decode(container: &Container, like: &ShMaps) -> Result<ShMaps> {
     Ok(maps)
 }
 
+/// Refuses a ratio the SH maps cannot be stored at, before any tracing.
+pub fn check_ratio(ratio: f64) -> Result<()> {
+    if !(1.0..=100_000.0).contains(&ratio) {
+        bail!("--ratio {ratio}: expected a compression ratio from 1 to 100000");
+    }
+    Ok(())
+}
+
 /// `maps` (cached raw under `raw_path` with key `raw_key`) encoded at
 /// `ratio`:1 and decoded: read from the cached container when its key
 /// matches, else encoded and cached.
@@ -86,9 +94,7 @@ pub fn compressed(
     raw_key: &Key,
     ratio: f64,
 ) -> Result<CompressedMaps> {
-    if !(1.0..=100_000.0).contains(&ratio) {
-        bail!("--ratio {ratio}: expected a compression ratio from 1 to 100000");
-    }
+    check_ratio(ratio)?;
     let stem = raw_path
         .file_stem()
         .and_then(|s| s.to_str())

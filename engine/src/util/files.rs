@@ -65,6 +65,12 @@ pub fn check_overwrite(path: &Path) -> Result<()> {
 /// that writes one named file at the end of long work fails before it.
 pub fn check_output_file(path: &Path) -> Result<()> {
     check_overwrite(path)?;
+    check_folder_exists(path)
+}
+
+/// The folder the file `path` goes in exists (a command that writes one
+/// named file at the end of long work checks it before).
+pub fn check_folder_exists(path: &Path) -> Result<()> {
     let folder = path
         .parent()
         .filter(|p| !p.as_os_str().is_empty())

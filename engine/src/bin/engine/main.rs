@@ -3,13 +3,12 @@
 mod cli;
 mod cmd;
 
-use clap::Parser;
 use cli::{Cli, Command};
 use engine::backend::validation;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = Cli::parse_args();
     let (result, validate) = match &cli.command {
         None => (cmd::play::run(&cli.play), cli.play.validate),
         Some(Command::Bench(args)) => (cmd::bench::run(args), args.validate),

@@ -10,8 +10,8 @@ use std::path::PathBuf;
 /// offered here to be silently ignored).
 #[derive(Args, Debug, Clone)]
 pub struct BenchArgs {
-    /// A built-in scene's name (teapot, glass) or the path of a .toml scene
-    /// file.
+    /// A built-in scene's name (teapot, teapot_split, teapot_rings, glass,
+    /// glass_near, brass) or the path of a .toml scene file.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
     /// Timed frames per view and variant (8 views; at most 100,000).
@@ -36,7 +36,7 @@ pub struct BenchArgs {
     /// `validation messages: N` and fails when N > 0.
     #[arg(long)]
     pub validate: bool,
-    /// Vulkan device to use (substring of its name) [default: lavapipe].
+    /// Vulkan device to use (substring of its name; "lavapipe" finds llvmpipe) [default: lavapipe].
     #[arg(long, env = "ENGINE_DEVICE")]
     pub device: Option<String>,
     /// Untimed frames first per view and variant (lavapipe compiles

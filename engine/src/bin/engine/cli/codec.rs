@@ -63,7 +63,7 @@ pub struct CodecReportArgs {
     /// Turn the Khronos validation layer on for the rendered frames.
     #[arg(long)]
     pub validate: bool,
-    /// Vulkan device to use (substring of its name) [default: lavapipe].
+    /// Vulkan device to use (substring of its name; "lavapipe" finds llvmpipe) [default: lavapipe].
     #[arg(long, env = "ENGINE_DEVICE")]
     pub device: Option<String>,
 }

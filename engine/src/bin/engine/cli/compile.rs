@@ -6,7 +6,8 @@ use std::path::PathBuf;
 
 #[derive(Args, Debug, Clone)]
 pub struct CompileArgs {
-    /// A built-in scene's name (teapot) or the path of a .toml scene file.
+    /// A built-in scene's name (teapot, teapot_split, teapot_rings, glass,
+    /// glass_near, brass) or the path of a .toml scene file.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
     /// Where the compiled files go (and shards' files are merged from)
@@ -33,7 +34,7 @@ pub struct CompileArgs {
     /// today's inputs (writes nothing; fails when stale).
     #[arg(long, conflicts_with_all = ["shard", "merge", "ship"])]
     pub check_shipped: bool,
-    /// Vulkan device to use (substring of its name) [default: lavapipe].
+    /// Vulkan device to use (substring of its name; "lavapipe" finds llvmpipe) [default: lavapipe].
     #[arg(long, env = "ENGINE_DEVICE")]
     pub device: Option<String>,
     /// Turn the Khronos validation layer on for the probe renders.

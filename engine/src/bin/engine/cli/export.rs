@@ -9,7 +9,8 @@ pub struct ExportArgs {
     /// when it holds files the engine did not write).
     #[arg(long)]
     pub ktx2: PathBuf,
-    /// A built-in scene's name (teapot) or the path of a .toml scene file.
+    /// A built-in scene's name (teapot, teapot_split, teapot_rings, glass,
+    /// glass_near, brass) or the path of a .toml scene file.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
     /// Where the maps were inferred [default: out/<scene>/infer, where the main job puts them].

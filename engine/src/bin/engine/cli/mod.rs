@@ -7,8 +7,8 @@ use engine::options::{LightPathOptions, Mode, PlayOptions, RunPlace};
 use std::path::PathBuf;
 
 pub use parse::{
-    parse_degrees, parse_elevation, parse_ratio, parse_size, parse_tau, parse_view_blend,
-    parse_weight,
+    parse_degrees, parse_elevation, parse_grid, parse_ratio, parse_size, parse_tau, parse_threads,
+    parse_view_blend, parse_weight,
 };
 
 mod bench;
@@ -40,6 +40,20 @@ pub struct Cli {
     /// Without a subcommand: play the scene (the main job).
     #[command(flatten)]
     pub play: PlayArgs,
+}
+
+impl Cli {
+    /// Parses the process's arguments. Every command lets a negative number
+    /// reach its flag's own parser (`--frames -1` is then refused naming
+    /// `--frames` and its range, not as an unknown argument `-1`).
+    pub fn parse_args() -> Self {
+        use clap::{CommandFactory, FromArgMatches};
+        let command = Cli::command()
+            .allow_negative_numbers(true)
+            .mut_subcommands(|c| c.allow_negative_numbers(true));
+        let matches = command.get_matches();
+        Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
+    }
 }
 
 #[derive(Subcommand, Debug)]
@@ -91,11 +105,12 @@ pub enum Command {
 #[derive(Args, Debug, Clone)]
 #[command(group(clap::ArgGroup::new("what").required(true).args(["sample", "all", "view_angle"])))]
 pub struct TraceArgs {
-    /// A built-in scene's name (teapot) or the path of a .toml scene file.
+    /// A built-in scene's name (teapot, teapot_split, teapot_rings, glass,
+    /// glass_near, brass) or the path of a .toml scene file.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
-    /// Orbit sample to trace (0-based).
-    #[arg(long)]
+    /// Orbit sample to trace (0-based; a scene has at most 4,096).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..4096))]
     pub sample: Option<u32>,
     /// Trace every orbit sample, skipping those already traced with the same inputs.
     #[arg(long)]
@@ -103,15 +118,14 @@ pub struct TraceArgs {
     /// Trace a free view at this orbit azimuth in degrees (off the sample grid).
     #[arg(long, allow_hyphen_values = true, value_parser = parse_degrees)]
     pub view_angle: Option<f32>,
-    /// With --view-angle: elevation above the orbit in degrees.
+    /// With --view-angle: elevation above the orbit in degrees [default: 0].
     #[arg(
         long,
-        default_value_t = 0.0,
         allow_hyphen_values = true,
         requires = "view_angle",
         value_parser = parse_elevation
     )]
-    pub elevation: f32,
+    pub elevation: Option<f32>,
     /// Samples per pixel [default: 16].
     #[arg(long)]
     pub spp: Option<u32>,
@@ -124,19 +138,20 @@ pub struct TraceArgs {
     /// Random seed; the same seed gives bit-identical images.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Worker threads [default: all cores]; does not change the images.
-    #[arg(long)]
+    /// Worker threads, 1 to 256 [default: all cores]; does not change the images.
+    #[arg(long, value_parser = parse_threads)]
     pub threads: Option<usize>,
 }
 
 #[derive(Args, Debug, Clone)]
 #[command(group(clap::ArgGroup::new("which").required(true).args(["sample", "all", "diffuse"])))]
 pub struct InferArgs {
-    /// A built-in scene's name (teapot) or the path of a .toml scene file.
+    /// A built-in scene's name (teapot, teapot_split, teapot_rings, glass,
+    /// glass_near, brass) or the path of a .toml scene file.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
     /// Orbit sample to infer (0-based).
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..4096))]
     pub sample: Option<u32>,
     /// Every orbit sample, skipping those already inferred from the same inputs.
     #[arg(long)]
@@ -145,8 +160,8 @@ pub struct InferArgs {
     /// traced diffuse layers at --views, stacked into one solve.
     #[arg(long)]
     pub diffuse: Option<String>,
-    /// Orbit samples stacked by --diffuse.
-    #[arg(long, value_delimiter = ',', default_values_t = [0u32, 33, 66, 99])]
+    /// Orbit samples stacked by --diffuse, comma-separated (e.g. 0,33,66,99).
+    #[arg(long, value_delimiter = ',', default_value = "0,33,66,99")]
     pub views: Vec<u32>,
     /// Texture size (square, power of two) for --diffuse.
     #[arg(long, default_value_t = 256)]
@@ -179,14 +194,15 @@ pub struct InferArgs {
     /// Turn the Khronos validation layer on (see the main command).
     #[arg(long)]
     pub validate: bool,
-    /// Vulkan device to use (substring of its name) [default: lavapipe].
+    /// Vulkan device to use (substring of its name; "lavapipe" finds llvmpipe) [default: lavapipe].
     #[arg(long, env = "ENGINE_DEVICE")]
     pub device: Option<String>,
 }
 
 #[derive(Args, Debug, Clone)]
 pub struct EvalArgs {
-    /// A built-in scene's name (teapot) or the path of a .toml scene file.
+    /// A built-in scene's name (teapot, teapot_split, teapot_rings, glass,
+    /// glass_near, brass) or the path of a .toml scene file.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
     /// Output folder for eval.json, tradeoff.png and pictures [default: out/<scene>/eval].
@@ -208,11 +224,11 @@ pub struct EvalArgs {
         value_parser = parse_elevation
     )]
     pub elevation: Vec<f32>,
-    /// Samples per pixel of the traced references.
-    #[arg(long, default_value_t = 16)]
+    /// Samples per pixel of the traced references (1 to 4096).
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub spp: u32,
-    /// Timed frames per view and row (after one untimed frame).
-    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Timed frames per view and row (after one untimed frame; 1 to 1,000).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub repeats: u32,
     /// Only these rows (labels as printed, comma-separated) [default: all].
     #[arg(long, value_delimiter = ',')]
@@ -224,7 +240,7 @@ pub struct EvalArgs {
     #[arg(long, default_value = "1024x256", value_parser = parse_size)]
     pub relight_size: (u32, u32),
     /// The `relight` rows: light grid, rings x azimuths (as `engine relight --grid`).
-    #[arg(long, default_value = "8x16", value_parser = parse_size)]
+    #[arg(long, default_value = "8x16", value_parser = parse_grid)]
     pub relight_grid: (u32, u32),
     /// The `relight` rows: samples per panorama texel (as `engine relight --spp`).
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=1024))]
@@ -232,19 +248,20 @@ pub struct EvalArgs {
     /// Turn the Khronos validation layer on.
     #[arg(long)]
     pub validate: bool,
-    /// Vulkan device to use (substring of its name) [default: lavapipe].
+    /// Vulkan device to use (substring of its name; "lavapipe" finds llvmpipe) [default: lavapipe].
     #[arg(long, env = "ENGINE_DEVICE")]
     pub device: Option<String>,
 }
 
 #[derive(Args, Debug, Clone)]
 pub struct PlayArgs {
-    /// A built-in scene's name (teapot) or the path of a .toml scene file.
+    /// A built-in scene's name (teapot, teapot_split, teapot_rings, glass,
+    /// glass_near, brass) or the path of a .toml scene file.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
     /// Frames along the default path: through every orbit sample, then
     /// rising above the orbit plane [default: 1.5 per viewpoint sample].
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub frames: Option<u32>,
     /// Frame size as WIDTHxHEIGHT.
     #[arg(long, default_value = "640x480", value_parser = parse_size)]
@@ -264,7 +281,7 @@ pub struct PlayArgs {
     /// `validation messages: N` and fails when N > 0.
     #[arg(long)]
     pub validate: bool,
-    /// Vulkan device to use (substring of its name) [default: lavapipe].
+    /// Vulkan device to use (substring of its name; "lavapipe" finds llvmpipe) [default: lavapipe].
     #[arg(long, env = "ENGINE_DEVICE")]
     pub device: Option<String>,
     /// Untimed frames first (lavapipe compiles shaders at the first draw).
@@ -297,7 +314,7 @@ pub struct PlayArgs {
     #[arg(long, default_value = "1024x512", value_parser = parse_size)]
     pub light_path_size: (u32, u32),
     /// With --light-path: the light grid, rings x azimuths.
-    #[arg(long, default_value = "8x16", value_parser = parse_size)]
+    #[arg(long, default_value = "8x16", value_parser = parse_grid)]
     pub light_path_grid: (u32, u32),
     /// With --light-path: samples per panorama texel.
     #[arg(long, default_value_t = 2)]

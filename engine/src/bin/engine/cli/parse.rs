@@ -13,6 +13,31 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
+/// Parses a light grid `RINGSxAZIMUTHS` (rings 1..=64, azimuths 1..=128,
+/// as the relighting grid allows).
+pub fn parse_grid(s: &str) -> Result<(u32, u32), String> {
+    let expected = || {
+        format!("expected RINGSxAZIMUTHS (rings 1 to 64, azimuths 1 to 128, e.g. 8x16), got {s:?}")
+    };
+    let (r, a) = s.split_once(['x', 'X']).ok_or_else(expected)?;
+    let r: u32 = r.trim().parse().map_err(|_| expected())?;
+    let a: u32 = a.trim().parse().map_err(|_| expected())?;
+    if !(1..=64).contains(&r) || !(1..=128).contains(&a) {
+        return Err(expected());
+    }
+    Ok((r, a))
+}
+
+/// A worker thread count, 1 to 256 (more only queues work on a machine's
+/// cores and costs a stack each).
+pub fn parse_threads(s: &str) -> Result<usize, String> {
+    number(
+        s,
+        |t: usize| (1..=256).contains(&t),
+        "a thread count from 1 to 256",
+    )
+}
+
 /// A number that parses and passes `ok`, else "expected {expected}".
 fn number<T: std::str::FromStr + Copy>(
     s: &str,
@@ -79,6 +104,16 @@ mod tests {
         assert_eq!(parse_size("640x480"), Ok((640, 480)));
         for bad in ["640", "0x480", "640x", "axb", "9000x10", "-1x5"] {
             assert!(parse_size(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn grids_parse_and_reject_naming_a_grid() {
+        assert_eq!(parse_grid("8x16"), Ok((8, 16)));
+        assert_eq!(parse_grid("64X128"), Ok((64, 128)));
+        for bad in ["0x0", "65x1", "1x129", "8", "8x", "axb", "-1x5"] {
+            let e = parse_grid(bad).expect_err(bad);
+            assert!(e.contains("RINGSxAZIMUTHS") && e.contains(bad), "{e}");
         }
     }
 

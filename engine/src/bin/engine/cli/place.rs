@@ -6,9 +6,11 @@ use std::path::PathBuf;
 
 #[derive(Args, Debug, Clone)]
 pub struct PlaceArgs {
-    /// A built-in scene's name (teapot) or the path of a .toml scene file;
-    /// its samples are the dense lines placement chooses from.
-    #[arg(long, default_value = "teapot")]
+    /// A built-in scene's name or the path of a .toml scene file whose
+    /// samples are the dense lines placement chooses from: every ring keeps
+    /// every line (`ring_line_every = 1`; brass and teapot_rings do, the
+    /// default teapot's sparse rings do not).
+    #[arg(long)]
     pub scene: String,
     /// Where the scene's dense compile lives (compiled there if missing) [default: out/<scene>].
     #[arg(long)]
@@ -24,7 +26,7 @@ pub struct PlaceArgs {
     pub max_samples: Option<u32>,
     /// At most this many bytes of map container, at the dense container's
     /// bytes per sample (the codec codes at a fixed ratio) [default: no limit].
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1_000_000_000_000))]
     pub max_bytes: Option<u64>,
     /// At most this many minutes of compile (trace, maps, container), at the
     /// dense compile's recorded minutes per sample [default: no limit].
@@ -52,7 +54,7 @@ pub struct PlaceArgs {
     /// Turn the Khronos validation layer on.
     #[arg(long)]
     pub validate: bool,
-    /// Vulkan device to use (substring of its name) [default: lavapipe].
+    /// Vulkan device to use (substring of its name; "lavapipe" finds llvmpipe) [default: lavapipe].
     #[arg(long, env = "ENGINE_DEVICE")]
     pub device: Option<String>,
 }

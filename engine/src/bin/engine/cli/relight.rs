@@ -5,14 +5,15 @@ use std::path::PathBuf;
 
 #[derive(Args, Debug, Clone)]
 pub struct RelightArgs {
-    /// A built-in scene's name (teapot) or the path of a .toml scene file.
+    /// A built-in scene's name (teapot, teapot_split, teapot_rings, glass,
+    /// glass_near, brass) or the path of a .toml scene file.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
     /// Panorama size as WIDTHxHEIGHT (cylindrical, square pixels at the horizon).
     #[arg(long, default_value = "1024x256", value_parser = super::parse_size)]
     pub size: (u32, u32),
     /// Light grid: Gauss–Legendre rings x azimuths (≥ 5x9 for exact k = 25 projection).
-    #[arg(long, default_value = "8x16", value_parser = super::parse_size)]
+    #[arg(long, default_value = "8x16", value_parser = super::parse_grid)]
     pub grid: (u32, u32),
     /// Samples per panorama texel for every traced light direction.
     #[arg(long, default_value_t = 2)]
@@ -31,8 +32,8 @@ pub struct RelightArgs {
     /// Play the raw (uncompressed) maps instead.
     #[arg(long)]
     pub raw: bool,
-    /// Timed frames per measurement (after 5 warm-up frames).
-    #[arg(long, default_value_t = 100)]
+    /// Timed frames per measurement (after 5 warm-up frames; 1 to 100,000).
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     pub frames: u32,
     /// Output folder (the cached grid and the images go to <out>/relight)
     /// [default: out/<scene>].
@@ -44,7 +45,7 @@ pub struct RelightArgs {
     /// Turn the Khronos validation layer on.
     #[arg(long)]
     pub validate: bool,
-    /// Vulkan device to use (substring of its name) [default: lavapipe].
+    /// Vulkan device to use (substring of its name; "lavapipe" finds llvmpipe) [default: lavapipe].
     #[arg(long, env = "ENGINE_DEVICE")]
     pub device: Option<String>,
 }

@@ -15,8 +15,11 @@ pub fn run(args: &EncodeArgs) -> Result<String> {
         (Some(r), None) if r.is_finite() && r > 1.0 => Target::Ratio(r),
         (None, Some(b)) if b > 0 => Target::Bytes(b),
         (None, None) => Target::Ratio(DEFAULT_RATIO),
-        _ => bail!("--ratio must be > 1 or --bytes > 0, not both"),
+        (Some(r), None) => bail!("--ratio {r}: expected a compression ratio above 1 (e.g. 384)"),
+        (None, Some(_)) => bail!("--bytes 0: expected a container size above 0 bytes"),
+        (Some(_), Some(_)) => bail!("--ratio and --bytes: give one target, not both"),
     };
+    engine::util::files::check_folder_exists(&args.out)?;
     let dir = default_dir(&args.infer_dir, &scene, "infer");
     // The container's key is made of the keys its maps were inferred with.
     let mut keys = Vec::new();

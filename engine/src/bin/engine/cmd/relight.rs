@@ -22,7 +22,10 @@ pub fn run(args: &RelightArgs) -> Result<String> {
         "--size, --grid, --spp, --bounces",
     )?;
     if let Some(json) = &args.json {
-        files::check_overwrite(json)?;
+        files::check_output_file(json)?;
+    }
+    if !args.raw {
+        engine::relight::codec::check_ratio(args.ratio)?;
     }
     let options = RelightOptions {
         settings,

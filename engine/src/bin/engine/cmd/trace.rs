@@ -2,7 +2,7 @@
 
 use super::default_dir;
 use crate::cli::TraceArgs;
-use anyhow::Result;
+use anyhow::{Result, bail};
 use engine::compile::trace::{TraceViews, trace};
 use inference::scene::Scene;
 use inference::trace::TraceSettings;
@@ -18,12 +18,18 @@ pub fn run(args: &TraceArgs) -> Result<String> {
         progress: true,
         ..TraceSettings::default()
     };
+    if args.elevation.is_some() && args.view_angle.is_none() {
+        // clap's `requires` alone lets it through beside --sample or --all.
+        bail!(
+            "--elevation places a free view: it needs --view-angle (orbit samples have their own elevation)"
+        );
+    }
     let views = match (args.all, args.sample, args.view_angle) {
         (true, ..) => TraceViews::All,
         (_, Some(k), _) => TraceViews::Sample(k),
         _ => TraceViews::Free {
             azimuth_deg: args.view_angle.unwrap_or(scene.orbit.start_deg),
-            elevation_deg: args.elevation,
+            elevation_deg: args.elevation.unwrap_or(0.0),
         },
     };
     trace(
