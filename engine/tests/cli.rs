@@ -378,6 +378,18 @@ fn mistakes_are_refused_before_any_work_and_leave_nothing() {
             vec!["1 to 256"],
         ),
         (vec!["eval", "--spp", "0", "--out", out_s], vec!["1..=4096"]),
+        (
+            vec![
+                "place",
+                "--scene",
+                "brass",
+                "--target-db",
+                "nan",
+                "--data",
+                out_s,
+            ],
+            vec!["'--target-db <TARGET_DB>'", "a finite PSNR"],
+        ),
         // A negative number reaches its flag's parser, which names the flag.
         (
             vec!["bench", "--frames", "-1", "--out", out_s],

@@ -305,3 +305,26 @@ fn assert_ktx2_equals_map(path: &Path, spec: &MapSpec, exr: &Path) {
         }
     }
 }
+
+/// Without the inferred maps, export says where it looked and how to make
+/// them, and claims no output folder.
+#[test]
+fn export_without_inferred_maps_says_how_to_make_them_and_writes_nothing() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let ktx = dir.path().join("ktx2");
+    let infer = dir.path().join("infer");
+    for (exists, needle) in [(false, "no such folder"), (true, "sample 0's teapot")] {
+        if exists {
+            std::fs::create_dir(&infer).expect("mkdir");
+        }
+        let args = ["export", "--ktx2", s(&ktx), "--infer-dir", s(&infer)];
+        let o = engine(&args, None);
+        let text = log(&o);
+        assert!(!o.status.success() && !text.contains("panicked"), "{text}");
+        assert!(
+            text.contains(needle) && text.contains("engine infer --scene teapot --all"),
+            "{text}"
+        );
+        assert!(!ktx.exists(), "{text}");
+    }
+}

@@ -387,7 +387,9 @@ fn diffuse_needs_a_diffuse_object() {
     let o = engine(&["infer", "--diffuse", "nothing"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        !o.status.success() && err.contains("no such object"),
+        !o.status.success()
+            && err.contains("no such object")
+            && err.contains("its diffuse objects: floor, walls, ceiling"),
         "{err}"
     );
 }

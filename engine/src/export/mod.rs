@@ -87,6 +87,7 @@ pub fn export_ktx2(scene: &Scene, infer_dir: &Path, out: &Path) -> Result<Export
         );
     }
     let jobs = jobs_for(scene, None, false)?;
+    check_inputs(scene, infer_dir, &specs)?;
     claim_dir(out)?;
     let writer = format!("pem-engine {}", env!("CARGO_PKG_VERSION"));
     let mut files = Vec::new();
@@ -145,6 +146,40 @@ fn write_atlas(scene: &Scene, spec: &MapSpec, out: &Path) -> Result<PathBuf> {
     );
     write_obj(&path, &mesh, &header).with_context(|| format!("writing {}", path.display()))?;
     Ok(path)
+}
+
+/// Every map the export reads is there with its key record, checked before
+/// the output folder is claimed: a run that cannot export leaves nothing.
+fn check_inputs(scene: &Scene, infer_dir: &Path, specs: &[MapSpec]) -> Result<()> {
+    let how = || {
+        format!(
+            "`engine infer --scene {} --all --out {}` writes them; the main job playing a \
+             shipped compiled scene infers none",
+            scene.arg(),
+            infer_dir.display()
+        )
+    };
+    if !infer_dir.is_dir() {
+        bail!(
+            "{}: no such folder (expected the scene's inferred maps: {})",
+            infer_dir.display(),
+            how()
+        );
+    }
+    for k in 0..scene.orbit.sample_count() {
+        for spec in specs {
+            let path = map_path(infer_dir, k, &spec.object, spec.layer);
+            if inference::key::read_record(&path).is_none() {
+                bail!(
+                    "{}: sample {k}'s {} is missing or has no key record ({})",
+                    path.display(),
+                    spec.name(),
+                    how()
+                );
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Sample `k`'s map `spec` as an RGBA texture: checked against its key

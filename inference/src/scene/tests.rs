@@ -298,6 +298,23 @@ fn bad_numbers_name_their_field() {
         let e = error_of(from, to);
         assert!(e.contains(&format!("x.toml: {field}: ")), "{to:?} → {e}");
     }
+    // Vectors read as the file writes them, and an open range names no
+    // float's largest value as its end.
+    let e = error_of(
+        "radiance = [10.0, 10.0, 10.0]",
+        "radiance = [-1.0, 0.5, 0.0]",
+    );
+    assert!(
+        e.contains("[-1, 0.5, 0] (expected each component at least 0)"),
+        "{e}"
+    );
+    let e = error_of("f0 = [0.55, 0.56, 0.55]", "f0 = [1.5, 0.56, 0.55]");
+    assert!(e.contains("(expected each component from 0 to 1)"), "{e}");
+    let e = error_of("max = [4.0, 4.0, 4.0]", "max = [4.0, 0.0, 4.0]");
+    assert!(
+        e.contains("max [4, 0, 4] must exceed min [-4, 0, -4]"),
+        "{e}"
+    );
 }
 
 #[test]

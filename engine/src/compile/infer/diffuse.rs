@@ -134,9 +134,19 @@ pub fn infer_diffuse(scene: &Scene, req: &DiffuseRequest) -> Result<String> {
 fn checked_diffuse_object<'s>(scene: &'s Scene, req: &DiffuseRequest) -> Result<&'s Object> {
     let object_name = req.object.as_str();
     let object = scene.object(object_name).with_context(|| {
+        let diffuse: Vec<&str> = (scene.objects.iter())
+            .filter(|o| {
+                matches!(
+                    scene.materials.get(o.material),
+                    Some(Material::Diffuse { .. })
+                )
+            })
+            .map(|o| o.name.as_str())
+            .collect();
         format!(
-            "--diffuse {object_name}: no such object in {}",
-            scene.source.display()
+            "--diffuse {object_name}: no such object in {} (its diffuse objects: {})",
+            scene.source.display(),
+            diffuse.join(", ")
         )
     })?;
     if !matches!(

@@ -40,16 +40,25 @@ impl Loader<'_> {
     pub(super) fn vec3(&self, field: &str, v: V3) -> Result<Vec3, SceneError> {
         let v = Vec3::from_array(v);
         if !v.is_finite() {
-            return Err(self.err(field, format!("{v:?} is not finite (expected numbers)")));
+            return Err(self.err(
+                field,
+                format!("{} is not finite (expected numbers)", toml3(v)),
+            ));
         }
         Ok(v)
     }
 
-    /// Finite, each component in `[lo, hi]`.
+    /// Finite, each component in `[lo, hi]` (`hi` = `f32::MAX`: no bound
+    /// above, and none named).
     pub(super) fn vec3_in(&self, field: &str, v: V3, lo: f32, hi: f32) -> Result<Vec3, SceneError> {
         let v = self.vec3(field, v)?;
         if v.cmplt(Vec3::splat(lo)).any() || v.cmpgt(Vec3::splat(hi)).any() {
-            return Err(self.err(field, format!("{v:?} outside [{lo}, {hi}]")));
+            let expected = if hi == f32::MAX {
+                format!("each component at least {lo}")
+            } else {
+                format!("each component from {lo} to {hi}")
+            };
+            return Err(self.err(field, format!("{} (expected {expected})", toml3(v))));
         }
         Ok(v)
     }
@@ -81,14 +90,20 @@ impl Loader<'_> {
                 return Err(self.err(
                     "orbit",
                     format!(
-                        "sample {k}'s eye at [{:.3}, {:.3}, {:.3}] lies outside the room \
-                         [{:.3}, {:.3}, {:.3}]..[{:.3}, {:.3}, {:.3}] (expected center, radius, \
-                         height and rings that keep every eye inside it)",
-                        eye.x, eye.y, eye.z, min.x, min.y, min.z, max.x, max.y, max.z
+                        "sample {k}'s eye at {} lies outside the room {}..{} (expected \
+                         center, radius, height and rings that keep every eye inside it)",
+                        toml3(eye),
+                        toml3(min),
+                        toml3(max)
                     ),
                 ));
             }
         }
         Ok(())
     }
+}
+
+/// `v` as a scene file writes it: `[x, y, z]`.
+pub(super) fn toml3(v: Vec3) -> String {
+    format!("[{}, {}, {}]", v.x, v.y, v.z)
 }

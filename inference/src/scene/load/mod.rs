@@ -371,7 +371,11 @@ impl Loader<'_> {
         if min.cmpge(max).any() {
             return Err(self.err(
                 "room",
-                format!("max {max:?} must exceed min {min:?} on every axis"),
+                format!(
+                    "max {} must exceed min {} on every axis",
+                    check::toml3(max),
+                    check::toml3(min)
+                ),
             ));
         }
         Ok((min, max))

@@ -13,7 +13,9 @@ pub struct ExportArgs {
     /// glass_near, brass) or the path of a .toml scene file.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
-    /// Where the maps were inferred [default: out/<scene>/infer, where the main job puts them].
+    /// Where the maps were inferred [default: out/<scene>/infer, where
+    /// `engine infer --all` and a compile that infers put them; the main
+    /// job playing a shipped compiled scene infers none].
     #[arg(long)]
     pub infer_dir: Option<PathBuf>,
 }

@@ -66,6 +66,11 @@ pub fn parse_elevation(s: &str) -> Result<f32, String> {
     )
 }
 
+/// A PSNR in dB: finite.
+pub fn parse_db(s: &str) -> Result<f64, String> {
+    number(s, f64::is_finite, "a finite PSNR in dB (e.g. 42)")
+}
+
 /// A regularization weight: finite and not negative.
 pub fn parse_weight(s: &str) -> Result<f32, String> {
     number(

@@ -19,7 +19,7 @@ pub struct PlaceArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Reflector PSNR every view half way between placed samples should reach, dB.
-    #[arg(long, default_value_t = 42.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 42.0, allow_hyphen_values = true, value_parser = super::parse::parse_db)]
     pub target_db: f64,
     /// At most this many samples (the budget) [default: the dense lines].
     #[arg(long, value_parser = clap::value_parser!(u32).range(2..))]
