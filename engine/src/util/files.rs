@@ -19,6 +19,12 @@ pub fn claim_dir(dir: &Path) -> Result<()> {
     if marker.is_file() {
         return Ok(());
     }
+    if dir.exists() && !dir.is_dir() {
+        bail!(
+            "{}: a file, expected an output folder (a new, empty or engine-made one)",
+            dir.display()
+        );
+    }
     if dir.exists() {
         let mut entries = std::fs::read_dir(dir)
             .with_context(|| format!("output folder {} cannot be read", dir.display()))?;
@@ -155,6 +161,14 @@ mod tests {
         let e = claim_dir(&foreign).expect_err("not ours").to_string();
         assert!(e.contains("foreign") && e.contains(MARKER), "{e}");
         assert!(!foreign.join(MARKER).exists());
+        let file = dir.path().join("notes.txt");
+        std::fs::write(&file, b"mine")?;
+        let e = claim_dir(&file).expect_err("a file").to_string();
+        assert!(
+            e.contains("notes.txt: a file, expected an output folder"),
+            "{e}"
+        );
+        assert_eq!(std::fs::read(&file)?, b"mine");
         Ok(())
     }
 
