@@ -117,14 +117,30 @@ pub enum CodecError {
     #[error("output slice holds {got} elements, expected {expected}")]
     OutputSize { got: usize, expected: usize },
 
-    #[error("i/o error on {path}: {source}")]
-    Io {
+    /// Reading or writing a file failed. The message is complete on one
+    /// line, the OS's reason included, so `cause` is not also exposed as
+    /// `source()` (anyhow's `{:#}` would print it twice).
+    #[error("{path}: {cause}")]
+    Io { path: String, cause: std::io::Error },
+    /// What was wrong with the container file at `path`
+    /// ([`crate::Container::open`] names the file in every error).
+    #[error("{path}: {cause}")]
+    File {
         path: String,
-        #[source]
-        source: std::io::Error,
+        cause: Box<CodecError>,
     },
     #[error("baseline {name}: {what}")]
     Baseline { name: &'static str, what: String },
+}
+
+impl CodecError {
+    /// The error itself, without the file it was found in.
+    pub fn inner(&self) -> &CodecError {
+        match self {
+            CodecError::File { cause, .. } => cause.inner(),
+            e => e,
+        }
+    }
 }
 
 pub type Result<T> = std::result::Result<T, CodecError>;

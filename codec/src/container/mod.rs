@@ -34,6 +34,8 @@
 mod block;
 mod cursor;
 mod header;
+#[cfg(test)]
+mod tests;
 mod write;
 
 pub use block::BlockView;
@@ -156,10 +158,22 @@ impl Container {
     }
 
     /// Opens a file, reading only its header; blocks are read when decoded.
+    /// Every error names the file (so callers need not add its path again).
     pub fn open(path: &Path) -> Result<Self> {
-        let io = |source| CodecError::Io {
+        Self::open_file(path).map_err(|e| match e {
+            CodecError::Io { .. } => e,
+            e => CodecError::File {
+                path: path.display().to_string(),
+                cause: Box::new(e),
+            },
+        })
+    }
+
+    /// [`Container::open`], its errors other than i/o without the path.
+    fn open_file(path: &Path) -> Result<Self> {
+        let io = |cause| CodecError::Io {
             path: path.display().to_string(),
-            source,
+            cause,
         };
         let mut file = File::open(path).map_err(io)?;
         let file_len = file.metadata().map_err(io)?.len();
@@ -242,9 +256,9 @@ impl Container {
                 use std::os::unix::fs::FileExt;
                 let mut buf = vec![0u8; e.len as usize];
                 file.read_exact_at(&mut buf, e.offset)
-                    .map_err(|source| CodecError::Io {
+                    .map_err(|cause| CodecError::Io {
                         path: path.clone(),
-                        source,
+                        cause,
                     })?;
                 Cow::Owned(buf)
             }

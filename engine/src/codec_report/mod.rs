@@ -44,8 +44,8 @@ pub struct CodecReportRequest {
 
 pub fn codec_report(scene: &Scene, req: &CodecReportRequest) -> Result<String> {
     crate::util::files::check_output_file(&req.json)?;
-    let container = codec::Container::open(&req.file)
-        .with_context(|| format!("opening {}", req.file.display()))?;
+    // Its errors name the file.
+    let container = codec::Container::open(&req.file)?;
     let input = load_input(scene, &req.infer_dir)?;
     let progress = indicatif::ProgressBar::new_spinner().with_style(
         indicatif::ProgressStyle::with_template("{spinner} codec-report {elapsed} {msg}")
