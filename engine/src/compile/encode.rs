@@ -36,11 +36,13 @@ pub fn orbit_grid(orbit: &inference::scene::Orbit) -> ParamGrid {
 
 /// A map that could not be used for encoding: which one, and why.
 #[derive(Debug, thiserror::Error)]
-#[error("{}: {why}", path.display())]
+#[error("{why}")]
 pub struct BadMap {
     pub sample: u32,
     pub spec: usize,
     pub path: std::path::PathBuf,
+    /// The whole message, naming the map's file (as the key records' and
+    /// the maps' readers do).
     pub why: String,
 }
 
@@ -110,7 +112,8 @@ fn read_checked(dir: &Path, k: u32, spec_index: usize, spec: &MapSpec) -> Result
         .map_err(|e| bad(e.to_string()))?;
     if let Some(v) = map.iter().flatten().find(|v| v.abs() > F16_MAX) {
         return Err(bad(format!(
-            "holds {v:e}, beyond what playback's f16 textures hold (±{F16_MAX})"
+            "{}: holds {v:e}, beyond what playback's f16 textures hold (±{F16_MAX})",
+            path.display()
         ))
         .into());
     }
@@ -225,6 +228,17 @@ fn worst_psnr(container: &codec::Container, input: &EncodeInput) -> Result<f64> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_map_without_its_record_is_named_once() {
+        let scene = inference::scene::Scene::load("teapot").expect("built-in scene");
+        let dir = tempfile::tempdir().expect("tempdir");
+        let e = load_input(&scene, dir.path()).expect_err("no maps");
+        let bad = e.downcast_ref::<BadMap>().expect("a BadMap");
+        let text = format!("{e:#}");
+        let path = bad.path.display().to_string();
+        assert_eq!(text, format!("{path}: no record of how it was made"));
+    }
 
     #[test]
     fn rings_are_a_2d_grid_whose_linear_order_is_the_sample_order() {
