@@ -410,6 +410,29 @@ fn report_on_a_truncated_container_says_how_long_it_should_be() {
     assert!(err.starts_with(&start) && err.ends_with(&end), "{err}");
 }
 
+/// A valid container without the maps it was encoded from: where the
+/// report looked, why it needs them and how to make them; `--help` says so.
+#[test]
+fn report_without_inferred_maps_says_where_it_looked_and_why() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let infer = dir.path().join("infer");
+    let infer_s = infer.to_str().expect("utf-8");
+    let err = report_error(&shipped_container(), dir.path(), &["--infer-dir", infer_s]);
+    for part in [
+        "_0000",
+        ": missing or without its key record: codec-report compares the container against the uncompressed inferred maps it was encoded from",
+        &format!("looks for them in {infer_s};"),
+        &format!("`engine infer --scene teapot --all --out {infer_s}`"),
+        "or point --infer-dir at them",
+    ] {
+        assert_eq!(err.matches(part).count(), 1, "{part}: {err}");
+    }
+    let help = ok(&engine(&["codec-report", "--help"]));
+    for part in ["compares the decoded", "out/<scene>/infer", "must exist"] {
+        assert!(help.contains(part), "{part}: {help}");
+    }
+}
+
 /// The report's JSON goes in a folder that must exist: checked before the
 /// (minutes-long) measurement, not after it.
 #[test]

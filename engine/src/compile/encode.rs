@@ -46,6 +46,54 @@ pub struct BadMap {
     pub why: String,
 }
 
+/// A command that reads every inferred map: what it says when one is
+/// missing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MapsFor {
+    /// `engine encode` and the compile: the maps are compressed.
+    Encode,
+    /// `engine codec-report`: the container is measured against them.
+    Report,
+}
+
+impl MapsFor {
+    /// What the command does with the maps.
+    fn needs(self) -> &'static str {
+        match self {
+            MapsFor::Encode => "encode compresses the inferred maps",
+            MapsFor::Report => {
+                "codec-report compares the container against the uncompressed inferred maps it was encoded from"
+            }
+        }
+    }
+}
+
+/// Every sample's maps' key records in `infer_dir`, in [`load_input`]'s
+/// order. A map missing, or without its record, is refused naming it, the
+/// folder, what `purpose` needs the maps for and how to make them.
+pub fn map_keys(scene: &Scene, infer_dir: &Path, purpose: MapsFor) -> Result<Vec<Key>> {
+    let specs = map_specs(scene);
+    let mut keys = Vec::new();
+    for k in 0..scene.orbit.sample_count() {
+        for spec in &specs {
+            let path = map_path(infer_dir, k, &spec.object, spec.layer);
+            let record = inference::key::read_record(&path).filter(|_| path.is_file());
+            let Some(record) = record else {
+                bail!(
+                    "{}: missing or without its key record: {}, and looks for them in {}; make them with `engine infer --scene {} --all --out {}`, or point --infer-dir at them",
+                    path.display(),
+                    purpose.needs(),
+                    infer_dir.display(),
+                    scene.arg(),
+                    infer_dir.display()
+                );
+            };
+            keys.push(record.key);
+        }
+    }
+    Ok(keys)
+}
+
 /// Reads every sample's maps into the codec's input (sample-major; each
 /// sample MIP-major, then face, rows, texels, channels interleaved). A map
 /// that is missing, damaged (its key record's checksum) or holds values
