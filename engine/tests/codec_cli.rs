@@ -433,6 +433,32 @@ fn report_without_inferred_maps_says_where_it_looked_and_why() {
     }
 }
 
+/// A scene without parameterized maps: codec-report does not talk of
+/// encoding; encode still does.
+#[test]
+fn report_on_a_scene_without_maps_does_not_say_encode() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let err = report_error(&shipped_container(), dir.path(), &["--scene", "glass"]);
+    assert!(
+        err.contains("glass.toml: no reflective object has [objects.em] settings: this scene has no parameterized maps to report on"),
+        "{err}"
+    );
+    assert!(!err.contains("encode"), "{err}");
+    let out = dir.path().join("x.ptxc");
+    let o = engine(&[
+        "encode",
+        "--scene",
+        "glass",
+        "--out",
+        out.to_str().expect("utf-8"),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("settings: nothing to encode"),
+        "{err}"
+    );
+}
+
 /// The report's JSON goes in a folder that must exist: checked before the
 /// (minutes-long) measurement, not after it.
 #[test]

@@ -49,7 +49,7 @@ pub fn codec_report(scene: &Scene, req: &CodecReportRequest) -> Result<String> {
     // Measured against the maps it was encoded from: refused, saying how
     // to make them, when they are not there.
     map_keys(scene, &req.infer_dir, MapsFor::Report)?;
-    let input = load_input(scene, &req.infer_dir)?;
+    let input = load_input(scene, &req.infer_dir, MapsFor::Report)?;
     let progress = indicatif::ProgressBar::new_spinner().with_style(
         indicatif::ProgressStyle::with_template("{spinner} codec-report {elapsed} {msg}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),

@@ -46,8 +46,8 @@ pub struct BadMap {
     pub why: String,
 }
 
-/// A command that reads every inferred map: what it says when one is
-/// missing.
+/// A command that reads every inferred map: what it says when the scene
+/// has none, or one is missing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MapsFor {
     /// `engine encode` and the compile: the maps are compressed.
@@ -57,6 +57,14 @@ pub enum MapsFor {
 }
 
 impl MapsFor {
+    /// Why a scene without parameterized maps is refused.
+    fn nothing(self) -> &'static str {
+        match self {
+            MapsFor::Encode => "nothing to encode",
+            MapsFor::Report => "this scene has no parameterized maps to report on",
+        }
+    }
+
     /// What the command does with the maps.
     fn needs(self) -> &'static str {
         match self {
@@ -68,11 +76,24 @@ impl MapsFor {
     }
 }
 
+/// The scene's maps ([`map_specs`]), refused when it has none.
+fn specs_for(scene: &Scene, purpose: MapsFor) -> Result<Vec<MapSpec>> {
+    let specs = map_specs(scene);
+    if specs.is_empty() {
+        bail!(
+            "{}: no reflective object has [objects.em] settings: {}",
+            scene.source.display(),
+            purpose.nothing()
+        );
+    }
+    Ok(specs)
+}
+
 /// Every sample's maps' key records in `infer_dir`, in [`load_input`]'s
 /// order. A map missing, or without its record, is refused naming it, the
 /// folder, what `purpose` needs the maps for and how to make them.
 pub fn map_keys(scene: &Scene, infer_dir: &Path, purpose: MapsFor) -> Result<Vec<Key>> {
-    let specs = map_specs(scene);
+    let specs = specs_for(scene, purpose)?;
     let mut keys = Vec::new();
     for k in 0..scene.orbit.sample_count() {
         for spec in &specs {
@@ -95,17 +116,11 @@ pub fn map_keys(scene: &Scene, infer_dir: &Path, purpose: MapsFor) -> Result<Vec
 }
 
 /// Reads every sample's maps into the codec's input (sample-major; each
-/// sample MIP-major, then face, rows, texels, channels interleaved). A map
-/// that is missing, damaged (its key record's checksum) or holds values
-/// playback cannot (beyond f16) is a [`BadMap`] naming it.
-pub fn load_input(scene: &Scene, infer_dir: &Path) -> Result<EncodeInput> {
-    let specs = map_specs(scene);
-    if specs.is_empty() {
-        bail!(
-            "{}: no reflective object has [objects.em] settings: nothing to encode",
-            scene.source.display()
-        );
-    }
+/// sample MIP-major, then face, rows, texels, channels interleaved) for
+/// `purpose`. A map that is missing, damaged (its key record's checksum)
+/// or holds values playback cannot (beyond f16) is a [`BadMap`] naming it.
+pub fn load_input(scene: &Scene, infer_dir: &Path, purpose: MapsFor) -> Result<EncodeInput> {
+    let specs = specs_for(scene, purpose)?;
     let samples = scene.orbit.sample_count();
     let mut textures = Vec::new();
     for (index, spec) in specs.iter().enumerate() {
@@ -281,7 +296,7 @@ mod tests {
     fn a_map_without_its_record_is_named_once() {
         let scene = inference::scene::Scene::load("teapot").expect("built-in scene");
         let dir = tempfile::tempdir().expect("tempdir");
-        let e = load_input(&scene, dir.path()).expect_err("no maps");
+        let e = load_input(&scene, dir.path(), MapsFor::Encode).expect_err("no maps");
         let bad = e.downcast_ref::<BadMap>().expect("a BadMap");
         let text = format!("{e:#}");
         let path = bad.path.display().to_string();

@@ -21,7 +21,7 @@ pub fn run(args: &EncodeArgs) -> Result<String> {
     let dir = default_dir(&args.infer_dir, &scene, "infer");
     // The container's key is made of the keys its maps were inferred with.
     let keys = map_keys(&scene, &dir, MapsFor::Encode)?;
-    let input = load_input(&scene, &dir)?;
+    let input = load_input(&scene, &dir, MapsFor::Encode)?;
     let e = encode_to(
         &input,
         target,
