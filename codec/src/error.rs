@@ -31,7 +31,11 @@ pub enum CodecError {
     #[error("byte budget {budget} is below the container's minimum of {minimum} bytes")]
     BudgetTooSmall { budget: u64, minimum: u64 },
 
-    /// The file ended before a field could be read.
+    /// The file is shorter than its header says it is: cut off (a copy or
+    /// a download that stopped), not corrupt. `len` is the file's length.
+    #[error("truncated: {} bytes, but {implied}", Grouped(*len))]
+    TruncatedFile { len: u64, implied: Implied },
+    /// The bytes ended before a field could be read.
     #[error("truncated container: {field} needs {needed} bytes at offset {offset}, file has {len}")]
     Truncated {
         field: &'static str,
@@ -57,7 +61,8 @@ pub enum CodecError {
     /// The header checksum does not match its bytes.
     #[error("container header checksum mismatch: stored {stored:08x}, computed {computed:08x}")]
     HeaderChecksum { stored: u32, computed: u32 },
-    /// A block index entry points outside the file or overlaps the header.
+    /// A block index entry overlaps the header or ends past any file's end
+    /// (one merely past this file's end makes it [`CodecError::TruncatedFile`]).
     #[error("block {block}: range {offset}..{end} lies outside the payload area {start}..{len}")]
     BlockOutOfRange {
         block: usize,
@@ -117,14 +122,75 @@ pub enum CodecError {
     #[error("output slice holds {got} elements, expected {expected}")]
     OutputSize { got: usize, expected: usize },
 
-    #[error("i/o error on {path}: {source}")]
-    Io {
+    /// Reading or writing a file failed. The message is complete on one
+    /// line, the OS's reason included, so `cause` is not also exposed as
+    /// `source()` (anyhow's `{:#}` would print it twice).
+    #[error("{path}: {cause}")]
+    Io { path: String, cause: std::io::Error },
+    /// What was wrong with the container file at `path`
+    /// ([`crate::Container::open`] names the file in every error).
+    #[error("{path}: {cause}")]
+    File {
         path: String,
-        #[source]
-        source: std::io::Error,
+        cause: Box<CodecError>,
     },
     #[error("baseline {name}: {what}")]
     Baseline { name: &'static str, what: String },
+}
+
+impl CodecError {
+    /// The error itself, without the file it was found in.
+    pub fn inner(&self) -> &CodecError {
+        match self {
+            CodecError::File { cause, .. } => cause.inner(),
+            e => e,
+        }
+    }
+}
+
+/// How long a truncated file should be, by its header.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Implied {
+    /// Too short for even the smallest header
+    /// ([`crate::container::MIN_HEADER`] bytes).
+    MinimumHeader,
+    /// The header's own length (its `header_len` field).
+    Header(u64),
+    /// The block index's entry that ends last: `end` is one past its last byte.
+    Block { block: usize, end: u64 },
+}
+
+impl std::fmt::Display for Implied {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Implied::MinimumHeader => write!(
+                f,
+                "a container's header alone is at least {} bytes",
+                Grouped(crate::container::MIN_HEADER as u64)
+            ),
+            Implied::Header(n) => write!(f, "its header alone is {} bytes", Grouped(n)),
+            Implied::Block { block, end } => {
+                write!(f, "block {block} ends at byte {}", Grouped(end))
+            }
+        }
+    }
+}
+
+/// A count written with thousands separators: 3538709 as "3,538,709".
+pub struct Grouped(pub u64);
+
+impl std::fmt::Display for Grouped {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let digits = self.0.to_string();
+        let mut out = String::with_capacity(digits.len() + digits.len() / 3);
+        for (i, d) in digits.chars().enumerate() {
+            if i > 0 && (digits.len() - i) % 3 == 0 {
+                out.push(',');
+            }
+            out.push(d);
+        }
+        f.pad(&out)
+    }
 }
 
 pub type Result<T> = std::result::Result<T, CodecError>;

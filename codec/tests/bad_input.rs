@@ -2,6 +2,7 @@
 //! an out-of-bounds access or an allocation the file does not justify.
 
 use codec::container::{FIXED_HEADER, TEX_RECORD};
+use codec::error::Implied;
 use codec::synth::{SynthSpec, scene};
 use codec::{CodecError, Container, DecodeCache, EncodeOptions, ParamGrid, Target, encode};
 use proptest::prelude::*;
@@ -60,27 +61,23 @@ fn intact_file_decodes() {
 fn every_truncation_is_an_error() {
     let f = sample_file();
     let h = header_len(&f);
+    let nb = u32::from_le_bytes(f[16..20].try_into().unwrap()) as usize;
     for len in 0..f.len() {
         let r = open_and_decode(f[..len].to_vec());
         let e = r.expect_err("truncated file accepted");
-        if len < h {
-            assert!(
-                matches!(
-                    e,
-                    CodecError::Truncated { .. }
-                        | CodecError::BadField {
-                            field: "header_len",
-                            ..
-                        }
-                ),
-                "len {len}: {e}"
-            );
-        } else {
-            assert!(
-                matches!(e, CodecError::BlockOutOfRange { .. }),
-                "len {len}: {e}"
-            );
-        }
+        // Too short to read header_len; then its header; then its blocks.
+        let implied = match len {
+            0..12 => Implied::MinimumHeader,
+            _ if len < h => Implied::Header(h as u64),
+            _ => Implied::Block {
+                block: nb - 1,
+                end: f.len() as u64,
+            },
+        };
+        assert!(
+            matches!(e, CodecError::TruncatedFile { len: l, implied: i } if l == len as u64 && i == implied),
+            "len {len}: {e}"
+        );
     }
 }
 
@@ -129,11 +126,12 @@ fn block_offsets_past_the_end_are_rejected() {
     let f = sample_file();
     let nt = u32::from_le_bytes(f[12..16].try_into().unwrap()) as usize;
     let index = FIXED_HEADER + TEX_RECORD * nt;
-    for (field_off, value) in [
-        (0usize, f.len() as u64 - 3),
-        (0, u64::MAX - 2),
-        (0, 0),
-        (8, u32::MAX as u64),
+    // (field offset in the entry, value, whether it reads as a cut file)
+    for (field_off, value, cut) in [
+        (0usize, f.len() as u64 - 3, true),
+        (0, u64::MAX - 2, false),
+        (0, 0, false),
+        (8, u32::MAX as u64, true),
     ] {
         let mut g = f.clone();
         let at = index + 16 + field_off; // second block entry
@@ -144,10 +142,24 @@ fn block_offsets_past_the_end_are_rejected() {
         }
         reseal(&mut g);
         let e = Container::from_bytes(g).unwrap_err();
-        assert!(
-            matches!(e, CodecError::BlockOutOfRange { block: 1, .. }),
-            "{e}"
-        );
+        // Past this file's end: cut; over the header or past any end: corrupt.
+        if cut {
+            assert!(
+                matches!(
+                    e,
+                    CodecError::TruncatedFile {
+                        implied: Implied::Block { block: 1, .. },
+                        ..
+                    }
+                ),
+                "{e}"
+            );
+        } else {
+            assert!(
+                matches!(e, CodecError::BlockOutOfRange { block: 1, .. }),
+                "{e}"
+            );
+        }
     }
 }
 

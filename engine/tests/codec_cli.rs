@@ -1,7 +1,8 @@
 //! `engine encode` and `engine codec-report` on a small scene (3 orbit
 //! samples, 16² maps) inferred end to end; missing maps fail cleanly.
 
-use std::path::Path;
+use codec::error::Grouped;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn engine(args: &[&str]) -> Output {
@@ -329,6 +330,131 @@ fn report_on_a_corrupt_container_fails_cleanly() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         !o.status.success() && err.contains("bad.ptxc") && !err.contains("panicked"),
+        "{err}"
+    );
+}
+
+/// A missing container: its path once, the OS's reason once.
+#[test]
+fn report_on_a_missing_container_names_it_once() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let file = dir.path().join("nosuch.ptxc");
+    let json = dir.path().join("r.json");
+    let o = engine(&[
+        "codec-report",
+        file.to_str().expect("utf-8"),
+        "--json",
+        json.to_str().expect("utf-8"),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert_eq!(err.matches("nosuch.ptxc").count(), 1, "{err}");
+    assert_eq!(err.matches("No such file or directory").count(), 1, "{err}");
+}
+
+/// The shipped teapot's container.
+fn shipped_container() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/compiled/teapot/teapot.ptxc")
+}
+
+/// `engine codec-report file --json <dir>/r.json args`, which must fail:
+/// its stderr.
+fn report_error(file: &Path, dir: &Path, args: &[&str]) -> String {
+    let json = dir.join("r.json");
+    let report = [
+        "codec-report",
+        file.to_str().expect("utf-8"),
+        "--json",
+        json.to_str().expect("utf-8"),
+    ];
+    let o = engine(&[&report[..], args].concat());
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(!o.status.success() && !err.contains("panicked"), "{err}");
+    assert!(!json.exists(), "{err}");
+    err
+}
+
+/// A container cut short says so: its length and the length its header
+/// implies, in plain words.
+#[test]
+fn report_on_a_truncated_container_says_how_long_it_should_be() {
+    let full = std::fs::read(shipped_container()).expect("shipped container");
+    let u32_at =
+        |at: usize| u32::from_le_bytes([full[at], full[at + 1], full[at + 2], full[at + 3]]);
+    let header = u32_at(8) as u64;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let cut = |len: usize| {
+        let file = dir.path().join(format!("trunc{len}.ptxc"));
+        std::fs::write(&file, &full[..len]).expect("write");
+        (
+            file.display().to_string(),
+            report_error(&file, dir.path(), &[]),
+        )
+    };
+    for len in [20, 1000] {
+        let (file, err) = cut(len);
+        let want = format!(
+            "error: {file}: truncated: {} bytes, but its header alone is {} bytes\n",
+            Grouped(len as u64),
+            Grouped(header)
+        );
+        assert_eq!(err, want);
+    }
+    let half = full.len() / 2;
+    let (file, err) = cut(half);
+    let start = format!(
+        "error: {file}: truncated: {} bytes, but block ",
+        Grouped(half as u64)
+    );
+    let end = format!(" ends at byte {}\n", Grouped(full.len() as u64));
+    assert!(err.starts_with(&start) && err.ends_with(&end), "{err}");
+}
+
+/// A valid container without the maps it was encoded from: where the
+/// report looked, why it needs them and how to make them; `--help` says so.
+#[test]
+fn report_without_inferred_maps_says_where_it_looked_and_why() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let infer = dir.path().join("infer");
+    let infer_s = infer.to_str().expect("utf-8");
+    let err = report_error(&shipped_container(), dir.path(), &["--infer-dir", infer_s]);
+    for part in [
+        "_0000",
+        ": missing or without its key record: codec-report compares the container against the uncompressed inferred maps it was encoded from",
+        &format!("looks for them in {infer_s};"),
+        &format!("`engine infer --scene teapot --all --out {infer_s}`"),
+        "or point --infer-dir at them",
+    ] {
+        assert_eq!(err.matches(part).count(), 1, "{part}: {err}");
+    }
+    let help = ok(&engine(&["codec-report", "--help"]));
+    for part in ["compares the decoded", "out/<scene>/infer", "must exist"] {
+        assert!(help.contains(part), "{part}: {help}");
+    }
+}
+
+/// A scene without parameterized maps: codec-report does not talk of
+/// encoding; encode still does.
+#[test]
+fn report_on_a_scene_without_maps_does_not_say_encode() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let err = report_error(&shipped_container(), dir.path(), &["--scene", "glass"]);
+    assert!(
+        err.contains("glass.toml: no reflective object has [objects.em] settings: this scene has no parameterized maps to report on"),
+        "{err}"
+    );
+    assert!(!err.contains("encode"), "{err}");
+    let out = dir.path().join("x.ptxc");
+    let o = engine(&[
+        "encode",
+        "--scene",
+        "glass",
+        "--out",
+        out.to_str().expect("utf-8"),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("settings: nothing to encode"),
         "{err}"
     );
 }

@@ -197,7 +197,12 @@ fn small_maps_are_encoded_at_a_size_that_holds_their_quality() {
     let dir = tempfile::tempdir().expect("tempdir");
     let (scene, out) = compiled(dir.path());
     let scene = inference::scene::Scene::load(s(&scene)).expect("scene");
-    let input = engine::compile::encode::load_input(&scene, &out.join("infer")).expect("maps");
+    let input = engine::compile::encode::load_input(
+        &scene,
+        &out.join("infer"),
+        engine::compile::encode::MapsFor::Encode,
+    )
+    .expect("maps");
     let c = codec::Container::open(&out.join("teapot.ptxc")).expect("container");
     let mut cache = codec::DecodeCache::default();
     for t in &input.textures {

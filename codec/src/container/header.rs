@@ -3,9 +3,9 @@
 
 use super::{
     BLOCK_ENTRY, BLOCK_LOG2, BlockEntry, Cursor, FIXED_HEADER, FORMAT_VERSION, MAGIC,
-    MAX_DECLARED_RATIO, TEX_RECORD, TextureInfo,
+    MAX_DECLARED_RATIO, MIN_HEADER, TEX_RECORD, TextureInfo,
 };
-use crate::error::{CodecError, Result};
+use crate::error::{CodecError, Implied, Result};
 use crate::input::{LeafLayout, MAX_DIM, MAX_SAMPLES, MAX_SAMPLES_PER_DIM, ParamGrid, TextureId};
 
 pub(super) fn bad(field: &'static str, got: u64, expected: impl Into<String>) -> CodecError {
@@ -16,7 +16,7 @@ pub(super) fn bad(field: &'static str, got: u64, expected: impl Into<String>) ->
     }
 }
 
-pub(super) fn check_magic_version(c: &mut Cursor) -> Result<()> {
+fn check_magic_version(c: &mut Cursor) -> Result<()> {
     let m = c.take(4, "magic")?;
     let got = [m[0], m[1], m[2], m[3]];
     if got != MAGIC {
@@ -37,12 +37,22 @@ pub(super) fn check_magic_version(c: &mut Cursor) -> Result<()> {
 
 type Header = (f32, Vec<TextureInfo>, Vec<BlockEntry>);
 
-/// Parses and validates the header. `header` starts at file offset 0 and
+/// Parses and validates the header. `bytes` starts at file offset 0 and
 /// holds at least the whole header; `file_len` is the full file's length.
-pub(super) fn parse_header(header: &[u8], file_len: u64) -> Result<Header> {
+pub(super) fn parse_header(bytes: &[u8], file_len: u64) -> Result<Header> {
+    let Counts { header_len, nt, nb } = read_counts(bytes, file_len)?;
+    let header = bytes
+        .get(..header_len as usize)
+        .ok_or(CodecError::TruncatedFile {
+            len: bytes.len() as u64,
+            implied: Implied::Header(header_len),
+        })?;
+    check_checksum(header)?;
+    if nt == 0 {
+        return Err(bad("n_textures", 0, "at least 1"));
+    }
     let mut c = Cursor::new(header, 0);
-    check_magic_version(&mut c)?;
-    let Counts { header_len, nt, nb } = parse_counts(&mut c, header, file_len)?;
+    c.take(COUNTS_END, "counts")?; // read by read_counts
     let gamma = parse_coding_domain(&mut c)?;
     let textures = parse_textures(&mut c, nt, nb, file_len)?;
     let blocks = parse_block_index(&mut c, nb, header_len, file_len)?;
@@ -50,18 +60,47 @@ pub(super) fn parse_header(header: &[u8], file_len: u64) -> Result<Header> {
 }
 
 /// The header's length and its texture and block counts.
-struct Counts {
-    header_len: u64,
+pub(super) struct Counts {
+    pub(super) header_len: u64,
     nt: u64,
     nb: u64,
 }
 
-/// Reads the counts and checks them against the header's length, the
-/// bytes at hand and the header checksum.
-fn parse_counts(c: &mut Cursor, header: &[u8], file_len: u64) -> Result<Counts> {
-    let header_len = c.u32("header_len")? as u64;
-    let nt = c.u32("n_textures")? as u64;
-    let nb = c.u32("n_blocks")? as u64;
+/// Where the counts end: magic, version, header_len, n_textures, n_blocks.
+const COUNTS_END: usize = 20;
+
+/// Magic, version and counts from the file's first bytes (`fixed`; all of
+/// them when the file is shorter than the fixed header), checked against
+/// the file's length `file_len`. A `header_len` below the smallest header
+/// or other than its counts imply is corrupt; one that fits its counts but
+/// not the file means the file was cut off ([`CodecError::TruncatedFile`]).
+pub(super) fn read_counts(fixed: &[u8], file_len: u64) -> Result<Counts> {
+    let too_short = || CodecError::TruncatedFile {
+        len: file_len,
+        implied: Implied::MinimumHeader,
+    };
+    let mut c = Cursor::new(fixed, 0);
+    match check_magic_version(&mut c) {
+        Err(CodecError::Truncated { .. }) => return Err(too_short()),
+        r => r?,
+    }
+    let header_len = c.u32("header_len").map_err(|_| too_short())? as u64;
+    if header_len < MIN_HEADER as u64 {
+        return Err(bad(
+            "header_len",
+            header_len,
+            format!("at least {MIN_HEADER}"),
+        ));
+    }
+    let cut = CodecError::TruncatedFile {
+        len: file_len,
+        implied: Implied::Header(header_len),
+    };
+    let (Ok(nt), Ok(nb)) = (c.u32("n_textures"), c.u32("n_blocks")) else {
+        // Shorter than the counts, so than any header_len ≥ MIN_HEADER.
+        return Err(cut);
+    };
+    let (nt, nb) = (nt as u64, nb as u64);
     let expected_len = FIXED_HEADER as u64 + TEX_RECORD as u64 * nt + BLOCK_ENTRY as u64 * nb + 4;
     if header_len != expected_len {
         return Err(bad(
@@ -70,29 +109,27 @@ fn parse_counts(c: &mut Cursor, header: &[u8], file_len: u64) -> Result<Counts> 
             format!("{expected_len} for {nt} textures and {nb} blocks"),
         ));
     }
-    if header_len > file_len || header_len > header.len() as u64 {
-        return Err(CodecError::Truncated {
-            field: "header",
-            offset: 0,
-            needed: header_len,
-            len: file_len.min(header.len() as u64),
-        });
-    }
-    let stored_crc = {
-        let t = &header[header_len as usize - 4..header_len as usize];
-        u32::from_le_bytes([t[0], t[1], t[2], t[3]])
-    };
-    let computed = crc32fast::hash(&header[..header_len as usize - 4]);
-    if stored_crc != computed {
-        return Err(CodecError::HeaderChecksum {
-            stored: stored_crc,
-            computed,
-        });
-    }
-    if nt == 0 {
-        return Err(bad("n_textures", 0, "at least 1"));
+    if header_len > file_len {
+        return Err(cut);
     }
     Ok(Counts { header_len, nt, nb })
+}
+
+/// The checksum in the last 4 bytes of `header` against the bytes before.
+fn check_checksum(header: &[u8]) -> Result<()> {
+    let Some((body, tail)) = header.split_last_chunk::<4>() else {
+        return Err(bad(
+            "header_len",
+            header.len() as u64,
+            format!("at least {MIN_HEADER}"),
+        ));
+    };
+    let stored = u32::from_le_bytes(*tail);
+    let computed = crc32fast::hash(body);
+    if stored != computed {
+        return Err(CodecError::HeaderChecksum { stored, computed });
+    }
+    Ok(())
 }
 
 /// The coding domain's gamma, after checking the block size and the
@@ -150,7 +187,10 @@ fn parse_textures(c: &mut Cursor, nt: u64, nb: u64, file_len: u64) -> Result<Vec
     Ok(textures)
 }
 
-/// The `nb` block index entries, each inside the file after the header.
+/// The `nb` block index entries, each after the header and inside the
+/// file: an entry that overlaps the header or ends past any file's end is
+/// corrupt; the one ending last ending past this file's end means the
+/// file was cut off ([`CodecError::TruncatedFile`]).
 fn parse_block_index(
     c: &mut Cursor,
     nb: u64,
@@ -158,12 +198,14 @@ fn parse_block_index(
     file_len: u64,
 ) -> Result<Vec<BlockEntry>> {
     let mut blocks = Vec::with_capacity(nb as usize);
+    // The block that ends last, and its end.
+    let mut last: Option<(usize, u64)> = None;
     for i in 0..nb as usize {
         let offset = c.u64("block offset")?;
         let len = c.u32("block len")?;
         let crc = c.u32("block crc")?;
         let end = offset.checked_add(len as u64);
-        if offset < header_len || end.is_none_or(|e| e > file_len) {
+        let Some(end) = end.filter(|_| offset >= header_len) else {
             return Err(CodecError::BlockOutOfRange {
                 block: i,
                 offset,
@@ -171,8 +213,17 @@ fn parse_block_index(
                 start: header_len,
                 len: file_len,
             });
+        };
+        if last.is_none_or(|(_, e)| end > e) {
+            last = Some((i, end));
         }
         blocks.push(BlockEntry { offset, len, crc });
+    }
+    if let Some((block, end)) = last.filter(|&(_, end)| end > file_len) {
+        return Err(CodecError::TruncatedFile {
+            len: file_len,
+            implied: Implied::Block { block, end },
+        });
     }
     Ok(blocks)
 }

@@ -34,6 +34,8 @@
 mod block;
 mod cursor;
 mod header;
+#[cfg(test)]
+mod tests;
 mod write;
 
 pub use block::BlockView;
@@ -49,11 +51,13 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use crate::error::{CodecError, Result};
 use crate::input::{LeafLayout, ParamGrid, TextureId};
 use crate::pyramid::Plan;
-use header::{bad, check_magic_version, parse_header};
+use header::{parse_header, read_counts};
 
 pub const MAGIC: [u8; 4] = *b"PTXC";
 pub const FORMAT_VERSION: u32 = 1;
 pub const FIXED_HEADER: usize = 28;
+/// The smallest header: the fixed fields and the checksum.
+pub const MIN_HEADER: usize = FIXED_HEADER + 4;
 pub const TEX_RECORD: usize = 64;
 pub const BLOCK_ENTRY: usize = 16;
 /// Largest raw/compressed ratio a file may declare; bounds what a small
@@ -156,28 +160,30 @@ impl Container {
     }
 
     /// Opens a file, reading only its header; blocks are read when decoded.
+    /// Every error names the file (so callers need not add its path again).
     pub fn open(path: &Path) -> Result<Self> {
-        let io = |source| CodecError::Io {
+        Self::open_file(path).map_err(|e| match e {
+            CodecError::Io { .. } => e,
+            e => CodecError::File {
+                path: path.display().to_string(),
+                cause: Box::new(e),
+            },
+        })
+    }
+
+    /// [`Container::open`], its errors other than i/o without the path.
+    fn open_file(path: &Path) -> Result<Self> {
+        let io = |cause| CodecError::Io {
             path: path.display().to_string(),
-            source,
+            cause,
         };
         let mut file = File::open(path).map_err(io)?;
         let file_len = file.metadata().map_err(io)?.len();
         let mut fixed = [0u8; FIXED_HEADER];
         let n = read_up_to(&mut file, &mut fixed).map_err(io)?;
-        // Let the parser report truncation/magic/version on the fixed part.
-        let header_len = {
-            let mut c = Cursor::new(&fixed[..n], 0);
-            check_magic_version(&mut c)?;
-            c.u32("header_len")? as u64
-        };
-        if header_len > file_len || header_len < FIXED_HEADER as u64 + 4 {
-            return Err(bad(
-                "header_len",
-                header_len,
-                format!("{}..={file_len}", FIXED_HEADER + 4),
-            ));
-        }
+        // Magic, version, and a header_len that fits the counts and the file.
+        let header_len = read_counts(&fixed[..n], file_len)?.header_len;
+        // header_len ≥ MIN_HEADER > FIXED_HEADER ≥ n.
         let mut header = fixed[..n].to_vec();
         header.resize(header_len as usize, 0);
         file.read_exact(&mut header[n..]).map_err(io)?;
@@ -242,9 +248,9 @@ impl Container {
                 use std::os::unix::fs::FileExt;
                 let mut buf = vec![0u8; e.len as usize];
                 file.read_exact_at(&mut buf, e.offset)
-                    .map_err(|source| CodecError::Io {
+                    .map_err(|cause| CodecError::Io {
                         path: path.clone(),
-                        source,
+                        cause,
                     })?;
                 Cow::Owned(buf)
             }

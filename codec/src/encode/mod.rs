@@ -210,9 +210,9 @@ pub fn encode_to_file(
 }
 
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let io = |source| CodecError::Io {
+    let io = |cause| CodecError::Io {
         path: path.display().to_string(),
-        source,
+        cause,
     };
     let dir = path
         .parent()

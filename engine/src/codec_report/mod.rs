@@ -10,7 +10,7 @@ mod view_frames;
 pub use curves::plot_curves;
 
 use crate::backend::DeviceOptions;
-use crate::compile::encode::load_input;
+use crate::compile::encode::{MapsFor, load_input, map_keys};
 use anyhow::{Context, Result};
 use curves::curves;
 use frames::{FRAME_PIXELS, FrameBench};
@@ -44,9 +44,12 @@ pub struct CodecReportRequest {
 
 pub fn codec_report(scene: &Scene, req: &CodecReportRequest) -> Result<String> {
     crate::util::files::check_output_file(&req.json)?;
-    let container = codec::Container::open(&req.file)
-        .with_context(|| format!("opening {}", req.file.display()))?;
-    let input = load_input(scene, &req.infer_dir)?;
+    // Its errors name the file.
+    let container = codec::Container::open(&req.file)?;
+    // Measured against the maps it was encoded from: refused, saying how
+    // to make them, when they are not there.
+    map_keys(scene, &req.infer_dir, MapsFor::Report)?;
+    let input = load_input(scene, &req.infer_dir, MapsFor::Report)?;
     let progress = indicatif::ProgressBar::new_spinner().with_style(
         indicatif::ProgressStyle::with_template("{spinner} codec-report {elapsed} {msg}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),

@@ -36,26 +36,91 @@ pub fn orbit_grid(orbit: &inference::scene::Orbit) -> ParamGrid {
 
 /// A map that could not be used for encoding: which one, and why.
 #[derive(Debug, thiserror::Error)]
-#[error("{}: {why}", path.display())]
+#[error("{why}")]
 pub struct BadMap {
     pub sample: u32,
     pub spec: usize,
     pub path: std::path::PathBuf,
+    /// The whole message, naming the map's file (as the key records' and
+    /// the maps' readers do).
     pub why: String,
 }
 
-/// Reads every sample's maps into the codec's input (sample-major; each
-/// sample MIP-major, then face, rows, texels, channels interleaved). A map
-/// that is missing, damaged (its key record's checksum) or holds values
-/// playback cannot (beyond f16) is a [`BadMap`] naming it.
-pub fn load_input(scene: &Scene, infer_dir: &Path) -> Result<EncodeInput> {
+/// A command that reads every inferred map: what it says when the scene
+/// has none, or one is missing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MapsFor {
+    /// `engine encode` and the compile: the maps are compressed.
+    Encode,
+    /// `engine codec-report`: the container is measured against them.
+    Report,
+}
+
+impl MapsFor {
+    /// Why a scene without parameterized maps is refused.
+    fn nothing(self) -> &'static str {
+        match self {
+            MapsFor::Encode => "nothing to encode",
+            MapsFor::Report => "this scene has no parameterized maps to report on",
+        }
+    }
+
+    /// What the command does with the maps.
+    fn needs(self) -> &'static str {
+        match self {
+            MapsFor::Encode => "encode compresses the inferred maps",
+            MapsFor::Report => {
+                "codec-report compares the container against the uncompressed inferred maps it was encoded from"
+            }
+        }
+    }
+}
+
+/// The scene's maps ([`map_specs`]), refused when it has none.
+fn specs_for(scene: &Scene, purpose: MapsFor) -> Result<Vec<MapSpec>> {
     let specs = map_specs(scene);
     if specs.is_empty() {
         bail!(
-            "{}: no reflective object has [objects.em] settings: nothing to encode",
-            scene.source.display()
+            "{}: no reflective object has [objects.em] settings: {}",
+            scene.source.display(),
+            purpose.nothing()
         );
     }
+    Ok(specs)
+}
+
+/// Every sample's maps' key records in `infer_dir`, in [`load_input`]'s
+/// order. A map missing, or without its record, is refused naming it, the
+/// folder, what `purpose` needs the maps for and how to make them.
+pub fn map_keys(scene: &Scene, infer_dir: &Path, purpose: MapsFor) -> Result<Vec<Key>> {
+    let specs = specs_for(scene, purpose)?;
+    let mut keys = Vec::new();
+    for k in 0..scene.orbit.sample_count() {
+        for spec in &specs {
+            let path = map_path(infer_dir, k, &spec.object, spec.layer);
+            let record = inference::key::read_record(&path).filter(|_| path.is_file());
+            let Some(record) = record else {
+                bail!(
+                    "{}: missing or without its key record: {}, and looks for them in {}; make them with `engine infer --scene {} --all --out {}`, or point --infer-dir at them",
+                    path.display(),
+                    purpose.needs(),
+                    infer_dir.display(),
+                    scene.arg(),
+                    infer_dir.display()
+                );
+            };
+            keys.push(record.key);
+        }
+    }
+    Ok(keys)
+}
+
+/// Reads every sample's maps into the codec's input (sample-major; each
+/// sample MIP-major, then face, rows, texels, channels interleaved) for
+/// `purpose`. A map that is missing, damaged (its key record's checksum)
+/// or holds values playback cannot (beyond f16) is a [`BadMap`] naming it.
+pub fn load_input(scene: &Scene, infer_dir: &Path, purpose: MapsFor) -> Result<EncodeInput> {
+    let specs = specs_for(scene, purpose)?;
     let samples = scene.orbit.sample_count();
     let mut textures = Vec::new();
     for (index, spec) in specs.iter().enumerate() {
@@ -110,7 +175,8 @@ fn read_checked(dir: &Path, k: u32, spec_index: usize, spec: &MapSpec) -> Result
         .map_err(|e| bad(e.to_string()))?;
     if let Some(v) = map.iter().flatten().find(|v| v.abs() > F16_MAX) {
         return Err(bad(format!(
-            "holds {v:e}, beyond what playback's f16 textures hold (±{F16_MAX})"
+            "{}: holds {v:e}, beyond what playback's f16 textures hold (±{F16_MAX})",
+            path.display()
         ))
         .into());
     }
@@ -225,6 +291,17 @@ fn worst_psnr(container: &codec::Container, input: &EncodeInput) -> Result<f64> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_map_without_its_record_is_named_once() {
+        let scene = inference::scene::Scene::load("teapot").expect("built-in scene");
+        let dir = tempfile::tempdir().expect("tempdir");
+        let e = load_input(&scene, dir.path(), MapsFor::Encode).expect_err("no maps");
+        let bad = e.downcast_ref::<BadMap>().expect("a BadMap");
+        let text = format!("{e:#}");
+        let path = bad.path.display().to_string();
+        assert_eq!(text, format!("{path}: no record of how it was made"));
+    }
 
     #[test]
     fn rings_are_a_2d_grid_whose_linear_order_is_the_sample_order() {

@@ -325,7 +325,7 @@ fn load_or_reinfer(
     req: &InferRequest,
     dirs: &DataDirs,
 ) -> Result<codec::EncodeInput> {
-    match encode::load_input(ctx.scene, &dirs.infer) {
+    match encode::load_input(ctx.scene, &dirs.infer, encode::MapsFor::Encode) {
         Ok(input) => Ok(input),
         Err(e) => {
             let Some(bad) = e.downcast_ref::<encode::BadMap>() else {
@@ -336,7 +336,7 @@ fn load_or_reinfer(
             let spec = &specs[bad.spec];
             inference::key::forget(&map_path(&dirs.infer, bad.sample, &spec.object, spec.layer));
             eprint!("{}", infer::infer(ctx.scene, req)?);
-            encode::load_input(ctx.scene, &dirs.infer)
+            encode::load_input(ctx.scene, &dirs.infer, encode::MapsFor::Encode)
         }
     }
 }

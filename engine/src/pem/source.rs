@@ -66,8 +66,8 @@ impl MapSource {
     /// Opens the container at `path`, checking it holds the maps this scene
     /// asks for, in the order `engine encode` writes them.
     pub fn container(scene: &Scene, path: &Path) -> Result<Self> {
-        let container = codec::Container::open(path)
-            .with_context(|| format!("opening map container {}", path.display()))?;
+        // Its errors name the file.
+        let container = codec::Container::open(path).context("opening the map container")?;
         let specs = map_specs(scene);
         let textures = container.textures();
         if textures.len() != specs.len() {
@@ -143,8 +143,7 @@ impl MapSource {
             Kind::Container { path, index, .. } => Kind::Container {
                 path: path.clone(),
                 container: Box::new(
-                    codec::Container::open(path)
-                        .with_context(|| format!("opening map container {}", path.display()))?,
+                    codec::Container::open(path).context("opening the map container")?,
                 ),
                 cache: Box::default(),
                 index: index.clone(),

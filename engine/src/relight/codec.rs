@@ -106,9 +106,10 @@ pub fn compressed(
         .with("codec format", u64::from(codec::FORMAT_VERSION))
         .with("codec gamma", u64::from(options().gamma.to_bits()));
     if matches!(inference::key::freshness(&path, &key), Freshness::Fresh) {
+        // Opening names the file; decoding is told it.
         match Container::open(&path)
             .map_err(anyhow::Error::from)
-            .and_then(|c| decode(&c, maps))
+            .and_then(|c| decode(&c, maps).with_context(|| path.display().to_string()))
         {
             Ok(decoded) => {
                 let bytes = std::fs::metadata(&path).map_or(0, |m| m.len());
@@ -119,7 +120,7 @@ pub fn compressed(
                     cached: true,
                 });
             }
-            Err(e) => eprintln!("{}: rebuilding ({e:#})", path.display()),
+            Err(e) => eprintln!("{e:#}: rebuilding it"),
         }
     }
     files::check_overwrite_keyed(&path)?;

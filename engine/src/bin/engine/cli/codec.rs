@@ -33,7 +33,9 @@ pub struct CodecReportArgs {
     /// A built-in scene's name (teapot) or the path of a .toml scene file.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
-    /// Where `engine infer --all` wrote the maps [default: out/<scene>/infer].
+    /// The uncompressed maps the container was encoded from, which the
+    /// report compares it against; they must exist (`engine infer --scene
+    /// <scene> --all` writes them) [default: out/<scene>/infer].
     #[arg(long)]
     pub infer_dir: Option<PathBuf>,
     /// Traced targets for the rendered-frame PSNR [default: out/<scene>/trace].

@@ -71,6 +71,11 @@ pub enum Command {
     /// Compress every sample's inferred maps into one container per scene.
     Encode(EncodeArgs),
     /// Measure a container: ratio, PSNR, decode time, baselines (JSON).
+    ///
+    /// Needs the uncompressed inferred maps the container was encoded from
+    /// (`engine infer --scene <scene> --all`): it compares the decoded
+    /// container against them, and looks for them in out/<scene>/infer
+    /// unless --infer-dir says where they are.
     CodecReport(CodecReportArgs),
     /// Compile what the main job plays (traces, maps, room light maps,
     /// container) without playing: whole, one shard of the samples for a

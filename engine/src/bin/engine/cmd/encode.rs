@@ -2,11 +2,12 @@
 
 use super::default_dir;
 use crate::cli::EncodeArgs;
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use codec::Target;
 use engine::compile::container_key;
-use engine::compile::encode::{DEFAULT_RATIO, encode_to, load_input, orbit_grid};
-use engine::maps::{map_path, map_specs};
+use engine::compile::encode::{
+    DEFAULT_RATIO, MapsFor, encode_to, load_input, map_keys, orbit_grid,
+};
 use inference::scene::Scene;
 
 pub fn run(args: &EncodeArgs) -> Result<String> {
@@ -22,22 +23,8 @@ pub fn run(args: &EncodeArgs) -> Result<String> {
     engine::util::files::check_folder_exists(&args.out)?;
     let dir = default_dir(&args.infer_dir, &scene, "infer");
     // The container's key is made of the keys its maps were inferred with.
-    let mut keys = Vec::new();
-    for k in 0..scene.orbit.sample_count() {
-        for spec in map_specs(&scene) {
-            let path = map_path(&dir, k, &spec.object, spec.layer);
-            let record = inference::key::read_record(&path).with_context(|| {
-                format!(
-                    "{}: missing or without its key record (run `engine infer --scene {} --all --out {}` first)",
-                    path.display(),
-                    args.scene,
-                    dir.display()
-                )
-            })?;
-            keys.push(record.key);
-        }
-    }
-    let input = load_input(&scene, &dir)?;
+    let keys = map_keys(&scene, &dir, MapsFor::Encode)?;
+    let input = load_input(&scene, &dir, MapsFor::Encode)?;
     let e = encode_to(
         &input,
         target,
