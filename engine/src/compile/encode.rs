@@ -54,6 +54,8 @@ pub enum MapsFor {
     Encode,
     /// `engine codec-report`: the container is measured against them.
     Report,
+    /// `engine export --ktx2`: the maps are written for other engines.
+    Export,
 }
 
 impl MapsFor {
@@ -62,6 +64,7 @@ impl MapsFor {
         match self {
             MapsFor::Encode => "nothing to encode",
             MapsFor::Report => "this scene has no parameterized maps to report on",
+            MapsFor::Export => "no maps to export",
         }
     }
 
@@ -71,6 +74,9 @@ impl MapsFor {
             MapsFor::Encode => "encode compresses the inferred maps",
             MapsFor::Report => {
                 "codec-report compares the container against the uncompressed inferred maps it was encoded from"
+            }
+            MapsFor::Export => {
+                "export writes the inferred maps as KTX2 files (the main job playing a shipped compiled scene infers none)"
             }
         }
     }
@@ -90,8 +96,9 @@ fn specs_for(scene: &Scene, purpose: MapsFor) -> Result<Vec<MapSpec>> {
 }
 
 /// Every sample's maps' key records in `infer_dir`, in [`load_input`]'s
-/// order. A map missing, or without its record, is refused naming it, the
-/// folder, what `purpose` needs the maps for and how to make them.
+/// order. A map missing, or without its record, is refused naming it, its
+/// sample, the folder (and whether it exists), what `purpose` needs the
+/// maps for and how to make them.
 pub fn map_keys(scene: &Scene, infer_dir: &Path, purpose: MapsFor) -> Result<Vec<Key>> {
     let specs = specs_for(scene, purpose)?;
     let mut keys = Vec::new();
@@ -100,13 +107,19 @@ pub fn map_keys(scene: &Scene, infer_dir: &Path, purpose: MapsFor) -> Result<Vec
             let path = map_path(infer_dir, k, &spec.object, spec.layer);
             let record = inference::key::read_record(&path).filter(|_| path.is_file());
             let Some(record) = record else {
+                let folder = if infer_dir.is_dir() {
+                    ""
+                } else {
+                    "; no such folder"
+                };
                 bail!(
-                    "{}: missing or without its key record: {}, and looks for them in {}; make them with `engine infer --scene {} --all --out {}`, or point --infer-dir at them",
+                    "{}: missing or without its key record: {}, and looks for them in {}; make them with `engine infer --scene {} --all --out {}`, or point --infer-dir at them (sample {k}'s {}{folder})",
                     path.display(),
                     purpose.needs(),
                     infer_dir.display(),
                     scene.arg(),
-                    infer_dir.display()
+                    infer_dir.display(),
+                    spec.name()
                 );
             };
             keys.push(record.key);

@@ -10,6 +10,7 @@
 pub mod ktx2;
 pub mod sidecar;
 
+use crate::compile::encode::{MapsFor, map_keys};
 use crate::compile::infer::jobs_for;
 use crate::maps::{MapLayer, MapSpec, map_path, map_specs};
 use crate::util::files::{check_overwrite, claim_dir, write, write_json};
@@ -79,15 +80,11 @@ pub fn file_name(spec: &MapSpec, sample: u32) -> String {
 /// Writes every sample's maps from `infer_dir` as KTX2 files into `out`
 /// (claimed: made, empty or the engine's) and the sidecar beside them.
 pub fn export_ktx2(scene: &Scene, infer_dir: &Path, out: &Path) -> Result<Exported> {
+    // Every map there with its key record, checked before the folder is
+    // claimed: a run that cannot export leaves nothing.
+    map_keys(scene, infer_dir, MapsFor::Export)?;
     let specs = map_specs(scene);
-    if specs.is_empty() {
-        bail!(
-            "{}: no reflective object has [objects.em] settings: no maps to export",
-            scene.source.display()
-        );
-    }
     let jobs = jobs_for(scene, None, false)?;
-    check_inputs(scene, infer_dir, &specs)?;
     claim_dir(out)?;
     let writer = format!("pem-engine {}", env!("CARGO_PKG_VERSION"));
     let mut files = Vec::new();
@@ -146,40 +143,6 @@ fn write_atlas(scene: &Scene, spec: &MapSpec, out: &Path) -> Result<PathBuf> {
     );
     write_obj(&path, &mesh, &header).with_context(|| format!("writing {}", path.display()))?;
     Ok(path)
-}
-
-/// Every map the export reads is there with its key record, checked before
-/// the output folder is claimed: a run that cannot export leaves nothing.
-fn check_inputs(scene: &Scene, infer_dir: &Path, specs: &[MapSpec]) -> Result<()> {
-    let how = || {
-        format!(
-            "`engine infer --scene {} --all --out {}` writes them; the main job playing a \
-             shipped compiled scene infers none",
-            scene.arg(),
-            infer_dir.display()
-        )
-    };
-    if !infer_dir.is_dir() {
-        bail!(
-            "{}: no such folder (expected the scene's inferred maps: {})",
-            infer_dir.display(),
-            how()
-        );
-    }
-    for k in 0..scene.orbit.sample_count() {
-        for spec in specs {
-            let path = map_path(infer_dir, k, &spec.object, spec.layer);
-            if inference::key::read_record(&path).is_none() {
-                bail!(
-                    "{}: sample {k}'s {} is missing or has no key record ({})",
-                    path.display(),
-                    spec.name(),
-                    how()
-                );
-            }
-        }
-    }
-    Ok(())
 }
 
 /// Sample `k`'s map `spec` as an RGBA texture: checked against its key
