@@ -39,7 +39,12 @@ impl Session {
     /// Loads the scene, claims the output folder (`out/<scene>` unless
     /// given), opens the device and sets the renderer up.
     pub fn open(place: &RunPlace) -> Result<Session> {
-        let scene = Scene::load(&place.scene)?;
+        Session::open_scene(place, Scene::load(&place.scene)?)
+    }
+
+    /// [`Session::open`] with `scene`, already loaded from `place.scene`
+    /// (and checked by the caller before any folder is claimed).
+    pub fn open_scene(place: &RunPlace, scene: Scene) -> Result<Session> {
         let out = place.out_dir(&scene);
         claim_dir(&out)?;
         let device = create_device(&place.device)?;

@@ -132,17 +132,15 @@ impl Planned {
 /// missing); writes the report and chart; returns the printed summary.
 pub fn place(place: &RunPlace, opts: &PlaceOptions) -> Result<String> {
     // Checked before the session claims a folder or compiles anything.
-    let mut planned = {
-        let scene = inference::scene::Scene::load(&place.scene)?;
-        check_dense(&scene)?;
-        Planned::new(&scene, opts)?
-    };
+    let scene = inference::scene::Scene::load(&place.scene)?;
+    check_dense(&scene)?;
+    let mut planned = Planned::new(&scene, opts)?;
     let Session {
         scene,
         out: data,
         mut renderer,
         ..
-    } = Session::open(place)?;
+    } = Session::open_scene(place, scene)?;
     let out = opts.out.clone().unwrap_or_else(|| data.join("place"));
     crate::util::files::claim_dir(&out)?;
     let reflectors = crate::eval::reflector_names(&scene)?;
