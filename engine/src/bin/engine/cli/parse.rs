@@ -3,29 +3,31 @@
 
 /// Parses `WIDTHxHEIGHT`, each 1..=8192.
 pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let expected = || format!("expected WIDTHxHEIGHT (each 1 to 8192, e.g. 640x480), got {s:?}");
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(expected)?;
-    let w: u32 = w.trim().parse().map_err(|_| expected())?;
-    let h: u32 = h.trim().parse().map_err(|_| expected())?;
-    if !(1..=8192).contains(&w) || !(1..=8192).contains(&h) {
-        return Err(expected());
-    }
-    Ok((w, h))
+    pair(
+        s,
+        (8192, 8192),
+        "WIDTHxHEIGHT (each 1 to 8192, e.g. 640x480)",
+    )
 }
 
 /// Parses a light grid `RINGSxAZIMUTHS` (rings 1..=64, azimuths 1..=128,
 /// as the relighting grid allows).
 pub fn parse_grid(s: &str) -> Result<(u32, u32), String> {
-    let expected = || {
-        format!("expected RINGSxAZIMUTHS (rings 1 to 64, azimuths 1 to 128, e.g. 8x16), got {s:?}")
-    };
-    let (r, a) = s.split_once(['x', 'X']).ok_or_else(expected)?;
-    let r: u32 = r.trim().parse().map_err(|_| expected())?;
-    let a: u32 = a.trim().parse().map_err(|_| expected())?;
-    if !(1..=64).contains(&r) || !(1..=128).contains(&a) {
-        return Err(expected());
-    }
-    Ok((r, a))
+    pair(
+        s,
+        (64, 128),
+        "RINGSxAZIMUTHS (rings 1 to 64, azimuths 1 to 128, e.g. 8x16)",
+    )
+}
+
+/// Two counts `AxB`, each from 1 to its `max`, else "expected {expected}".
+fn pair(s: &str, max: (u32, u32), expected: &str) -> Result<(u32, u32), String> {
+    let parsed = s.split_once(['x', 'X']).and_then(|(a, b)| {
+        let a: u32 = a.trim().parse().ok()?;
+        let b: u32 = b.trim().parse().ok()?;
+        ((1..=max.0).contains(&a) && (1..=max.1).contains(&b)).then_some((a, b))
+    });
+    parsed.ok_or_else(|| format!("expected {expected}, got {s:?}"))
 }
 
 /// A worker thread count, 1 to 256 (more only queues work on a machine's
