@@ -123,13 +123,10 @@ pub struct TraceArgs {
     /// Trace a free view at this orbit azimuth in degrees (off the sample grid).
     #[arg(long, allow_hyphen_values = true, value_parser = parse_degrees)]
     pub view_angle: Option<f32>,
+    // Without --view-angle refused by `cmd::trace`: clap's `requires` lets
+    // it through beside the required group's --sample or --all.
     /// With --view-angle: elevation above the orbit in degrees [default: 0].
-    #[arg(
-        long,
-        allow_hyphen_values = true,
-        requires = "view_angle",
-        value_parser = parse_elevation
-    )]
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_elevation)]
     pub elevation: Option<f32>,
     /// Samples per pixel [default: 16].
     #[arg(long)]

@@ -19,7 +19,6 @@ pub fn run(args: &TraceArgs) -> Result<String> {
         ..TraceSettings::default()
     };
     if args.elevation.is_some() && args.view_angle.is_none() {
-        // clap's `requires` alone lets it through beside --sample or --all.
         bail!(
             "--elevation places a free view: it needs --view-angle (orbit samples have their own elevation)"
         );
