@@ -338,16 +338,7 @@ fn report_on_a_corrupt_container_fails_cleanly() {
 #[test]
 fn report_on_a_missing_container_names_it_once() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let file = dir.path().join("nosuch.ptxc");
-    let json = dir.path().join("r.json");
-    let o = engine(&[
-        "codec-report",
-        file.to_str().expect("utf-8"),
-        "--json",
-        json.to_str().expect("utf-8"),
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success(), "{err}");
+    let err = report_error(&dir.path().join("nosuch.ptxc"), dir.path(), &[]);
     assert_eq!(err.matches("nosuch.ptxc").count(), 1, "{err}");
     assert_eq!(err.matches("No such file or directory").count(), 1, "{err}");
 }
