@@ -73,15 +73,7 @@ fn main() -> Result<()> {
     }
     if let Some(out) = rest.first() {
         let diff = engine::compare::diff_image(&a, &b, 4.0);
-        let mut mosaic = vec![[0.0f32; 4]; (3 * w * h) as usize];
-        for y in 0..h as usize {
-            for (k, img) in [&a, &b, &diff].into_iter().enumerate() {
-                for x in 0..w as usize {
-                    mosaic[y * 3 * w as usize + k * w as usize + x] = img[y * w as usize + x];
-                }
-            }
-        }
-        engine::capture::write_png(Path::new(out), 3 * w, h, &mosaic)?;
+        engine::eval::pictures::frames_in_a_row(Path::new(out), &[&a, &b, &diff], w, h)?;
     }
     Ok(())
 }

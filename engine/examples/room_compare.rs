@@ -93,7 +93,7 @@ fn main() -> Result<()> {
             engine::capture::write_png(&named("engine"), width, height, &frames[0])?;
             engine::capture::write_png(&named("trace"), width, height, &traced)?;
         }
-        let diff = |f: &Frame| display_diff(&traced, f, 4.0);
+        let diff = |f: &Frame| engine::eval::metrics::display_difference(&traced, f, 4.0);
         side_by_side(out, [&frames[0], &traced], width, height)?;
         let diffs = out.with_file_name(format!("{}_diff.png", stem(out)));
         side_by_side(
@@ -192,22 +192,6 @@ fn side_by_side(path: &Path, frames: [&Frame; 2], width: u32, height: u32) -> Re
     }
     engine::capture::write_png(path, 2 * w as u32, h as u32, &mosaic)?;
     Ok(())
-}
-
-/// |sRGB(a) − sRGB(b)| × `gain`, the largest channel, as a grey frame that
-/// the PNG shows at that value: the error as the goals weigh it.
-fn display_diff(a: &Frame, b: &Frame, gain: f32) -> Frame {
-    use engine::capture::{linear_to_srgb, srgb_to_linear};
-    a.iter()
-        .zip(b)
-        .map(|(p, q)| {
-            let d = (0..3)
-                .map(|c| (linear_to_srgb(p[c]) - linear_to_srgb(q[c])).abs())
-                .fold(0.0f32, f32::max);
-            let v = srgb_to_linear((d * gain).min(1.0));
-            [v, v, v, 1.0]
-        })
-        .collect()
 }
 
 /// Display PSNR of `pixels` per object of the reference (its `.mask`

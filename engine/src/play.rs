@@ -175,6 +175,9 @@ pub fn setup_mode<'s>(
 /// What a play wrote besides its frames.
 pub struct Played {
     pub report: PerfReport,
+    /// Where the frames went, and how many the path had.
+    pub out: PathBuf,
+    pub frames: u32,
     /// The path as a video, when frames were captured and a video asked for.
     pub video: Option<crate::video::Video>,
 }
@@ -259,7 +262,12 @@ pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<Played> {
     } else {
         None
     };
-    Ok(Played { report, video })
+    Ok(Played {
+        report,
+        video,
+        out,
+        frames,
+    })
 }
 
 /// A progress bar over `frames` frames, labelled `message`.

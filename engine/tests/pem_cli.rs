@@ -46,6 +46,54 @@ fn pass_names(out: &Path) -> Vec<String> {
         .collect()
 }
 
+/// `--score 3`: the first, middle and last of the 5 frames, as written,
+/// against their traced views; the references are traced once. Refused
+/// with `--no-capture` before anything runs.
+fn assert_path_is_scored(scene: &Path, out: &Path) {
+    let refused = play(scene, out, &["--score", "3", "--no-capture"]);
+    assert!(!refused.status.success());
+    assert!(
+        text(&refused).contains("--score with --no-capture"),
+        "{}",
+        text(&refused)
+    );
+
+    let first = play(scene, out, &["--score", "3", "--no-video"]);
+    assert!(first.status.success(), "{}", text(&first));
+    assert!(
+        text(&first).contains("references: 3 traced, 0 from the cache"),
+        "{}",
+        text(&first)
+    );
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("score.json")).expect("score.json"))
+            .expect("JSON");
+    let frames = json["frames"].as_array().expect("frames");
+    let field = |f: &serde_json::Value, k: &str| f[k].as_f64().expect(k);
+    let picked: Vec<f64> = frames.iter().map(|f| field(f, "frame")).collect();
+    assert_eq!(picked, [0.0, 2.0, 4.0]);
+    assert_eq!(frames[0]["kind"], "on a sample");
+    assert_eq!(frames[2]["kind"], "above the orbit");
+    assert!(field(&frames[2], "elevation_deg") > 19.0);
+    for f in frames {
+        // The tiny scene's 16² maps at 64x48 score 26–28 dB; frame 0
+        // against the 20° view's reference scores 14 dB.
+        let (db, flip) = (field(f, "psnr_frame_db"), field(f, "flip_frame"));
+        assert!((22.0..45.0).contains(&db), "{f}");
+        assert!(flip > 0.0 && flip < 0.3, "{f}");
+    }
+    let picture = image::open(out.join("score.png")).expect("score.png");
+    assert_eq!((picture.width(), picture.height()), (3 * 64, 48));
+
+    let again = play(scene, out, &["--score", "3", "--no-video"]);
+    assert!(again.status.success(), "{}", text(&again));
+    assert!(
+        text(&again).contains("references: 0 traced, 3 from the cache"),
+        "{}",
+        text(&again)
+    );
+}
+
 /// The first run traces, infers and encodes what is missing, then plays
 /// deferred layered PEMs.
 fn assert_first_run_compiles(scene: &Path, out: &Path) {
@@ -270,6 +318,7 @@ fn main_job_compiles_what_is_missing_then_plays_every_mode() {
         text(&again)
     );
 
+    assert_path_is_scored(&scene, &out);
     assert_edited_scene_recompiles(&scene, &out);
     assert_bench_rows(&scene, &out);
     assert_every_mode_plays(&scene, &out);

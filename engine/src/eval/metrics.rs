@@ -154,6 +154,21 @@ pub fn display_bytes(image: &[[f32; 4]]) -> Vec<u8> {
     crate::util::srgb8::srgb8_rgb(image)
 }
 
+/// |display(a) − display(b)| × `gain`, the largest channel, as a grey
+/// linear frame whose PNG shows that value: the error as the display
+/// metrics weigh it, for pictures.
+pub fn display_difference(a: &[[f32; 4]], b: &[[f32; 4]], gain: f32) -> Vec<[f32; 4]> {
+    let (a, b) = (display_bytes(a), display_bytes(b));
+    a.chunks_exact(3)
+        .zip(b.chunks_exact(3))
+        .map(|(p, q)| {
+            let d = (0..3).map(|c| p[c].abs_diff(q[c])).max().unwrap_or(0);
+            let v = crate::capture::srgb_to_linear((f32::from(d) / 255.0 * gain).min(1.0));
+            [v, v, v, 1.0]
+        })
+        .collect()
+}
+
 /// Display-referred PSNR in dB over every pixel: both frames through
 /// [`display_bytes`] (what a person sees in the PNG), peak 255, MSE over
 /// R, G and B of all pixels; bounded to `PSNR_CAP_DB` for identical frames.

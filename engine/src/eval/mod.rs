@@ -7,6 +7,7 @@ pub mod bars;
 pub mod chart;
 pub mod metrics;
 pub mod noise;
+pub mod path_score;
 pub mod pictures;
 pub mod plot;
 pub mod reference;

@@ -40,3 +40,22 @@ pub fn side_by_side(
         .with_context(|| format!("writing {}", path.with_extension("txt").display()))?;
     Ok(())
 }
+
+/// Whole frames of `width × height` side by side, left to right, as one PNG.
+pub fn frames_in_a_row(path: &Path, frames: &[&[[f32; 4]]], width: u32, height: u32) -> Result<()> {
+    let (w, h, n) = (width as usize, height as usize, frames.len());
+    let mut mosaic = vec![[0.0f32; 4]; n * w * h];
+    for (k, image) in frames.iter().enumerate() {
+        if image.len() != w * h {
+            anyhow::bail!(
+                "frame {k}: {} pixels, expected {width}x{height}",
+                image.len()
+            );
+        }
+        for y in 0..h {
+            mosaic[y * n * w + k * w..][..w].copy_from_slice(&image[y * w..][..w]);
+        }
+    }
+    crate::capture::write_png(path, (n * w) as u32, height, &mosaic)
+        .with_context(|| format!("writing {}", path.display()))
+}

@@ -295,6 +295,14 @@ pub struct PlayArgs {
     /// Write no frames (only perf.json): for benchmarks.
     #[arg(long)]
     pub no_capture: bool,
+    /// After playing, score N frames spread along the path (1 to 1,000; the
+    /// first and the last among them) against the ray tracer: each frame as
+    /// written to PNG against its view traced at 16 spp (about 7 s a view at
+    /// 640x480 on two cores; cached under <out>/reference), display PSNR and
+    /// FLIP over every pixel as `engine eval` scores them; writes score.json
+    /// and score.png (the worst frame: engine | tracer | difference ×4).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub score: Option<u32>,
     /// Write no video of the path beside the frames (an H.264 MP4 when
     /// ffmpeg is on PATH, else an animated PNG).
     #[arg(long)]
