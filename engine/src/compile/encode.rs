@@ -101,7 +101,7 @@ fn specs_for(scene: &Scene, purpose: MapsFor) -> Result<Vec<MapSpec>> {
     if specs.is_empty() {
         bail!(
             "{}: no reflective object has [objects.em] settings: {}",
-            scene.source.display(),
+            scene.origin,
             purpose.nothing()
         );
     }
