@@ -50,7 +50,7 @@ impl Session {
         let device = create_device(&place.device)?;
         let (width, height) = place.size;
         let renderer = Renderer::new(&device, &scene, width, height)
-            .with_context(|| format!("setting up scene {}", scene.source.display()))?;
+            .with_context(|| format!("setting up {}", scene.origin))?;
         Ok(Session {
             place: place.clone(),
             scene,

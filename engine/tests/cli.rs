@@ -349,6 +349,15 @@ fn mistakes_are_refused_before_any_work_and_leave_nothing() {
             vec!["relight", "--ratio", "0", "--out", out_s],
             vec!["--ratio 0", "compression ratio"],
         ),
+        // 1:1 is no compression: relight and encode refuse it alike.
+        (
+            vec!["relight", "--ratio", "1", "--out", out_s],
+            vec!["--ratio 1: expected a finite compression ratio above 1"],
+        ),
+        (
+            vec!["encode", "--ratio", "1", "--out", json_s],
+            vec!["--ratio 1: expected a finite compression ratio above 1"],
+        ),
         (
             vec!["relight", "--json", json_s, "--out", out_s],
             vec!["r.json", "does not exist"],
@@ -363,7 +372,11 @@ fn mistakes_are_refused_before_any_work_and_leave_nothing() {
         ),
         (
             vec!["place", "--scene", "teapot", "--data", out_s],
-            vec!["ring_line_every = 4", "rings = 1"],
+            // A built-in scene is named as one: no repository path.
+            vec![
+                "built-in scene 'teapot': orbit.ring_line_every = 4",
+                "rings = 1",
+            ],
         ),
         (
             vec![

@@ -431,7 +431,7 @@ fn report_on_a_scene_without_maps_does_not_say_encode() {
     let dir = tempfile::tempdir().expect("tempdir");
     let err = report_error(&shipped_container(), dir.path(), &["--scene", "glass"]);
     assert!(
-        err.contains("glass.toml: no reflective object has [objects.em] settings: this scene has no parameterized maps to report on"),
+        err.contains("built-in scene 'glass': no reflective object has [objects.em] settings: this scene has no parameterized maps to report on"),
         "{err}"
     );
     assert!(!err.contains("encode"), "{err}");

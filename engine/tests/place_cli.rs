@@ -241,7 +241,7 @@ fn a_budget_below_the_start_lines_is_refused_before_anything_compiles() {
     let log = output_text(&o);
     assert!(!o.status.success(), "{log}");
     assert!(
-        log.contains("ring_line_every") && log.contains("teapot.toml"),
+        log.contains("ring_line_every") && log.contains("built-in scene 'teapot'"),
         "{log}"
     );
     let tiny = tiny_scene(dir.path());

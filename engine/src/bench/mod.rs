@@ -139,7 +139,7 @@ pub fn bench(place: &RunPlace, opts: &BenchOptions) -> Result<BenchReport> {
     if !scene.objects.iter().any(|o| o.em.is_some()) {
         anyhow::bail!(
             "{}: nothing to bench: no reflective object has [objects.em] settings and no object is glass",
-            scene.source.display()
+            scene.origin
         );
     }
     let (width, height) = place.size;

@@ -20,6 +20,19 @@ pub const MIN_TEXTURE_PSNR_DB: f64 = 35.0;
 pub const DEFAULT_RATIO: f64 = 384.0;
 /// f16's largest finite value: what playback's textures can hold.
 const F16_MAX: f32 = 65504.0;
+/// What a compression ratio must be (against 32-bit floats), as every
+/// refusal of one words it.
+pub const RATIO_EXPECTED: &str = "a finite compression ratio above 1 (e.g. 384)";
+
+/// Refuses a ratio the codec cannot aim at ([`RATIO_EXPECTED`]): the one
+/// check of `--ratio` for `engine encode`, `engine relight` and
+/// `engine codec-report --curve-ratios`, made before any work.
+pub fn check_ratio(ratio: f64) -> Result<()> {
+    if !(ratio.is_finite() && ratio > 1.0) {
+        bail!("--ratio {ratio}: expected {RATIO_EXPECTED}");
+    }
+    Ok(())
+}
 
 /// The codec's parameter grid of `orbit`'s viewpoint samples: its azimuth
 /// lines × elevation rings as a 2D grid (2D 8×8 parameter blocks, thesis
@@ -88,7 +101,7 @@ fn specs_for(scene: &Scene, purpose: MapsFor) -> Result<Vec<MapSpec>> {
     if specs.is_empty() {
         bail!(
             "{}: no reflective object has [objects.em] settings: {}",
-            scene.source.display(),
+            scene.origin,
             purpose.nothing()
         );
     }
@@ -304,6 +317,18 @@ fn worst_psnr(container: &codec::Container, input: &EncodeInput) -> Result<f64> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_ratio_must_be_finite_and_above_one() {
+        for ok in [1.000_001, 20.0, 384.0, 1e9] {
+            assert!(check_ratio(ok).is_ok(), "{ok}");
+        }
+        for bad in [1.0, 0.5, 0.0, -384.0, f64::INFINITY, f64::NAN] {
+            let e = check_ratio(bad).expect_err("refused");
+            let want = format!("--ratio {bad}: expected a finite compression ratio above 1");
+            assert!(e.to_string().starts_with(&want), "{e}");
+        }
+    }
 
     #[test]
     fn a_map_without_its_record_is_named_once() {

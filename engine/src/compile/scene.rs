@@ -100,7 +100,7 @@ fn compile_glass(ctx: &CompileContext, part: Part, ship: Option<&Path>) -> Resul
     if part != Part::Whole {
         bail!(
             "{}: a glass scene compiles in one part (no --shard or --merge)",
-            ctx.scene.source.display()
+            ctx.scene.origin
         );
     }
     let layered = super::glass_shells::layered::LayeredObject::for_scene(ctx.scene, ctx.out)?;
@@ -108,7 +108,7 @@ fn compile_glass(ctx: &CompileContext, part: Part, ship: Option<&Path>) -> Resul
         bail!(
             "--ship {}: {} has layered shells; their per-sample maps play from --out and are not shipped",
             dest.display(),
-            ctx.scene.source.display()
+            ctx.scene.origin
         );
     }
     let start = Instant::now();
@@ -116,7 +116,7 @@ fn compile_glass(ctx: &CompileContext, part: Part, ship: Option<&Path>) -> Resul
         bail!(
             "{}: nothing to compile: its glass object has no `shell_every` (per-sample shell \
              maps); its shell map is traced in seconds when played (`engine --scene {}`)",
-            ctx.scene.source.display(),
+            ctx.scene.origin,
             ctx.scene_arg
         );
     };

@@ -167,8 +167,8 @@ pub fn reflector_names(scene: &inference::scene::Scene) -> Result<Vec<String>> {
         .map(|o| o.name.clone())
         .collect();
     if names.is_empty() {
-        let source = scene.source.display();
-        bail!("{source}: no reflector with [objects.em] or glass with [objects.glass]");
+        let origin = &scene.origin;
+        bail!("{origin}: no reflector with [objects.em] or glass with [objects.glass]");
     }
     Ok(names)
 }

@@ -126,11 +126,7 @@ pub fn atlas_file_name(object: &str) -> String {
 
 fn write_atlas(scene: &Scene, spec: &MapSpec, out: &Path) -> Result<PathBuf> {
     let Some(object) = scene.object(&spec.object) else {
-        bail!(
-            "{}: no object {} in the scene",
-            scene.source.display(),
-            spec.object
-        );
+        bail!("{}: no object {} in the scene", scene.origin, spec.object);
     };
     let edge = crate::maps::ptm_edge(spec.resolution);
     let mesh = inference::atlas::build(&object.mesh, edge).mesh(&object.mesh);

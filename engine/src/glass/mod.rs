@@ -441,7 +441,7 @@ pub fn setup(
     let Some(glass) = renderer.glass.as_mut() else {
         anyhow::bail!(
             "{}: --mode hybrid needs an object with [objects.glass] (a glass material)",
-            scene.source.display()
+            scene.origin
         );
     };
     glass.clear_samples();

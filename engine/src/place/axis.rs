@@ -20,11 +20,11 @@ impl Axis {
             Axis::Azimuth if rings > 1 => bail!(
                 "{}: [orbit] has {rings} rings: `engine place` places the azimuth lines of a 1D \
                  orbit, with --rings the rings of a 2D one, or with --grid both",
-                scene.source.display()
+                scene.origin
             ),
             Axis::Rings if rings < 2 => bail!(
                 "{}: --rings: [orbit] has one ring (expected rings ≥ 2 to choose from)",
-                scene.source.display()
+                scene.origin
             ),
             _ => Ok(()),
         }
@@ -103,7 +103,7 @@ impl Placing {
                     bail!(
                         "{}: --grid: [orbit] has {} azimuth lines × {} rings (expected at least \
                          2 of each to choose from)",
-                        scene.source.display(),
+                        scene.origin,
                         o.samples,
                         o.rings.max(1)
                     );

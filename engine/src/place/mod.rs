@@ -76,12 +76,12 @@ impl Planned {
                 target_db: opts.target_db,
             };
             grid.validate()
-                .with_context(|| format!("{}: --grid", scene.source.display()))?;
+                .with_context(|| format!("{}: --grid", scene.origin))?;
             if grid.start_samples() >= o.sample_count() {
                 bail!(
                     "{}: --start {} places all {} × {} dense lines × rings: nothing is left to \
                      choose (expected --start below one of them, e.g. 2)",
-                    scene.source.display(),
+                    scene.origin,
                     opts.start,
                     o.samples,
                     o.rings
@@ -97,19 +97,17 @@ impl Planned {
             target_db: opts.target_db,
         };
         plan.validate().with_context(|| match axis {
-            Axis::Azimuth => format!("{}: [orbit]", scene.source.display()),
+            Axis::Azimuth => format!("{}: [orbit]", scene.origin),
             Axis::Rings => format!(
                 "{}: --rings: a ring is {per_line} samples, so --max-samples {} buys {} rings",
-                scene.source.display(),
-                opts.max_samples,
-                plan.max_samples
+                scene.origin, opts.max_samples, plan.max_samples
             ),
         })?;
         if plan.start >= plan.lines {
             bail!(
                 "{}: --start {} places all {} dense {}: nothing is left to choose (expected \
                  --start below {}, e.g. 2)",
-                scene.source.display(),
+                scene.origin,
                 plan.start,
                 plan.lines,
                 axis.noun(),
@@ -199,7 +197,7 @@ fn check_dense(scene: &inference::scene::Scene) -> Result<()> {
          (expected ring_line_every = 1 in the dense scene it starts from; for the orbit's lines \
          alone, a copy of the scene with `rings = 1`, or with `ring_line_every = 1` for the \
          whole grid)",
-        scene.source.display(),
+        scene.origin,
         scene.orbit.ring_line_every
     )
 }

@@ -6,7 +6,7 @@
 //! the pyramid over the parameter finds little to share between them; the
 //! gain is the per-plane transform coding.
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use codec::input::{EncodeInput, LeafLayout, ParamGrid, ParamTexture, TextureId};
 use codec::{Container, EncodeOptions, Target};
 use inference::key::{Freshness, Key};
@@ -77,14 +77,6 @@ fn decode(container: &Container, like: &ShMaps) -> Result<ShMaps> {
     Ok(maps)
 }
 
-/// Refuses a ratio the SH maps cannot be stored at, before any tracing.
-pub fn check_ratio(ratio: f64) -> Result<()> {
-    if !(1.0..=100_000.0).contains(&ratio) {
-        bail!("--ratio {ratio}: expected a compression ratio from 1 to 100000");
-    }
-    Ok(())
-}
-
 /// `maps` (cached raw under `raw_path` with key `raw_key`) encoded at
 /// `ratio`:1 and decoded: read from the cached container when its key
 /// matches, else encoded and cached.
@@ -94,7 +86,7 @@ pub fn compressed(
     raw_key: &Key,
     ratio: f64,
 ) -> Result<CompressedMaps> {
-    check_ratio(ratio)?;
+    crate::compile::encode::check_ratio(ratio)?;
     let stem = raw_path
         .file_stem()
         .and_then(|s| s.to_str())

@@ -116,7 +116,7 @@ pub fn reflector(scene: &Scene) -> Result<usize> {
             format!(
                 "{}: reflection-space IBR needs a mirror, glossy or diffuse object with \
                  [objects.em]",
-                scene.source.display()
+                scene.origin
             )
         })
 }

@@ -2,7 +2,10 @@
 
 use std::path::PathBuf;
 
-/// Everything a user, a scene file or a mesh file can get wrong. Every variant names the file.
+use super::Origin;
+
+/// Everything a user, a scene file or a mesh file can get wrong. Every variant names the file
+/// (a built-in scene by its name: [`Origin`]).
 /// Each message is complete on one line, inner errors included, so they are not also
 /// exposed as `source()` (anyhow's `{:#}` would print them twice).
 #[derive(Debug, thiserror::Error)]
@@ -19,15 +22,15 @@ pub enum SceneError {
     #[error("{}: a folder, expected a .toml scene file (scenes in it: {available})", path.display())]
     Folder { path: PathBuf, available: String },
     /// TOML syntax or type error; `toml`'s message carries line and column.
-    #[error("{}: {cause}", path.display())]
+    #[error("{scene}: {cause}")]
     Toml {
-        path: PathBuf,
+        scene: Origin,
         cause: Box<toml::de::Error>,
     },
     /// A value that parsed but makes no sense; `field` is a path like `objects[0].material`.
-    #[error("{}: {field}: {message}", path.display())]
+    #[error("{scene}: {field}: {message}")]
     Invalid {
-        path: PathBuf,
+        scene: Origin,
         field: String,
         message: String,
     },
@@ -46,9 +49,9 @@ pub enum SceneError {
         message: String,
     },
     /// An error inside a file the scene refers to, e.g. a mesh.
-    #[error("{}: {field}: {cause}", path.display())]
+    #[error("{scene}: {field}: {cause}")]
     Nested {
-        path: PathBuf,
+        scene: Origin,
         field: String,
         cause: Box<SceneError>,
     },

@@ -13,6 +13,7 @@ mod local_group;
 pub mod material;
 pub mod mesh;
 pub mod obj;
+mod origin;
 pub mod pattern_filter;
 pub mod placed;
 pub mod ring_lines;
@@ -43,6 +44,7 @@ pub use grid::{SampleBlend, ViewBlend, ViewGrid};
 pub use light::{AreaLight, DirectionalLight, PointLight};
 pub use material::{EM_RESOLUTIONS, EmLayer, EmSettings, LOD_BIASES, Material};
 pub use mesh::Mesh;
+pub use origin::Origin;
 pub use shipped::{SHIPPED, shipped};
 pub use texture::{Pattern, PatternSource, Texture};
 
@@ -51,8 +53,12 @@ pub use texture::{Pattern, PatternSource, Texture};
 #[derive(Clone, Debug)]
 pub struct Scene {
     pub name: String,
-    /// The scene file this was loaded from.
+    /// The scene file this was loaded from (a built-in's: the repository
+    /// path its text comes from, `assets/scenes/<name>.toml`); relative mesh
+    /// paths are relative to it.
     pub source: PathBuf,
+    /// What messages call it: `built-in scene 'teapot'` or the file's path.
+    pub origin: Origin,
     pub camera: Camera,
     pub orbit: Orbit,
     pub lights: Vec<AreaLight>,
@@ -151,13 +157,18 @@ impl Scene {
     /// [`SHIPPED`]) or a path to a `.toml` file. Relative mesh paths are
     /// relative to the scene file.
     pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
-        let (text, source) = Scene::text(name_or_path)?;
-        Scene::from_toml(&text, &source)
+        let (text, source, origin) = Scene::read(name_or_path)?;
+        Scene::parse(&text, &source, origin)
     }
 
     /// The text of a built-in scene or a scene file, and the path it is
     /// known by (built-ins: `assets/scenes/<name>.toml`).
     pub fn text(name_or_path: &str) -> Result<(String, PathBuf), SceneError> {
+        Scene::read(name_or_path).map(|(text, source, _)| (text, source))
+    }
+
+    /// [`Scene::text`], and what messages call the scene.
+    fn read(name_or_path: &str) -> Result<(String, PathBuf, Origin), SceneError> {
         let p = Path::new(name_or_path);
         let is_path = p.extension().is_some_and(|e| e == "toml") || p.components().count() > 1;
         if p.is_dir() && (is_path || shipped(name_or_path).is_none()) {
@@ -177,7 +188,8 @@ impl Scene {
                 });
             };
             let source = Path::new("assets/scenes").join(format!("{name_or_path}.toml"));
-            return Ok((text.to_owned(), source));
+            let origin = Origin::BuiltIn(name_or_path.to_owned());
+            return Ok((text.to_owned(), source, origin));
         }
         let text = std::fs::read_to_string(p).map_err(|e| match e.kind() {
             std::io::ErrorKind::NotFound => SceneError::NoScene {
@@ -186,26 +198,34 @@ impl Scene {
             },
             _ => SceneError::io(p, e),
         })?;
-        Ok((text, p.to_owned()))
+        Ok((text, p.to_owned(), Origin::File(p.to_owned())))
     }
 
     /// Parses scene text; `path` is used for error messages and relative mesh paths.
     pub fn from_toml(text: &str, path: &Path) -> Result<Scene, SceneError> {
+        Scene::parse(text, path, Origin::File(path.to_owned()))
+    }
+
+    /// Parses scene text read from `origin`; `path` (its file, or a
+    /// built-in's repository path) anchors relative mesh paths.
+    fn parse(text: &str, path: &Path, origin: Origin) -> Result<Scene, SceneError> {
         let file: file::SceneFile = toml::from_str(text).map_err(|e| SceneError::Toml {
-            path: path.to_owned(),
+            scene: origin.clone(),
             cause: Box::new(e),
         })?;
-        load::Loader { path }.build(file)
+        load::Loader {
+            path,
+            origin: &origin,
+        }
+        .build(file)
     }
 
     /// How to name this scene on the command line: the built-in scene's
     /// name, or the path of the file it was loaded from.
     pub fn arg(&self) -> String {
-        let builtin = Path::new("assets/scenes").join(format!("{}.toml", self.name));
-        if shipped(&self.name).is_some() && self.source == builtin {
-            self.name.clone()
-        } else {
-            self.source.display().to_string()
+        match &self.origin {
+            Origin::BuiltIn(name) => name.clone(),
+            Origin::File(path) => path.display().to_string(),
         }
     }
 

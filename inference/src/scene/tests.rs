@@ -362,6 +362,45 @@ fn missing_scene_file_is_named() {
 }
 
 #[test]
+fn a_built_in_scene_is_named_as_one_a_scene_file_by_its_path() {
+    let teapot = shipped("teapot").expect("built in");
+    let s = Scene::load("teapot").expect("teapot");
+    assert_eq!(s.origin.to_string(), "built-in scene 'teapot'");
+    assert_eq!(s.arg(), "teapot");
+    // Relative mesh paths (and so what keys are made of) keep the repository path.
+    assert_eq!(s.source, Path::new("assets/scenes/teapot.toml"));
+    let as_built_in = |text: &str| {
+        let origin = Origin::BuiltIn("teapot".into());
+        let e = Scene::parse(text, &s.source, origin).expect_err("refused");
+        let e = e.to_string();
+        assert!(!e.contains("assets/scenes"), "names no file: {e}");
+        e
+    };
+    let typo = teapot.replacen("radius = 1.5", "radius = 1.5\nradiuss = 2.0", 1);
+    let e = as_built_in(&typo);
+    assert!(
+        e.starts_with("built-in scene 'teapot': ") && e.contains("radiuss"),
+        "{e}"
+    );
+    let bad = teapot.replacen("radius = 1.5", "radius = -1.5", 1);
+    let e = as_built_in(&bad);
+    assert!(
+        e.starts_with("built-in scene 'teapot': orbit.radius"),
+        "{e}"
+    );
+    // The same text read from a file names the file.
+    let e = load(&bad).expect_err("refused").to_string();
+    assert!(e.contains("x.toml: orbit.radius"), "{e}");
+    let s = load(teapot).expect("a copy on disk");
+    assert!(
+        matches!(&s.origin, Origin::File(p) if p.ends_with("x.toml")),
+        "{:?}",
+        s.origin
+    );
+    assert!(s.arg().ends_with("x.toml"), "{}", s.arg());
+}
+
+#[test]
 fn every_shipped_scene_loads_and_the_rings_scene_is_2d() {
     for (name, _) in crate::scene::SHIPPED {
         let s = Scene::load(name).unwrap_or_else(|e| panic!("{name}: {e}"));

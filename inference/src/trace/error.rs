@@ -5,9 +5,9 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum TraceError {
     /// A scene the tracer cannot render; `field` is a path like `lights[0]`.
-    #[error("{}: {field}: {message}", path.display())]
+    #[error("{scene}: {field}: {message}")]
     Scene {
-        path: PathBuf,
+        scene: crate::scene::Origin,
         field: String,
         message: String,
     },

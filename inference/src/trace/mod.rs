@@ -394,7 +394,7 @@ fn validate(scene: &Scene) -> Result<(), TraceError> {
 
 fn scene_error(scene: &Scene, field: String, message: String) -> TraceError {
     TraceError::Scene {
-        path: scene.source.clone(),
+        scene: scene.origin.clone(),
         field,
         message,
     }

@@ -58,6 +58,7 @@ pub(super) fn scene(objects: Vec<(&str, Mesh, Material)>) -> Scene {
     let mut s = Scene {
         name: "test".into(),
         source: "test.toml".into(),
+        origin: crate::scene::Origin::File("test.toml".into()),
         camera: Camera {
             fov_y_deg: 40.0,
             near: 0.05,

@@ -145,7 +145,7 @@ fn checked_diffuse_object<'s>(scene: &'s Scene, req: &DiffuseRequest) -> Result<
             .collect();
         format!(
             "--diffuse {object_name}: no such object in {} (its diffuse objects: {})",
-            scene.source.display(),
+            scene.origin,
             diffuse.join(", ")
         )
     })?;

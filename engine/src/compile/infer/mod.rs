@@ -127,7 +127,7 @@ impl<'a> Plan<'a> {
         if jobs.is_empty() {
             bail!(
                 "{}: no reflective object has [objects.em] settings: nothing to infer",
-                scene.source.display()
+                scene.origin
             );
         }
         let mut plan = Self {

@@ -9,7 +9,7 @@ use crate::scene::file::V3;
 impl Loader<'_> {
     pub(super) fn err(&self, field: impl Into<String>, message: impl Into<String>) -> SceneError {
         SceneError::Invalid {
-            path: self.path.to_owned(),
+            scene: self.origin.clone(),
             field: field.into(),
             message: message.into(),
         }

@@ -15,12 +15,14 @@ use super::error::SceneError;
 use super::file::{OrbitFile, RoomFile, SceneFile};
 use super::light::AreaLight;
 use super::material::Material;
-use super::{Object, Scene, room};
+use super::{Object, Origin, Scene, room};
 use materials::Materials;
 
-/// Validation context: the scene file (for messages and relative mesh paths).
+/// Validation context: the scene file (for relative mesh paths and a
+/// nameless scene's name) and what messages call the scene.
 pub struct Loader<'a> {
     pub path: &'a Path,
+    pub origin: &'a Origin,
 }
 
 /// Most viewpoint samples a scene may ask for (a 64 × 64 grid).
@@ -78,6 +80,7 @@ impl Loader<'_> {
         Ok(Scene {
             name,
             source: self.path.to_owned(),
+            origin: self.origin.clone(),
             camera,
             orbit,
             lights: parts.lights,

@@ -86,7 +86,7 @@ impl Loader<'_> {
 
     fn mesh(&self, field: &str, m: &MeshFile) -> Result<Mesh, SceneError> {
         let nested = |source: SceneError| SceneError::Nested {
-            path: self.path.to_owned(),
+            scene: self.origin.clone(),
             field: field.to_owned(),
             cause: Box::new(source),
         };
@@ -160,7 +160,7 @@ impl Loader<'_> {
         teapot::tessellate(segments, part)
             .map(|t| t.mesh)
             .map_err(|source| SceneError::Nested {
-                path: self.path.to_owned(),
+                scene: self.origin.clone(),
                 field: field.to_owned(),
                 cause: Box::new(source),
             })

@@ -88,13 +88,10 @@ pub fn parse_tau(s: &str) -> Result<f32, String> {
     number(s, |t| range.contains(&t), &format!("{range:?} subpixels"))
 }
 
-/// A compression ratio: finite and above 1.
+/// A compression ratio: finite and above 1 (`engine::compile::encode::check_ratio`).
 pub fn parse_ratio(s: &str) -> Result<f64, String> {
-    number(
-        s,
-        |r: f64| r.is_finite() && r > 1.0,
-        "a compression ratio above 1 (e.g. 384)",
-    )
+    use engine::compile::encode::{RATIO_EXPECTED, check_ratio};
+    number(s, |r: f64| check_ratio(r).is_ok(), RATIO_EXPECTED)
 }
 
 /// `bilinear` or `triangles` (`--view-blend`).

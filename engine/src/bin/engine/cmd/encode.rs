@@ -6,17 +6,19 @@ use anyhow::{Result, bail};
 use codec::Target;
 use engine::compile::container_key;
 use engine::compile::encode::{
-    DEFAULT_RATIO, MapsFor, encode_to, load_input, map_keys, orbit_grid,
+    DEFAULT_RATIO, MapsFor, check_ratio, encode_to, load_input, map_keys, orbit_grid,
 };
 use inference::scene::Scene;
 
 pub fn run(args: &EncodeArgs) -> Result<String> {
     let scene = Scene::load(&args.scene)?;
     let target = match (args.ratio, args.bytes) {
-        (Some(r), None) if r.is_finite() && r > 1.0 => Target::Ratio(r),
+        (Some(r), None) => {
+            check_ratio(r)?;
+            Target::Ratio(r)
+        }
         (None, Some(b)) if b > 0 => Target::Bytes(b),
         (None, None) => Target::Ratio(DEFAULT_RATIO),
-        (Some(r), None) => bail!("--ratio {r}: expected a compression ratio above 1 (e.g. 384)"),
         (None, Some(_)) => bail!("--bytes 0: expected a container size above 0 bytes"),
         (Some(_), Some(_)) => bail!("--ratio and --bytes: give one target, not both"),
     };

@@ -25,7 +25,7 @@ pub fn run(args: &RelightArgs) -> Result<String> {
         files::check_output_file(json)?;
     }
     if !args.raw {
-        engine::relight::codec::check_ratio(args.ratio)?;
+        engine::compile::encode::check_ratio(args.ratio)?;
     }
     let options = RelightOptions {
         settings,
