@@ -22,13 +22,17 @@ pub const DEFAULT_RATIO: f64 = 384.0;
 const F16_MAX: f32 = 65504.0;
 /// What a compression ratio must be (against 32-bit floats), as every
 /// refusal of one words it.
-pub const RATIO_EXPECTED: &str = "a finite compression ratio above 1 (e.g. 384)";
+pub const RATIO_EXPECTED: &str = "a compression ratio above 1 and at most 100,000 (e.g. 384)";
+/// `relight`'s limit before the commands shared one check: a far larger
+/// ratio is no useful aim, and refused up front it cannot fail only after
+/// the tracing, when the maps are encoded.
+const MAX_RATIO: f64 = 100_000.0;
 
 /// Refuses a ratio the codec cannot aim at ([`RATIO_EXPECTED`]): the one
 /// check of `--ratio` for `engine encode`, `engine relight` and
 /// `engine codec-report --curve-ratios`, made before any work.
 pub fn check_ratio(ratio: f64) -> Result<()> {
-    if !(ratio.is_finite() && ratio > 1.0) {
+    if !(ratio > 1.0 && ratio <= MAX_RATIO) {
         bail!("--ratio {ratio}: expected {RATIO_EXPECTED}");
     }
     Ok(())
@@ -319,13 +323,22 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_ratio_must_be_finite_and_above_one() {
-        for ok in [1.000_001, 20.0, 384.0, 1e9] {
+    fn a_ratio_must_be_above_one_and_at_most_100_000() {
+        for ok in [1.000_001, 20.0, 384.0, 100_000.0] {
             assert!(check_ratio(ok).is_ok(), "{ok}");
         }
-        for bad in [1.0, 0.5, 0.0, -384.0, f64::INFINITY, f64::NAN] {
+        for bad in [
+            1.0,
+            0.5,
+            0.0,
+            -384.0,
+            100_001.0,
+            1e9,
+            f64::INFINITY,
+            f64::NAN,
+        ] {
             let e = check_ratio(bad).expect_err("refused");
-            let want = format!("--ratio {bad}: expected a finite compression ratio above 1");
+            let want = format!("--ratio {bad}: expected a compression ratio above 1 and at most");
             assert!(e.to_string().starts_with(&want), "{e}");
         }
     }
