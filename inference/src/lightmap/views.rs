@@ -22,7 +22,7 @@ pub fn max_elevation_deg(orbit: &Orbit) -> f32 {
 const SURVEY_AZIMUTHS: u32 = 12;
 const SURVEY_ELEVATIONS: u32 = 4;
 /// Stacked views: azimuths × elevations.
-pub const SOLVE_AZIMUTHS: u32 = 3;
+pub const SOLVE_AZIMUTHS: u32 = 5;
 pub const SOLVE_ELEVATIONS: u32 = 2;
 
 /// An eye on the viewpoint space: azimuth on the orbit, elevation above it.
@@ -68,8 +68,9 @@ pub fn survey_views(orbit: &Orbit) -> Vec<Viewpoint> {
     grid(orbit, SURVEY_AZIMUTHS, SURVEY_ELEVATIONS)
 }
 
-/// The views traced and stacked into each light map's solve: the orbit's
-/// ends and middle, on the orbit plane and at the highest elevation.
+/// The views traced and stacked into each light map's solve: five azimuths
+/// from the orbit's first to its last line, on the orbit plane and at the
+/// highest elevation.
 pub fn solve_views(orbit: &Orbit) -> Vec<Viewpoint> {
     grid(orbit, SOLVE_AZIMUTHS, SOLVE_ELEVATIONS)
 }
@@ -90,8 +91,9 @@ mod tests {
                 elevation_deg: 0.0
             }
         );
-        assert_eq!(v[2].azimuth_deg, 99.0);
-        assert_eq!(v[5].elevation_deg, MAX_ELEVATION_DEG);
+        let last = v.len() - 1;
+        assert_eq!(v[SOLVE_AZIMUTHS as usize - 1].azimuth_deg, 99.0);
+        assert_eq!(v[last].elevation_deg, MAX_ELEVATION_DEG);
         let s = survey_views(&orbit);
         assert_eq!(s.len(), 48);
         assert!(s.iter().all(|p| (0.0..=99.0).contains(&p.azimuth_deg)));
