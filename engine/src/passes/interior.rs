@@ -5,8 +5,10 @@
 //! as culled back faces showed (96 pixels of the teapot at 12° on the
 //! orbit, 0–2 of 255 traced against ~155 drawn). The forward passes
 //! (multipass, static EM, REM) draw them black; the deferred G-buffer
-//! records "nothing drawn" and leaves the stencil unmarked, so the room's
-//! cleared black stays.
+//! records "nothing drawn" and unmarks the stencil, so the room's cleared
+//! black stays: where a reflector's part lies behind an opening (the body
+//! seen into the spout's mouth), its mark would otherwise survive the cap
+//! and the composite would shade the cap's "nothing drawn" there.
 //! `shaders/reflector_interior.*`, `pem_gbuffer_interior.frag`.
 
 use super::target::draw_mesh;
@@ -18,12 +20,14 @@ use glam::Mat4;
 
 /// The inside's pipeline with `fragment_spirv` over `color_formats` (one
 /// frame colour: `reflector_interior.frag`; the G-buffer's three:
-/// `pem_gbuffer_interior.frag`); pushes a [`PemPush`] (its view_proj).
+/// `pem_gbuffer_interior.frag`, with `stencil` [`StencilTest::Unmark`]);
+/// pushes a [`PemPush`] (its view_proj).
 pub fn interior_pipeline(
     device: &Device,
     (name, fragment_spirv): (&str, &[u8]),
     color_formats: &[vk::Format],
     depth_format: vk::Format,
+    stencil: StencilTest,
 ) -> GpuResult<Pipeline> {
     Pipeline::new(
         device,
@@ -41,7 +45,7 @@ pub fn interior_pipeline(
             bindings: &[],
             blend: crate::backend::Blend::Replace,
             depth: crate::backend::DepthTest::TestWrite,
-            stencil: StencilTest::Off,
+            stencil,
         },
     )
 }
@@ -53,7 +57,7 @@ pub fn black_interior(
     depth: vk::Format,
 ) -> GpuResult<Pipeline> {
     let names = ("reflector interior", spirv::REFLECTOR_INTERIOR_FRAG);
-    interior_pipeline(device, names, &[color], depth)
+    interior_pipeline(device, names, &[color], depth, StencilTest::Off)
 }
 
 /// Records `caps` with `pipeline` (a [`black_interior`]) under

@@ -96,13 +96,15 @@ impl DeferredPipelines {
                 stencil: StencilTest::Mark,
             },
         )?;
-        // The insides: the stencil stays unmarked and the cosine says
-        // "nothing drawn" (pem_gbuffer_interior.frag).
+        // The insides: the stencil unmarked (a part behind an opening had
+        // marked it) and the cosine saying "nothing drawn"
+        // (pem_gbuffer_interior.frag).
         let interior = super::interior::interior_pipeline(
             device,
             ("pem g-buffer interior", spirv::PEM_GBUFFER_INTERIOR_FRAG),
             &GBUFFER_FORMATS,
             depth,
+            StencilTest::Unmark,
         )?;
         let composite = Pipeline::with_variants(
             device,
@@ -219,7 +221,7 @@ impl Pass for GBufferPass<'_> {
                 // whose entries index the mesh (and, for the reflector
                 // itself, both streams: one entry per vertex).
                 unsafe {
-                    // The interior pipeline marks nothing (no stencil state).
+                    // The interior pipeline unmarks (no reference to set).
                     if !draw.interior {
                         d.cmd_set_stencil_reference(
                             cmd,
