@@ -75,11 +75,12 @@ fn assert_path_is_scored(scene: &Path, out: &Path) {
     assert_eq!(frames[0]["kind"], "on a sample");
     assert_eq!(frames[2]["kind"], "above the orbit");
     assert!(field(&frames[2], "elevation_deg") > 19.0);
-    for f in frames {
-        // The tiny scene's 16² maps at 64x48 score 26–28 dB; frame 0
-        // against the 20° view's reference scores 14 dB.
+    // The tiny scene's 16² maps at 64x48 score 28.0 dB on the orbit and
+    // 21.6 dB 20° above it (no rings); frame 0 scored against the 20°
+    // view's reference reads 14.1 dB.
+    for (f, lowest) in frames.iter().zip([24.0, 24.0, 18.0]) {
         let (db, flip) = (field(f, "psnr_frame_db"), field(f, "flip_frame"));
-        assert!((22.0..45.0).contains(&db), "{f}");
+        assert!((lowest..45.0).contains(&db), "{f}");
         assert!(flip > 0.0 && flip < 0.3, "{f}");
     }
     let picture = image::open(out.join("score.png")).expect("score.png");
