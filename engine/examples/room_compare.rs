@@ -182,16 +182,8 @@ fn half(frame: &[[f32; 4]], width: u32, height: u32) -> Frame {
 /// `frames` halved, side by side, written to `path`.
 fn side_by_side(path: &Path, frames: [&Frame; 2], width: u32, height: u32) -> Result<()> {
     let halves = frames.map(|f| half(f, width, height));
-    let (w, h) = (width as usize / 2, height as usize / 2);
-    let mut mosaic = vec![[0.0f32; 4]; 2 * w * h];
-    for y in 0..h {
-        for (k, img) in halves.iter().enumerate() {
-            mosaic[y * 2 * w + k * w..y * 2 * w + (k + 1) * w]
-                .copy_from_slice(&img[y * w..(y + 1) * w]);
-        }
-    }
-    engine::capture::write_png(path, 2 * w as u32, h as u32, &mosaic)?;
-    Ok(())
+    let halves = [&halves[0][..], &halves[1][..]];
+    engine::eval::pictures::frames_in_a_row(path, &halves, width / 2, height / 2)
 }
 
 /// Display PSNR of `pixels` per object of the reference (its `.mask`

@@ -48,15 +48,17 @@ fn pass_names(out: &Path) -> Vec<String> {
 
 /// `--score 3`: the first, middle and last of the 5 frames, as written,
 /// against their traced views; the references are traced once. Refused
-/// with `--no-capture` before anything runs.
+/// with `--no-capture` or `--light-path` before anything runs; a run
+/// without `--score` removes the scores of an earlier one.
 fn assert_path_is_scored(scene: &Path, out: &Path) {
-    let refused = play(scene, out, &["--score", "3", "--no-capture"]);
-    assert!(!refused.status.success());
-    assert!(
-        text(&refused).contains("--score with --no-capture"),
-        "{}",
-        text(&refused)
-    );
+    for (flags, needle) in [
+        (["--no-capture", "--no-video"], "--score with --no-capture"),
+        (["--light-path", "bulb"], "--score with --light-path"),
+    ] {
+        let refused = play(scene, out, &[&["--score", "3"][..], &flags].concat());
+        assert!(!refused.status.success());
+        assert!(text(&refused).contains(needle), "{}", text(&refused));
+    }
 
     let first = play(scene, out, &["--score", "3", "--no-video"]);
     assert!(first.status.success(), "{}", text(&first));
@@ -93,6 +95,11 @@ fn assert_path_is_scored(scene: &Path, out: &Path) {
         "{}",
         text(&again)
     );
+
+    // A run that does not score leaves no scores of other frames behind.
+    let unscored = play(scene, out, &["--no-video"]);
+    assert!(unscored.status.success(), "{}", text(&unscored));
+    assert!(!out.join("score.json").exists() && !out.join("score.png").exists());
 }
 
 /// The first run traces, infers and encodes what is missing, then plays

@@ -9,7 +9,7 @@
 use super::metrics::{self, FrameScores};
 use super::reference::{References, View as RefView};
 use super::views::Category;
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use inference::scene::{Orbit, Scene};
 use inference::trace::TraceSettings;
 use serde::Serialize;
@@ -86,10 +86,34 @@ fn kind_name(c: Category) -> &'static str {
     }
 }
 
+/// The references' trace settings at `size`.
+fn reference_settings((width, height): (u32, u32)) -> TraceSettings {
+    TraceSettings {
+        width,
+        height,
+        spp: SCORE_SPP,
+        seed: super::reference::REFERENCE_SEED,
+        progress: true,
+        ..TraceSettings::default()
+    }
+}
+
+/// What [`score_path`] would refuse, checked before a run plays: a scene
+/// without a reflector to trace references through, a size the tracer
+/// refuses.
+pub fn check(scene: &Scene, size: (u32, u32)) -> Result<()> {
+    super::reflector_names(scene)?;
+    reference_settings(size)
+        .validate()
+        .context("--score: the references' trace settings")?;
+    Ok(())
+}
+
 /// Scores `count` of the `frames` frames the main job wrote into `out`
 /// (`frame_NNNN.png`, at `size`) against references traced at
 /// [`SCORE_SPP`] (cached under `out/reference`, as eval's), writes
-/// `out/score.json` and `out/score.png`.
+/// `out/score.json` and `out/score.png` (an earlier run's are removed
+/// first, so a failed scoring leaves none that describe other frames).
 pub fn score_path(
     scene: &Scene,
     out: &Path,
@@ -97,15 +121,8 @@ pub fn score_path(
     frames: u32,
     count: u32,
 ) -> Result<PathScore> {
-    let settings = TraceSettings {
-        width: size.0,
-        height: size.1,
-        spp: SCORE_SPP,
-        seed: super::reference::REFERENCE_SEED,
-        progress: true,
-        ..TraceSettings::default()
-    };
-    let references = References::new(scene, &out.join("reference"), settings)?;
+    remove_scores(out)?;
+    let references = References::new(scene, &out.join("reference"), reference_settings(size))?;
     let reflectors = super::reflector_names(scene)?;
     let mut scored = Vec::new();
     // (dB, engine, tracer) of the lowest-scoring frame so far.
@@ -144,6 +161,21 @@ pub fn score_path(
     };
     crate::util::files::write_json(&out.join("score.json"), &score)?;
     Ok(score)
+}
+
+/// Removes `score.json` and `score.png` from `out` (a run's own folder),
+/// where a run that does not score would leave an earlier run's.
+pub fn remove_scores(out: &Path) -> Result<()> {
+    for name in ["score.json", "score.png"] {
+        let path = out.join(name);
+        match std::fs::remove_file(&path) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(e).with_context(|| format!("removing {}", path.display()));
+            }
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 /// A frame the main job wrote, as linear RGBA: decoding the 8-bit sRGB

@@ -56,6 +56,11 @@ pub fn frames_in_a_row(path: &Path, frames: &[&[[f32; 4]]], width: u32, height: 
             mosaic[y * n * w + k * w..][..w].copy_from_slice(&image[y * w..][..w]);
         }
     }
-    crate::capture::write_png(path, (n * w) as u32, height, &mosaic)
-        .with_context(|| format!("writing {}", path.display()))
+    // The error names the path itself.
+    Ok(crate::capture::write_png(
+        path,
+        (n * w) as u32,
+        height,
+        &mosaic,
+    )?)
 }

@@ -9,7 +9,7 @@ pub struct EncodeArgs {
     /// A built-in scene's name (teapot) or the path of a .toml scene file.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
-    /// Target compression ratio against 32-bit floats, above 1 [default: 384].
+    /// Target compression ratio against 32-bit floats, above 1 and at most 100,000 [default: 384].
     #[arg(long, conflicts_with = "bytes")]
     pub ratio: Option<f64>,
     /// Target container size in bytes.

@@ -295,8 +295,8 @@ pub struct PlayArgs {
     /// Write no frames (only perf.json): for benchmarks.
     #[arg(long)]
     pub no_capture: bool,
-    /// After playing, score N frames spread along the path (1 to 1,000; the
-    /// first and the last among them) against the ray tracer: each frame as
+    /// After playing, score N frames spread along the path from its first
+    /// frame to its last (1 to 1,000) against the ray tracer: each frame as
     /// written to PNG against its view traced at 16 spp (about 7 s a view at
     /// 640x480 on two cores; cached under <out>/reference), display PSNR and
     /// FLIP over every pixel as `engine eval` scores them; writes score.json

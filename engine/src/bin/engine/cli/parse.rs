@@ -88,7 +88,7 @@ pub fn parse_tau(s: &str) -> Result<f32, String> {
     number(s, |t| range.contains(&t), &format!("{range:?} subpixels"))
 }
 
-/// A compression ratio: finite and above 1 (`engine::compile::encode::check_ratio`).
+/// A compression ratio above 1 and at most 100,000 (`engine::compile::encode::check_ratio`).
 pub fn parse_ratio(s: &str) -> Result<f64, String> {
     use engine::compile::encode::{RATIO_EXPECTED, check_ratio};
     number(s, |r: f64| check_ratio(r).is_ok(), RATIO_EXPECTED)

@@ -25,7 +25,7 @@ pub struct RelightArgs {
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Store the SH maps through the codec at this compression ratio (against
-    /// 32-bit floats; above 1) and play the decoded maps; the raw maps' scores are
+    /// 32-bit floats; above 1 and at most 100,000) and play the decoded maps; the raw maps' scores are
     /// reported beside them.
     #[arg(long, default_value_t = engine::relight::codec::DEFAULT_RATIO)]
     pub ratio: f64,

@@ -2,7 +2,6 @@
 //! path, capture them, and report per-pass counters.
 
 use crate::backend::create_device;
-use crate::capture;
 use crate::compile::CompileContext;
 use crate::options::{
     LightPathOptions, Mode, PemOptions, PlayOptions, RoomShading, RunPlace, TraceFrames,
@@ -19,8 +18,12 @@ use anyhow::{Context, Result, bail};
 use inference::scene::Scene;
 use inference::trace::{TraceSettings, Tracer};
 use std::path::{Path, PathBuf};
-use std::sync::mpsc;
 use std::time::Instant;
+
+mod frame_writer;
+
+pub use frame_writer::{Captured, frame_stem};
+use frame_writer::{FrameWriter, path_video};
 
 /// SH coefficients a moving light is relit with (the paper's k = 16).
 const LIGHT_PATH_K: usize = 16;
@@ -198,10 +201,9 @@ pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<Played> {
     let ctx = compile_context(place, &scene, &out);
     let mode = play_mode(opts, &scene)?;
     let mut source = setup_mode(&ctx, &mut renderer, mode, &opts.pem, opts.trace)?;
-    let light = match opts.light_path {
-        Some(lp) => Some(setup_light_path(&scene, &out, lp, &mut renderer)?),
-        None => None,
-    };
+    let light = (opts.light_path)
+        .map(|lp| setup_light_path(&scene, &out, lp, &mut renderer))
+        .transpose()?;
     let renderer = &mut renderer;
     let scene = &scene;
     let (width, height) = place.size;
@@ -254,13 +256,9 @@ pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<Played> {
         &renderer.setup_timings,
     );
     crate::util::files::write_json(&out.join("perf.json"), &report)?;
-    let video = if opts.capture && opts.video {
-        let frames: Vec<PathBuf> = (0..frames)
-            .map(|i| frame_stem(&out, i).with_extension("png"))
-            .collect();
-        Some(crate::video::write_video(&out, &frames)?)
-    } else {
-        None
+    let video = match opts.capture && opts.video {
+        true => Some(path_video(&out, frames)?),
+        false => None,
     };
     Ok(Played {
         report,
@@ -313,81 +311,6 @@ fn setup_light_path(
     let stored = compressed(&r.maps, &r.path, &r.key, DEFAULT_RATIO)?;
     renderer.set_light_path(scene, &stored.maps, &r.positions, LIGHT_PATH_K)?;
     Ok((lp.path, inference::relight::panorama_origin(scene)))
-}
-
-/// `<out>/frame_NNNN`: the stem of frame `i`'s files.
-pub fn frame_stem(out: &Path, i: u32) -> PathBuf {
-    out.join(format!("frame_{i:04}"))
-}
-
-/// A kept frame on its way to the writer: the device's RGBA16F read-back
-/// (4 halves a pixel), or linear RGBA pixels (the tracer's).
-pub enum Captured {
-    Halves(Vec<half::f16>),
-    Pixels(Vec<[f32; 4]>),
-}
-
-impl Captured {
-    /// Frame `i` into `dir` as PNG (and EXR when `exr`).
-    fn write(
-        &self,
-        dir: &Path,
-        i: u32,
-        (width, height): (u32, u32),
-        exr: bool,
-    ) -> Result<(), capture::CaptureError> {
-        let stem = frame_stem(dir, i);
-        let (png, exr_path) = (stem.with_extension("png"), stem.with_extension("exr"));
-        match self {
-            Captured::Halves(halves) => {
-                capture::write_png_halves(&png, width, height, halves)?;
-                if exr {
-                    let pixels = crate::renderer::half_pixels(halves);
-                    capture::write_exr(&exr_path, width, height, &pixels)?;
-                }
-            }
-            Captured::Pixels(pixels) => {
-                capture::write_png(&png, width, height, pixels)?;
-                if exr {
-                    capture::write_exr(&exr_path, width, height, pixels)?;
-                }
-            }
-        }
-        Ok(())
-    }
-}
-
-/// Encoding PNGs takes longer than a frame: a writer thread does it, from
-/// converting the read-back on (the frame loop's thread only copies it).
-struct FrameWriter {
-    send: mpsc::Sender<(u32, Captured)>,
-    thread: std::thread::JoinHandle<Result<(), capture::CaptureError>>,
-}
-
-impl FrameWriter {
-    fn start(dir: PathBuf, (width, height): (u32, u32), exr: bool) -> Self {
-        let (send, receive) = mpsc::channel::<(u32, Captured)>();
-        let thread = std::thread::spawn(move || {
-            for (i, captured) in receive {
-                captured.write(&dir, i, (width, height), exr)?;
-            }
-            Ok(())
-        });
-        Self { send, thread }
-    }
-
-    /// Queues frame `i`; false when the writer has stopped (on an error).
-    fn send(&self, i: u32, frame: Captured) -> bool {
-        self.send.send((i, frame)).is_ok()
-    }
-
-    fn finish(self) -> Result<()> {
-        drop(self.send);
-        match self.thread.join() {
-            Ok(result) => Ok(result?),
-            Err(_) => bail!("the frame writer thread panicked"),
-        }
-    }
 }
 
 /// Where a run's frames come from: the rasteriser in some mode, or the
