@@ -41,6 +41,10 @@ fn glass_compiles_its_shell_once_and_plays_hybrid() {
     );
     assert!(out.join("glass/room_shells.ptxc").is_file());
     assert!(out.join("glass/room_shell.bin").is_file());
+    // The room around the glass is drawn from its inferred light maps, as
+    // in the reflector modes (it was the analytic room).
+    assert!(stderr.contains("room light maps compiled"), "{stderr}");
+    assert!(out.join("room/floor.light.exr").is_file());
     for line in ["0000", "0050", "0099"] {
         assert!(
             out.join(format!("glass/room_shell_line{line}.bin"))
@@ -224,6 +228,10 @@ fn a_glass_scene_compiles_and_ships_its_shell_maps() {
         std::fs::read(out.join("glass/room_shells.ptxc")).expect("compiled container")
     );
     assert!(inference::key::is_ours(&shipped), "shipped with its key");
+    // The room's light maps ship beside it.
+    assert!(log.contains("room light maps compiled"), "{log}");
+    let light = dest.join("room/floor.light.exr");
+    assert!(inference::key::is_ours(&light), "light map shipped with its key");
 
     let again = compile(&[]);
     let stderr = String::from_utf8_lossy(&again.stderr);

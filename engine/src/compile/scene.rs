@@ -95,7 +95,8 @@ pub fn compile_scene(place: &RunPlace, part: Part, ship: Option<&Path>) -> Resul
 }
 
 /// `engine compile` of a glass scene: its per-sample shell maps' container
-/// (what the first hybrid frame would otherwise solve for minutes).
+/// (what the first hybrid frame would otherwise solve for minutes) and the
+/// room's light maps.
 fn compile_glass(ctx: &CompileContext, part: Part, ship: Option<&Path>) -> Result<String> {
     if part != Part::Whole {
         bail!(
@@ -127,6 +128,15 @@ fn compile_glass(ctx: &CompileContext, part: Part, ship: Option<&Path>) -> Resul
         start.elapsed().as_secs_f64(),
         file.display()
     );
+    // The hybrid frame's room, as the main job draws it.
+    let room = room_maps(ctx)?;
+    if room.compile_s > 0.0 {
+        writeln!(
+            text,
+            "{}: room light maps compiled in {:.1} s",
+            ctx.scene.name, room.compile_s
+        )?;
+    }
     if let Some(dest) = ship {
         for file in shipped::ship(ctx, dest)? {
             writeln!(text, "shipped {}", file.display())?;

@@ -112,7 +112,7 @@ pub fn setup_mode<'s>(
 ) -> Result<FrameSource<'s>> {
     let inferred_room = matches!(
         mode,
-        Mode::LayeredPem | Mode::SpherePem | Mode::Ptm | Mode::Rem
+        Mode::LayeredPem | Mode::SpherePem | Mode::Ptm | Mode::Rem | Mode::Hybrid
     ) && pem.room == RoomShading::Inferred;
     let room = if inferred_room {
         let maps = crate::compile::room::room_maps(ctx)?;

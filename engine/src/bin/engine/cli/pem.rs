@@ -71,9 +71,10 @@ pub struct PemArgs {
     /// same for every view, even where the scene asks for per-sample maps.
     #[arg(long)]
     pub traced_layers: bool,
-    /// How the room is lit: `inferred` light maps of the traced light
-    /// (compiled with the maps, cached under `<out>/room/`) or the
-    /// `analytic` point light plus ambient.
+    /// How the room is lit in the PEM, PTM, REM and hybrid glass modes:
+    /// `inferred` light maps of the traced light (compiled with the maps,
+    /// cached under `<out>/room/`) or the `analytic` point light plus
+    /// ambient (what the static-EM baseline always draws).
     #[arg(long, value_enum, default_value_t = RoomShading::Inferred)]
     pub room: RoomShading,
     /// `--mode rem`: resolution of the traced source sphere maps.
