@@ -37,7 +37,7 @@ void main() {
     vec3 sum = vec3(0.0);
     for (int s = 0; s < SAMPLES; s++) {
         vec3 distant = textureLod(distant_em, vec4(d.xyz, pc.slot[s]), d.w).rgb;
-        vec3 c = distant;
+        vec3 c = clamp_light(distant);
         if (local_layer) {
             vec4 local = textureLod(local_em, vec4(l.xyz, pc.slot[s]), l.w);
             c = local_over_distant(local, distant);

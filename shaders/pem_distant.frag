@@ -22,5 +22,5 @@ layout(location = 0) out vec4 out_color;
 
 void main() {
     vec3 fresnel = schlick(pc.f0_weight.rgb, fresnel_factor(fresnel_lut, in_cos));
-    out_color = vec4(fresnel * texture(distant_em, vec4(in_distant, pc.slot.x), pc.slot.z).rgb, pc.f0_weight.a);
+    out_color = vec4(fresnel * clamp_light(texture(distant_em, vec4(in_distant, pc.slot.x), pc.slot.z).rgb), pc.f0_weight.a);
 }

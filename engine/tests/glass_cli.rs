@@ -231,7 +231,10 @@ fn a_glass_scene_compiles_and_ships_its_shell_maps() {
     // The room's light maps ship beside it.
     assert!(log.contains("room light maps compiled"), "{log}");
     let light = dest.join("room/floor.light.exr");
-    assert!(inference::key::is_ours(&light), "light map shipped with its key");
+    assert!(
+        inference::key::is_ours(&light),
+        "light map shipped with its key"
+    );
 
     let again = compile(&[]);
     let stderr = String::from_utf8_lossy(&again.stderr);
