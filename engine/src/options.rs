@@ -57,7 +57,7 @@ impl Mode {
     }
 }
 
-/// How the diffuse room is lit in PEM playback.
+/// How the diffuse room is lit in the PEM, PTM, REM and hybrid glass modes.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum RoomShading {

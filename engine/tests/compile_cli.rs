@@ -120,12 +120,13 @@ fn the_shipped_compiled_scene_matches_its_inputs() {
     assert!(o.status.success(), "{log}");
     assert!(log.contains("teapot.ptxc: fresh"), "{log}");
     assert!(log.contains("floor.light.exr: fresh"), "{log}");
-    // The glass scene's per-sample shell maps (`engine compile --scene glass
-    // --ship assets/compiled/glass`).
+    // The glass scene's per-sample shell maps and room light maps (`engine
+    // compile --scene glass --ship assets/compiled/glass`).
     let o = run_engine(&["compile", "--scene", "glass", "--check-shipped"]);
     let log = text(&o);
     assert!(o.status.success(), "{log}");
     assert!(log.contains("room_shells.ptxc: fresh"), "{log}");
+    assert!(log.contains("glass/room/floor.light.exr: fresh"), "{log}");
 }
 
 /// The tiny scene with `lines` after its `neighbour_weight` line, written

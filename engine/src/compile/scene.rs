@@ -116,7 +116,8 @@ fn compile_glass(ctx: &CompileContext, part: Part, ship: Option<&Path>) -> Resul
     let Some((file, bytes)) = super::glass_shells::compile(ctx)? else {
         bail!(
             "{}: nothing to compile: its glass object has no `shell_every` (per-sample shell \
-             maps); its shell map is traced in seconds when played (`engine --scene {}`)",
+             maps); its shell map is traced in seconds and its room's light maps compiled \
+             when played (`engine --scene {}`)",
             ctx.scene.origin,
             ctx.scene_arg
         );

@@ -7,8 +7,8 @@
 //! difference in inputs makes them stale and the pipeline runs as before.
 //! `engine compile --scene teapot --ship assets/compiled/teapot`
 //! regenerates them (`--scene glass … assets/compiled/glass`: the glass
-//! object's per-sample shell maps); a test fails when their keys no longer
-//! match.
+//! object's per-sample shell maps and the room's light maps); a test fails
+//! when their keys no longer match.
 
 use super::CompileContext;
 use anyhow::{Context, Result, bail};

@@ -26,7 +26,7 @@ pub struct CompileArgs {
     #[arg(long)]
     pub merge: bool,
     /// Also copy the compiled container and room light maps (a glass
-    /// scene: its per-sample shell maps' container) into DIR
+    /// scene: its per-sample shell maps' container and room light maps) into DIR
     /// (`assets/compiled/<scene>` regenerates the shipped scene).
     #[arg(long)]
     pub ship: Option<PathBuf>,
