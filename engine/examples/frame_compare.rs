@@ -1,6 +1,6 @@
 //! Whole-frame scores of one frame against another, as `engine eval`
 //! takes them (display-referred PSNR and FLIP over every pixel), and
-//! optionally a picture: reference | test | difference (×4).
+//! optionally a picture: reference | test | difference (×4, display-referred).
 //!
 //! ```sh
 //! cargo run --release -p engine --example frame_compare -- REF.exr TEST.exr [OUT.png]
@@ -72,7 +72,7 @@ fn main() -> Result<()> {
         }
     }
     if let Some(out) = rest.first() {
-        let diff = engine::compare::diff_image(&a, &b, 4.0);
+        let diff = engine::eval::metrics::display_difference(&a, &b, 4.0);
         engine::eval::pictures::frames_in_a_row(Path::new(out), &[&a, &b, &diff], w, h)?;
     }
     Ok(())

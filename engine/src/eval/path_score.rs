@@ -7,11 +7,10 @@
 //! between them, above the orbit).
 
 use super::metrics::{self, FrameScores};
-use super::reference::{References, View as RefView};
+use super::reference::{References, View as RefView, reference_settings};
 use super::views::Category;
 use anyhow::{Context, Result, bail};
 use inference::scene::{Orbit, Scene};
-use inference::trace::TraceSettings;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -70,11 +69,7 @@ pub fn category_of(orbit: &Orbit, azimuth_deg: f32, elevation_deg: f32) -> Categ
     if elevation_deg.abs() > EPS_DEG {
         return Category::Above;
     }
-    let lines = orbit
-        .azimuths
-        .as_ref()
-        .map_or(orbit.samples, |a| a.len() as u32);
-    let on = (0..lines).any(|k| (orbit.angle_deg(k) - azimuth_deg).abs() <= EPS_DEG);
+    let on = (0..orbit.samples).any(|k| (orbit.angle_deg(k) - azimuth_deg).abs() <= EPS_DEG);
     if on { Category::On } else { Category::Between }
 }
 
@@ -86,24 +81,12 @@ fn kind_name(c: Category) -> &'static str {
     }
 }
 
-/// The references' trace settings at `size`.
-fn reference_settings((width, height): (u32, u32)) -> TraceSettings {
-    TraceSettings {
-        width,
-        height,
-        spp: SCORE_SPP,
-        seed: super::reference::REFERENCE_SEED,
-        progress: true,
-        ..TraceSettings::default()
-    }
-}
-
 /// What [`score_path`] would refuse, checked before a run plays: a scene
 /// without a reflector to trace references through, a size the tracer
 /// refuses.
 pub fn check(scene: &Scene, size: (u32, u32)) -> Result<()> {
     super::reflector_names(scene)?;
-    reference_settings(size)
+    reference_settings(size, SCORE_SPP)
         .validate()
         .context("--score: the references' trace settings")?;
     Ok(())
@@ -122,7 +105,8 @@ pub fn score_path(
     count: u32,
 ) -> Result<PathScore> {
     remove_scores(out)?;
-    let references = References::new(scene, &out.join("reference"), reference_settings(size))?;
+    let settings = reference_settings(size, SCORE_SPP);
+    let references = References::new(scene, &out.join("reference"), settings)?;
     let reflectors = super::reflector_names(scene)?;
     let mut scored = Vec::new();
     // (dB, engine, tracer) of the lowest-scoring frame so far.

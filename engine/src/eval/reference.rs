@@ -62,6 +62,19 @@ impl View {
 /// traces use 0, the glass shell solves' frames 1), so every reference is
 /// held out, the views on samples too.
 pub const REFERENCE_SEED: u64 = 2;
+
+/// How a reference of `size` is traced at `spp` samples per pixel: with
+/// [`REFERENCE_SEED`], showing progress (eval's views and `--score`'s alike).
+pub fn reference_settings((width, height): (u32, u32), spp: u32) -> TraceSettings {
+    TraceSettings {
+        width,
+        height,
+        spp,
+        seed: REFERENCE_SEED,
+        progress: true,
+        ..TraceSettings::default()
+    }
+}
 const _: () = assert!(
     REFERENCE_SEED != crate::compile::glass_shells::views::SOLVE_FRAME_SEED && REFERENCE_SEED != 0
 );

@@ -16,7 +16,6 @@ use crate::play::{FrameSource, Session, compile_context, setup_mode};
 use crate::relight::GridSettings;
 use crate::util::stats::median;
 use anyhow::{Result, bail};
-use inference::trace::TraceSettings;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -178,19 +177,12 @@ pub fn reflector_names(scene: &inference::scene::Scene) -> Result<Vec<String>> {
 fn references(
     scene: &inference::scene::Scene,
     views: &[View],
-    (width, height): (u32, u32),
+    size: (u32, u32),
     spp: u32,
     out: &std::path::Path,
     reflectors: &[String],
 ) -> Result<Vec<ReferenceImage>> {
-    let settings = TraceSettings {
-        width,
-        height,
-        spp,
-        seed: super::reference::REFERENCE_SEED,
-        progress: true,
-        ..TraceSettings::default()
-    };
+    let settings = super::reference::reference_settings(size, spp);
     let tracing = References::new(scene, &out.join("reference"), settings)?;
     views
         .iter()

@@ -110,10 +110,10 @@ pub fn setup_mode<'s>(
     pem: &PemOptions,
     trace: TraceFrames,
 ) -> Result<FrameSource<'s>> {
-    let inferred_room = matches!(
-        mode,
-        Mode::LayeredPem | Mode::SpherePem | Mode::Ptm | Mode::Rem | Mode::Hybrid
-    ) && pem.room == RoomShading::Inferred;
+    // Every mode but the baselines (the static EM's analytic room, the
+    // bare frame) and the tracer itself.
+    let inferred_room = !matches!(mode, Mode::StaticEm | Mode::Bare | Mode::Trace)
+        && pem.room == RoomShading::Inferred;
     let room = if inferred_room {
         let maps = crate::compile::room::room_maps(ctx)?;
         if maps.compile_s > 0.0 {

@@ -4,20 +4,22 @@
 use crate::cli::PlayArgs;
 use anyhow::{Result, bail};
 use engine::eval::path_score;
+use inference::scene::Scene;
 
 pub fn run(args: &PlayArgs) -> Result<String> {
-    if args.score.is_some() {
-        check_score(args)?;
-    }
+    // Checked before anything plays; scored after.
+    let scoring = match args.score {
+        Some(count) => Some((scene_to_score(args)?, count)),
+        None => None,
+    };
     let played = engine::play::play(&args.place(), &args.options())?;
     let mut text = played.report.table();
     if let Some(video) = played.video {
         text += &video.describe();
         text.push('\n');
     }
-    match args.score {
-        Some(count) => {
-            let scene = inference::scene::Scene::load(&args.scene)?;
+    match scoring {
+        Some((scene, count)) => {
             let (out, frames) = (&played.out, played.frames);
             text += &path_score::score_path(&scene, out, args.size, frames, count)?.table();
         }
@@ -27,8 +29,8 @@ pub fn run(args: &PlayArgs) -> Result<String> {
     Ok(text)
 }
 
-/// `--score` mistakes, refused before anything plays.
-fn check_score(args: &PlayArgs) -> Result<()> {
+/// The scene `--score` traces its references of, its mistakes refused.
+fn scene_to_score(args: &PlayArgs) -> Result<Scene> {
     if args.no_capture {
         bail!("--score with --no-capture: scoring reads the frames the run writes; drop one");
     }
@@ -38,6 +40,7 @@ fn check_score(args: &PlayArgs) -> Result<()> {
              lights, not the moving one; drop one"
         );
     }
-    let scene = inference::scene::Scene::load(&args.scene)?;
-    path_score::check(&scene, args.size)
+    let scene = Scene::load(&args.scene)?;
+    path_score::check(&scene, args.size)?;
+    Ok(scene)
 }
