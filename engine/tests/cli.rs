@@ -374,7 +374,7 @@ fn mistakes_are_refused_before_any_work_and_leave_nothing() {
             vec!["place", "--scene", "teapot", "--data", out_s],
             // A built-in scene is named as one: no repository path.
             vec![
-                "built-in scene 'teapot': orbit.ring_line_every = 4",
+                "built-in scene 'teapot': orbit.ring_line_every = 2",
                 "rings = 1",
             ],
         ),

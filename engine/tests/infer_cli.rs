@@ -319,7 +319,7 @@ fn sample_out_of_range_fails_cleanly() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
     assert!(
-        err.contains("--sample 1000") && err.contains("0..178"),
+        err.contains("--sample 1000") && err.contains("0..253"),
         "{err}"
     );
     assert!(!err.contains("panicked"));

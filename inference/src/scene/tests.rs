@@ -82,10 +82,11 @@ fn committed_teapot_scene_loads() {
     assert_eq!(names, ["floor", "walls", "ceiling", "light", "teapot"]);
     assert_eq!(s.orbit.samples, 100);
     assert_eq!(s.orbit.step_deg, 1.0);
-    // Rings at 10°, 20°, 30° keep lines 0, 4, …, 96 and 99.
-    assert_eq!((s.orbit.rings, s.orbit.ring_line_every), (4, 4));
-    assert_eq!(s.orbit.sample_count(), 100 + 3 * 26);
-    assert_eq!(s.orbit.sample_angles(100 + 26 + 25), (99.0, 20.0));
+    // Rings at 10°, 20°, 30° keep lines 0, 2, …, 98 and 99.
+    assert_eq!((s.orbit.rings, s.orbit.ring_line_every), (4, 2));
+    assert_eq!(s.orbit.sample_count(), 100 + 3 * 51);
+    assert_eq!(s.orbit.sample_angles(100 + 51 + 50), (99.0, 20.0));
+    assert_eq!(s.orbit.sample_angles(100 + 51 + 49), (98.0, 20.0));
 
     let teapot = s.object("teapot").expect("teapot object");
     assert_eq!(teapot.mesh.triangle_count(), 39_800);

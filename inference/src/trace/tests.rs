@@ -349,10 +349,10 @@ fn bad_scenes_and_settings_name_the_field() {
     let s = teapot();
     let tracer = Tracer::new(&s).expect("valid");
     let e = tracer
-        .sample_eye(178)
+        .sample_eye(253)
         .expect_err("out of range")
         .to_string();
-    assert!(e.contains("178") && e.contains("0..178"), "{e}");
+    assert!(e.contains("253") && e.contains("0..253"), "{e}");
     let mut settings = small(0);
     let e = tracer
         .render(Vec3::ONE, &settings)
