@@ -256,10 +256,9 @@ pub fn play(place: &RunPlace, opts: &PlayOptions) -> Result<Played> {
         &renderer.setup_timings,
     );
     crate::util::files::write_json(&out.join("perf.json"), &report)?;
-    let video = match opts.capture && opts.video {
-        true => Some(path_video(&out, frames)?),
-        false => None,
-    };
+    let video = (opts.capture && opts.video)
+        .then(|| path_video(&out, frames))
+        .transpose()?;
     Ok(Played {
         report,
         video,
