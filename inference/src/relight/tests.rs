@@ -176,14 +176,8 @@ fn projection_of_a_band_limited_function_reconstructs_it_exactly() {
 fn traced_panoramas_relight_close_to_the_tracer_at_held_out_directions() {
     let scene = Scene::load("teapot").expect("teapot");
     let mut relit_scene = RelightScene::new(&scene);
-    assert_eq!(
-        relit_scene.reflector,
-        scene
-            .objects
-            .iter()
-            .position(|o| o.name == "teapot")
-            .map(|i| i as u32)
-    );
+    let teapot = scene.objects.iter().position(|o| o.name == "teapot");
+    assert_eq!(relit_scene.reflector, [teapot.expect("teapot") as u32]);
     let settings = PanoramaSettings {
         panorama: Panorama {
             width: 32,
@@ -226,4 +220,30 @@ fn traced_panoramas_relight_close_to_the_tracer_at_held_out_directions() {
         assert!(err25 < 0.5 * mean, "({e}, {a}): rms {err25} against {mean}");
         assert!(err25 < err1, "more bands help: k=25 {err25}, k=1 {err1}");
     }
+}
+
+/// Lid and body as separate reflectors: the panorama, seen from inside the
+/// body, passes through both. Before, rays rising from the body's centroid
+/// met the lid from below, so the panorama held the lid, not the room.
+#[test]
+fn a_split_reflector_is_transparent_to_its_panorama() {
+    let scene = Scene::load("teapot_split").expect("teapot_split");
+    let relit_scene = RelightScene::new(&scene);
+    let part = |name: &str| scene.objects.iter().position(|o| o.name == name);
+    let (body, lid) = (part("body").expect("body"), part("lid").expect("lid"));
+    assert_eq!(relit_scene.reflector, [body as u32, lid as u32]);
+    // The lid's box: above the body's centroid, where the room is seen
+    // (the box of the whole teapot also holds the floor under it).
+    let (lo, hi) = scene.objects[lid].mesh.bounds();
+    let (lo, hi) = (lo - 1e-3, hi + 1e-3);
+    let panorama = Panorama {
+        width: 32,
+        height: 16,
+    };
+    let points = relit_scene.positions(panorama);
+    let inside = points
+        .iter()
+        .filter(|p| p.cmpge(lo).all() && p.cmple(hi).all())
+        .count();
+    assert_eq!(inside, 0, "{inside} of {} texels see the lid", points.len());
 }

@@ -62,8 +62,12 @@ pub enum MovingLight {
 pub struct RelightScene {
     scene: Scene,
     bvh: SceneBvh,
-    /// Object index of the reflector (transparent to primary rays).
-    pub reflector: Option<u32>,
+    /// Object indices of the reflector, transparent to primary rays: the
+    /// first object with environment maps and the parts its local layer
+    /// groups with it (the default teapot's body and lid,
+    /// [`Scene::local_group`]), so a panorama seen from inside the teapot
+    /// sees the room, not the lid from below.
+    pub reflector: Vec<u32>,
     pub origin: Vec3,
 }
 
@@ -92,11 +96,12 @@ impl RelightScene {
         dark.directional_lights.clear();
         dark.point_lights.clear();
         let reflector = scene.objects.iter().position(|o| o.em.is_some());
+        let group = reflector.map_or(Vec::new(), |r| scene.local_group(r));
         let origin = panorama_origin(scene);
         RelightScene {
             bvh: SceneBvh::build(&dark),
             scene: dark,
-            reflector: reflector.map(|r| r as u32),
+            reflector: group.into_iter().map(|o| o as u32).collect(),
             origin,
         }
     }
@@ -134,7 +139,7 @@ impl RelightScene {
         };
         let integrator = Integrator::new(&self.scene, &self.bvh, transport);
         let p = settings.panorama;
-        let (origin, skip) = (self.origin, self.reflector);
+        let (origin, skip) = (self.origin, &self.reflector);
         let mut out = vec![Vec3::ZERO; p.texels()];
         out.par_chunks_mut(p.width as usize)
             .enumerate()
@@ -149,7 +154,10 @@ impl RelightScene {
                         let mut rng = Rng::new(settings.seed, pixel, s, 0);
                         let (fx, fy) = (x as f32 + rng.next_f32(), y as f32 + rng.next_f32());
                         let d = p.direction(fx, fy);
-                        if let Some(hit) = self.bvh.closest(origin, d, 0.0, f32::INFINITY, skip) {
+                        let seen = |o: u32| !skip.contains(&o);
+                        if let Some(hit) =
+                            self.bvh.closest_where(origin, d, 0.0, f32::INFINITY, seen)
+                        {
                             sum += integrator.radiance_at(hit, d, 0, &mut rng, &mut rays);
                         }
                     }
@@ -169,7 +177,9 @@ impl RelightScene {
                 let d = panorama.direction(x as f32 + 0.5, y as f32 + 0.5);
                 let t = self
                     .bvh
-                    .closest(self.origin, d, 0.0, f32::INFINITY, self.reflector)
+                    .closest_where(self.origin, d, 0.0, f32::INFINITY, |o| {
+                        !self.reflector.contains(&o)
+                    })
                     .map_or(1e6, |h| h.t);
                 self.origin + d * t
             })
