@@ -64,7 +64,7 @@ pub struct RelightScene {
     bvh: SceneBvh,
     /// Object indices of the reflector, transparent to primary rays: the
     /// first object with environment maps and the parts its local layer
-    /// groups with it (the default teapot's body and lid,
+    /// groups with it (`teapot_split`'s body and lid,
     /// [`Scene::local_group`]), so a panorama seen from inside the teapot
     /// sees the room, not the lid from below.
     pub reflector: Vec<u32>,
