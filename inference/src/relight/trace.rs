@@ -12,6 +12,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::scene::{DirectionalLight, Material, PointLight, Scene};
+use crate::trace::bvh::Hit;
 use crate::trace::rng::Rng;
 use crate::trace::{Caustics, Integrator, SceneBvh, Transport};
 
@@ -139,7 +140,6 @@ impl RelightScene {
         };
         let integrator = Integrator::new(&self.scene, &self.bvh, transport);
         let p = settings.panorama;
-        let (origin, skip) = (self.origin, &self.reflector);
         let mut out = vec![Vec3::ZERO; p.texels()];
         out.par_chunks_mut(p.width as usize)
             .enumerate()
@@ -154,10 +154,7 @@ impl RelightScene {
                         let mut rng = Rng::new(settings.seed, pixel, s, 0);
                         let (fx, fy) = (x as f32 + rng.next_f32(), y as f32 + rng.next_f32());
                         let d = p.direction(fx, fy);
-                        let seen = |o: u32| !skip.contains(&o);
-                        if let Some(hit) =
-                            self.bvh.closest_where(origin, d, 0.0, f32::INFINITY, seen)
-                        {
+                        if let Some(hit) = self.first_hit(d) {
                             sum += integrator.radiance_at(hit, d, 0, &mut rng, &mut rays);
                         }
                     }
@@ -165,6 +162,14 @@ impl RelightScene {
                 }
             });
         out
+    }
+
+    /// What a ray from the origin along `dir` meets first, through the
+    /// reflector's parts.
+    fn first_hit(&self, dir: Vec3) -> Option<Hit> {
+        let seen = |o: u32| !self.reflector.contains(&o);
+        self.bvh
+            .closest_where(self.origin, dir, 0.0, f32::INFINITY, seen)
     }
 
     /// World position of each texel centre's first hit (through the reflector);
@@ -175,12 +180,7 @@ impl RelightScene {
             .map(|i| {
                 let (x, y) = (i % panorama.width as usize, i / panorama.width as usize);
                 let d = panorama.direction(x as f32 + 0.5, y as f32 + 0.5);
-                let t = self
-                    .bvh
-                    .closest_where(self.origin, d, 0.0, f32::INFINITY, |o| {
-                        !self.reflector.contains(&o)
-                    })
-                    .map_or(1e6, |h| h.t);
+                let t = self.first_hit(d).map_or(1e6, |h| h.t);
                 self.origin + d * t
             })
             .collect()
