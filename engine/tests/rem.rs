@@ -8,7 +8,9 @@
 mod common;
 
 use common::*;
-use engine::rem::sources::{RemSettings, RemWarp, SourceMaps, reflector, trace, trace_views};
+use engine::rem::sources::{
+    RemSettings, RemWarp, SourceMaps, group_origin, reflector, trace, trace_views,
+};
 use engine::renderer::{FrameMode, Renderer};
 use glam::Vec3;
 use inference::scene::{Material, Scene};
@@ -31,7 +33,7 @@ fn tiny_maps(scene: &Scene) -> SourceMaps {
 
 /// The eye at orbit distance from the reflector's EM origin along `dir`.
 fn eye_along(scene: &Scene, maps: &SourceMaps, dir: Vec3) -> Vec3 {
-    let origin = scene.objects[maps.object].mesh.area_weighted_centroid();
+    let origin = group_origin(scene, &scene.local_group(maps.object));
     origin + dir.normalize() * scene.orbit.radius
 }
 
@@ -255,4 +257,32 @@ fn the_command_line_traces_source_maps_once() {
         "{}",
         output_text(&second)
     );
+}
+
+/// Lid and body, two reflectors of one local group, play as the whole
+/// teapot does: REM traces the group's maps from its centroid through
+/// both parts and draws both (before, it drew the body alone, its maps
+/// traced from inside the lid).
+#[test]
+fn a_split_teapot_plays_as_the_whole_one() {
+    let device = validated_device();
+    let frame = |name: &str| {
+        let scene = Scene::load(name).expect("scene");
+        let maps = tiny_maps(&scene);
+        let eye = eye_along(&scene, &maps, Vec3::new(0.3, 0.6, 1.0));
+        let mut r = Renderer::new(&device, &scene, SIZE.0, SIZE.1).expect("renderer");
+        r.set_rem(&scene, &maps, true).expect("set-up");
+        r.frame(FrameMode::Rem, eye, scene.orbit.view(eye))
+            .expect("frame");
+        r.pixels().expect("pixels")
+    };
+    let (whole, split) = (frame("teapot"), frame("teapot_split"));
+    let differ = whole
+        .iter()
+        .zip(&split)
+        .filter(|(a, b)| (0..3).any(|c| (a[c].min(1.0) - b[c].min(1.0)).abs() > 0.05))
+        .count();
+    eprintln!("{differ} of {} pixels differ by > 0.05", whole.len());
+    assert!(differ * 500 < whole.len(), "{differ} pixels differ");
+    assert_no_validation_messages();
 }

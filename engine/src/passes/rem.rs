@@ -44,8 +44,8 @@ pub struct SourceTexels<'a> {
     pub size: u32,
     pub count: u32,
     pub texels: &'a [[f32; 4]],
-    /// Index of the reflector in `scene.objects`.
-    pub object: usize,
+    /// The reflector's parts, indices in `scene.objects` (lid and body).
+    pub parts: Vec<usize>,
     /// Warp by the normal (a diffuse reflector), not the mirror direction.
     pub normal_warp: bool,
 }
@@ -63,8 +63,8 @@ pub struct RemRenderer {
     _sampler: Sampler,
     warp_set: vk::DescriptorSet,
     shade_set: vk::DescriptorSet,
-    /// Index of the reflector in `scene.objects`.
-    pub object: usize,
+    /// The reflector's parts, indices in `scene.objects`.
+    pub parts: Vec<usize>,
     /// The maps are warped and read by the normal (`SourceTexels`).
     pub normal_warp: bool,
 }
@@ -133,7 +133,7 @@ impl RemRenderer {
             _sampler: sampler,
             warp_set,
             shade_set,
-            object: maps.object,
+            parts: maps.parts.clone(),
             normal_warp: maps.normal_warp,
         })
     }
@@ -323,11 +323,12 @@ impl Pass for RemPass<'_> {
         let r = self.r;
         self.target.render(&r.device, cmd, || {
             r.shade.bind(cmd, Some(r.shade_set), &self.push)?;
-            if let Some(mesh) = self.gpu.meshes.get(r.object) {
+            for mesh in r.parts.iter().filter_map(|&o| self.gpu.meshes.get(o)) {
                 draw_mesh(&r.device, cmd, mesh, None);
             }
-            // Its inside (caps over its openings) after its front faces.
-            let caps = self.gpu.caps.get(r.object).and_then(Option::as_ref);
+            // Their insides (caps over their openings) after the front faces.
+            let caps =
+                (r.parts.iter()).filter_map(|&o| self.gpu.caps.get(o).and_then(Option::as_ref));
             super::interior::record_caps(&r.device, cmd, &r.interior, self.push.view_proj, caps)?;
             Ok(())
         })

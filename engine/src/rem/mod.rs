@@ -68,10 +68,12 @@ impl RemPlayer {
         formats: (ash::vk::Format, ash::vk::Format),
     ) -> crate::backend::GpuResult<Self> {
         let warp = sources::RemWarp::of(scene, maps.object).unwrap_or(sources::RemWarp::Mirror);
-        let texels = maps.upload(warp);
+        let parts = scene.local_group(maps.object);
+        let origin = sources::group_origin(scene, &parts);
+        let bounds =
+            inference::scene::Mesh::bounds_of(parts.iter().map(|&o| &scene.objects[o].mesh));
+        let texels = maps.upload(warp, parts);
         let gpu = crate::passes::rem::RemRenderer::new(device, executor, &texels, formats)?;
-        let mesh = &scene.objects[maps.object].mesh;
-        let origin = mesh.area_weighted_centroid();
         Ok(Self {
             gpu,
             views: RemViews {
@@ -80,7 +82,7 @@ impl RemPlayer {
                 blend,
             },
             bytes: maps.device_bytes(),
-            bounds: mesh.bounds(),
+            bounds,
         })
     }
 }

@@ -14,15 +14,16 @@ use super::geometry::{Geodesic, g_mirror, g_normal, view_frame};
 use anyhow::{Context, Result, bail};
 use glam::{Vec2, Vec3};
 use inference::key::{Fnv, Freshness, Key, freshness, read_verified, write_record};
-use inference::scene::{Material, Scene};
+use inference::scene::{Material, Mesh, Scene};
 use inference::trace::rng::{Rng, cosine_hemisphere, phong_lobe};
 use inference::trace::{TraceSettings, Tracer, cache, phong_exponent};
 use rayon::prelude::*;
 use std::hash::Hasher;
 use std::path::{Path, PathBuf};
 
-/// Bumped when the maps change for the same inputs.
-const REM_VERSION: u64 = 2;
+/// Bumped when the maps change for the same inputs (3: a reflector's
+/// parts are seen through and the maps centred on all of them).
+const REM_VERSION: u64 = 3;
 const MAGIC: &[u8; 8] = b"PEMREM01";
 const HEADER: usize = 16;
 
@@ -91,12 +92,13 @@ impl SourceMaps {
     }
 
     /// The texels as the device uploads them.
-    pub fn upload(&self, warp: RemWarp) -> crate::passes::rem::SourceTexels<'_> {
+    /// `parts`: the objects the maps are drawn on ([`Scene::local_group`]).
+    pub fn upload(&self, warp: RemWarp, parts: Vec<usize>) -> crate::passes::rem::SourceTexels<'_> {
         crate::passes::rem::SourceTexels {
             size: self.size,
             count: self.geodesic.vertices.len() as u32,
             texels: &self.texels,
-            object: self.object,
+            parts,
             normal_warp: warp == RemWarp::Normal,
         }
     }
@@ -221,7 +223,10 @@ pub fn trace_views(
         Some(Material::Diffuse { albedo, .. }) => Lobe::Lambert(*albedo),
         _ => bail!("{}: not a mirror, glossy or diffuse object", obj.name),
     };
-    let origin = obj.mesh.area_weighted_centroid();
+    // The reflector's parts (lid and body) are one reflector: maps seen
+    // from their common centroid, through all of them.
+    let parts = scene.local_group(object);
+    let origin = group_origin(scene, &parts);
     let tracer = Tracer::new(scene)?;
     let trace_settings = TraceSettings::default();
     let size = settings.size as usize;
@@ -232,7 +237,8 @@ pub fn trace_views(
     Ok(tracer.with_integrator(&trace_settings, |integ, bvh| {
         let radiance = |dir: Vec3, rng: &mut Rng| {
             let mut rays = 0;
-            match bvh.closest(origin, dir, 0.0, f32::INFINITY, Some(object as u32)) {
+            let outside = |o: u32| !parts.contains(&(o as usize));
+            match bvh.closest_where(origin, dir, 0.0, f32::INFINITY, outside) {
                 Some(hit) => integ.radiance_at(hit, dir, 1, rng, &mut rays),
                 None => trace_settings.transport.background,
             }
@@ -279,6 +285,16 @@ pub fn trace_views(
             .map(texel)
             .collect()
     }))
+}
+
+/// The EM origin of a reflector made of `parts` ([`Scene::local_group`]):
+/// their common area-weighted centroid.
+pub fn group_origin(scene: &Scene, parts: &[usize]) -> Vec3 {
+    Mesh::centroid_of(
+        parts
+            .iter()
+            .filter_map(|&i| Some(&scene.objects.get(i)?.mesh)),
+    )
 }
 
 /// What a source texel integrates: Fresnel times the radiance along the

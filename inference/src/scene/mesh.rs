@@ -36,23 +36,48 @@ impl Mesh {
     /// Area-weighted mean of triangle centroids: the PEM paper's EM origin.
     /// Falls back to the mean position when the area is zero, and to the origin when empty.
     pub fn area_weighted_centroid(&self) -> Vec3 {
+        Self::centroid_of([self])
+    }
+
+    /// [`Mesh::area_weighted_centroid`] of several meshes taken as one (a
+    /// reflector's parts); of one mesh, bit for bit its own.
+    pub fn centroid_of<'a>(meshes: impl IntoIterator<Item = &'a Mesh> + Clone) -> Vec3 {
         let (mut sum, mut total) = (Vec3::ZERO, 0.0f64);
-        for t in 0..self.triangle_count() {
-            let [a, b, c] = self.triangle(t);
-            let area = triangle_area([a, b, c]) as f64;
-            sum += (a + b + c) / 3.0 * area as f32;
-            total += area;
+        for mesh in meshes.clone() {
+            for t in 0..mesh.triangle_count() {
+                let [a, b, c] = mesh.triangle(t);
+                let area = triangle_area([a, b, c]) as f64;
+                sum += (a + b + c) / 3.0 * area as f32;
+                total += area;
+            }
+        }
+        let (mut positions, mut count) = (Vec3::ZERO, 0usize);
+        for mesh in meshes {
+            positions += mesh.positions.iter().copied().sum::<Vec3>();
+            count += mesh.positions.len();
         }
         if total > 0.0 {
             sum / total as f32
-        } else if !self.positions.is_empty() {
-            self.positions.iter().copied().sum::<Vec3>() / self.positions.len() as f32
+        } else if count > 0 {
+            positions / count as f32
         } else {
             Vec3::ZERO
         }
     }
 
-    /// Axis-aligned bounds `(min, max)`; `(0, 0)` for an empty mesh.
+    /// The box around several meshes (empty ones add nothing).
+    pub fn bounds_of<'a>(meshes: impl IntoIterator<Item = &'a Mesh>) -> (Vec3, Vec3) {
+        let boxes: Vec<_> = meshes
+            .into_iter()
+            .filter(|m| !m.positions.is_empty())
+            .map(Mesh::bounds)
+            .collect();
+        boxes
+            .into_iter()
+            .reduce(|(a0, a1), (b0, b1)| (a0.min(b0), a1.max(b1)))
+            .unwrap_or((Vec3::ZERO, Vec3::ZERO))
+    }
+
     pub fn bounds(&self) -> (Vec3, Vec3) {
         if self.positions.is_empty() {
             return (Vec3::ZERO, Vec3::ZERO);
