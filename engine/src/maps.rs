@@ -94,20 +94,52 @@ pub fn reflective(scene: &Scene, object: &Object) -> bool {
 
 /// The maps compiled for the scene, in container order: per reflector
 /// with `[objects.em]`, its EM layers, then its PTM. (Sphere EMs are
-/// inferred on request and play from EXR, outside the container.)
+/// inferred on request, in their own container: [`MapSet::Sphere`].)
 pub fn map_specs(scene: &Scene) -> Vec<MapSpec> {
-    let mut specs = Vec::new();
-    for o in scene.objects.iter().filter(|o| reflective(scene, o)) {
-        let Some(em) = o.em.as_ref() else { continue };
-        let spec = |layer| MapSpec {
-            object: o.name.clone(),
-            layer,
-            resolution: em.resolution,
-        };
-        specs.extend(em.layers.iter().map(|&l| spec(MapLayer::from_em(l))));
-        specs.push(spec(MapLayer::Ptm));
+    MapSet::Scene.specs(scene)
+}
+
+/// The maps one container holds: the scene's own, or the sphere-PEM
+/// baseline's, compiled only when asked for and compressed at the same
+/// ratio (so `engine eval` ranks the methods at equal compression).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MapSet {
+    /// Per reflector its EM layers, then its PTM: `<scene>.ptxc`.
+    Scene,
+    /// Per reflector its sphere EM: `<scene>.sphere.ptxc`.
+    Sphere,
+}
+
+impl MapSet {
+    /// The set playing `layers` needs.
+    pub fn of(layers: &[MapLayer]) -> Self {
+        if layers.contains(&MapLayer::Sphere) {
+            MapSet::Sphere
+        } else {
+            MapSet::Scene
+        }
     }
-    specs
+
+    /// The set's maps, in container order.
+    pub fn specs(self, scene: &Scene) -> Vec<MapSpec> {
+        let mut specs = Vec::new();
+        for o in scene.objects.iter().filter(|o| reflective(scene, o)) {
+            let Some(em) = o.em.as_ref() else { continue };
+            let spec = |layer| MapSpec {
+                object: o.name.clone(),
+                layer,
+                resolution: em.resolution,
+            };
+            match self {
+                MapSet::Scene => {
+                    specs.extend(em.layers.iter().map(|&l| spec(MapLayer::from_em(l))));
+                    specs.push(spec(MapLayer::Ptm));
+                }
+                MapSet::Sphere => specs.push(spec(MapLayer::Sphere)),
+            }
+        }
+        specs
+    }
 }
 
 /// Where a scene's compiled files live, under one output folder:
@@ -126,6 +158,14 @@ impl DataDirs {
             trace: out.join("trace"),
             infer: out.join("infer"),
             container: out.join(format!("{}.ptxc", scene.name)),
+        }
+    }
+
+    /// The container of `set`: `<scene>.ptxc` or `<scene>.sphere.ptxc`.
+    pub fn container_of(&self, set: MapSet) -> PathBuf {
+        match set {
+            MapSet::Scene => self.container.clone(),
+            MapSet::Sphere => self.container.with_extension("sphere.ptxc"),
         }
     }
 }
@@ -178,6 +218,22 @@ mod tests {
             Path::new("o/infer/sample_0007/teapot.specular_local.exr")
         );
         assert_eq!(MapLayer::Local.channels(), 4);
+        let sphere: Vec<String> = MapSet::Sphere
+            .specs(&scene)
+            .iter()
+            .map(MapSpec::name)
+            .collect();
+        assert_eq!(sphere, ["teapot.specular_sphere"]);
+        let dirs = DataDirs::under(Path::new("o"), &scene);
+        assert_eq!(
+            dirs.container_of(MapSet::Sphere),
+            Path::new("o/teapot.sphere.ptxc")
+        );
+        assert_eq!(MapSet::of(&[MapLayer::Sphere]), MapSet::Sphere);
+        assert_eq!(
+            MapSet::of(&[MapLayer::Distant, MapLayer::Local]),
+            MapSet::Scene
+        );
         assert_eq!(MapLayer::Ptm.layout(16).faces(), 1);
     }
 }

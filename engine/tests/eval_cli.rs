@@ -144,8 +144,8 @@ fn records(dir: &Path) -> Vec<std::path::PathBuf> {
 
 /// Rows that play the container state their compile minutes: its
 /// record's seconds, which sum the recorded seconds of every trace and of
-/// every map it holds plus the encode; the static EM's row and the sphere
-/// PEM's (its EXR maps) state none.
+/// every map it holds plus the encode; the sphere PEM's row its own
+/// container's (the same traces, its own maps); the static EM's none.
 fn assert_compile_minutes(rows: &[serde_json::Value], data: &Path) {
     let traced: Vec<f64> = records(&data.join("trace"))
         .iter()
@@ -159,11 +159,7 @@ fn assert_compile_minutes(rows: &[serde_json::Value], data: &Path) {
         .collect();
     assert_eq!(traced.len(), 3, "one trace per sample");
     assert_eq!(maps.len(), 3 * 3, "three maps per sample in the container");
-    let container = records(data)
-        .into_iter()
-        .find(|r| r.to_string_lossy().ends_with(".ptxc.key"))
-        .expect("container record");
-    let total = record_seconds(&container).expect("container seconds");
+    let total = record_seconds(&data.join("teapot.ptxc.key")).expect("container seconds");
     let inputs: f64 = traced.iter().chain(&maps).sum();
     assert!(
         inputs > 0.0 && total >= inputs,
@@ -173,9 +169,23 @@ fn assert_compile_minutes(rows: &[serde_json::Value], data: &Path) {
         let minutes = num(row(rows, label), "compile_minutes");
         assert!((minutes - total / 60.0).abs() < 1e-9, "{label}: {minutes}");
     }
-    for label in ["static-em", "sphere-pem"] {
-        assert!(row(rows, label).get("compile_minutes").is_none(), "{label}");
-    }
+    let sphere = record_seconds(&data.join("teapot.sphere.ptxc.key")).expect("sphere seconds");
+    let sphere_maps: f64 = records(&data.join("infer"))
+        .iter()
+        .filter(|r| r.to_string_lossy().ends_with("specular_sphere.exr.key"))
+        .filter_map(|r| record_seconds(r))
+        .sum();
+    let traces: f64 = traced.iter().sum();
+    assert!(
+        sphere >= traces + sphere_maps && sphere_maps > 0.0,
+        "{sphere} s"
+    );
+    let minutes = num(row(rows, "sphere-pem"), "compile_minutes");
+    assert!(
+        (minutes - sphere / 60.0).abs() < 1e-9,
+        "sphere-pem: {minutes}"
+    );
+    assert!(row(rows, "static-em").get("compile_minutes").is_none());
 }
 
 #[test]
@@ -236,6 +246,14 @@ fn eval_ranks_the_methods_against_the_tracer() {
     assert_views_above(rows);
     assert_methods_beat_static_em(rows, &log);
     assert_compile_minutes(rows, &data);
+    // The sphere PEM plays its own container, compressed as the scene's.
+    for (label, file) in [
+        ("sphere-pem", "teapot.sphere.ptxc"),
+        ("layered-pem", "teapot.ptxc"),
+    ] {
+        let bytes = std::fs::metadata(data.join(file)).expect(file).len();
+        assert_eq!(num(row(rows, label), "map_bytes"), bytes as f64, "{label}");
+    }
     // The local layer pays between samples (+0.5 dB measured).
     let gain = num(row(rows, "layered-pem"), "psnr_between_db")
         - num(row(rows, "layered-pem distant-only"), "psnr_between_db");

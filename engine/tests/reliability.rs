@@ -199,6 +199,7 @@ fn small_maps_are_encoded_at_a_size_that_holds_their_quality() {
     let scene = inference::scene::Scene::load(s(&scene)).expect("scene");
     let input = engine::compile::encode::load_input(
         &scene,
+        engine::maps::MapSet::Scene,
         &out.join("infer"),
         engine::compile::encode::MapsFor::Encode,
     )

@@ -11,6 +11,7 @@ pub use curves::plot_curves;
 
 use crate::backend::DeviceOptions;
 use crate::compile::encode::{MapsFor, load_input, map_keys};
+use crate::maps::MapSet;
 use anyhow::{Context, Result};
 use curves::curves;
 use frames::{FRAME_PIXELS, FrameBench};
@@ -48,8 +49,8 @@ pub fn codec_report(scene: &Scene, req: &CodecReportRequest) -> Result<String> {
     let container = codec::Container::open(&req.file)?;
     // Measured against the maps it was encoded from: refused, saying how
     // to make them, when they are not there.
-    map_keys(scene, &req.infer_dir, MapsFor::Report)?;
-    let input = load_input(scene, &req.infer_dir, MapsFor::Report)?;
+    map_keys(scene, MapSet::Scene, &req.infer_dir, MapsFor::Report)?;
+    let input = load_input(scene, MapSet::Scene, &req.infer_dir, MapsFor::Report)?;
     let progress = indicatif::ProgressBar::new_spinner().with_style(
         indicatif::ProgressStyle::with_template("{spinner} codec-report {elapsed} {msg}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),

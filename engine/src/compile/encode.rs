@@ -3,7 +3,7 @@
 //! below [`MIN_TEXTURE_PSNR_DB`] (maps too small for the ratio asked) is
 //! encoded again with more bytes, never played black.
 
-use crate::maps::{MapSpec, map_path, map_specs, sample_dir};
+use crate::maps::{MapSet, MapSpec, map_path, sample_dir};
 use crate::util::files::check_overwrite_keyed;
 use anyhow::{Context, Result, bail};
 use codec::quality::PsnrAccum;
@@ -99,9 +99,9 @@ impl MapsFor {
     }
 }
 
-/// The scene's maps ([`map_specs`]), refused when it has none.
-fn specs_for(scene: &Scene, purpose: MapsFor) -> Result<Vec<MapSpec>> {
-    let specs = map_specs(scene);
+/// The scene's maps of `set`, refused when it has none.
+fn specs_for(scene: &Scene, set: MapSet, purpose: MapsFor) -> Result<Vec<MapSpec>> {
+    let specs = set.specs(scene);
     if specs.is_empty() {
         bail!(
             "{}: no reflective object has [objects.em] settings: {}",
@@ -112,12 +112,17 @@ fn specs_for(scene: &Scene, purpose: MapsFor) -> Result<Vec<MapSpec>> {
     Ok(specs)
 }
 
-/// Every sample's maps' key records in `infer_dir`, in [`load_input`]'s
-/// order. A map missing, or without its record, is refused naming it, its
+/// Every sample's maps of `set`: their key records in `infer_dir`, in
+/// [`load_input`]'s order. A map missing, or without its record, is refused naming it, its
 /// sample, the folder (and whether it exists), what `purpose` needs the
 /// maps for and how to make them.
-pub fn map_keys(scene: &Scene, infer_dir: &Path, purpose: MapsFor) -> Result<Vec<Key>> {
-    let specs = specs_for(scene, purpose)?;
+pub fn map_keys(
+    scene: &Scene,
+    set: MapSet,
+    infer_dir: &Path,
+    purpose: MapsFor,
+) -> Result<Vec<Key>> {
+    let specs = specs_for(scene, set, purpose)?;
     let mut keys = Vec::new();
     for k in 0..scene.orbit.sample_count() {
         for spec in &specs {
@@ -145,12 +150,17 @@ pub fn map_keys(scene: &Scene, infer_dir: &Path, purpose: MapsFor) -> Result<Vec
     Ok(keys)
 }
 
-/// Reads every sample's maps into the codec's input (sample-major; each
+/// Reads every sample's maps of `set` into the codec's input (sample-major; each
 /// sample MIP-major, then face, rows, texels, channels interleaved) for
 /// `purpose`. A map that is missing, damaged (its key record's checksum)
 /// or holds values playback cannot (beyond f16) is a [`BadMap`] naming it.
-pub fn load_input(scene: &Scene, infer_dir: &Path, purpose: MapsFor) -> Result<EncodeInput> {
-    let specs = specs_for(scene, purpose)?;
+pub fn load_input(
+    scene: &Scene,
+    set: MapSet,
+    infer_dir: &Path,
+    purpose: MapsFor,
+) -> Result<EncodeInput> {
+    let specs = specs_for(scene, set, purpose)?;
     let samples = scene.orbit.sample_count();
     let mut textures = Vec::new();
     for (index, spec) in specs.iter().enumerate() {
@@ -347,7 +357,8 @@ mod tests {
     fn a_map_without_its_record_is_named_once() {
         let scene = inference::scene::Scene::load("teapot").expect("built-in scene");
         let dir = tempfile::tempdir().expect("tempdir");
-        let e = load_input(&scene, dir.path(), MapsFor::Encode).expect_err("no maps");
+        let e =
+            load_input(&scene, MapSet::Scene, dir.path(), MapsFor::Encode).expect_err("no maps");
         let bad = e.downcast_ref::<BadMap>().expect("a BadMap");
         let text = format!("{e:#}");
         let path = bad.path.display().to_string();

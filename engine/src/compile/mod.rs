@@ -14,7 +14,7 @@ pub mod shipped;
 pub mod trace;
 
 use crate::backend::DeviceOptions;
-use crate::maps::{DataDirs, MapLayer, map_path};
+use crate::maps::{DataDirs, MapLayer, MapSet, map_path};
 use crate::options::{Maps, PemOptions};
 use crate::pem::source::MapSource;
 use anyhow::{Result, bail};
@@ -81,7 +81,9 @@ pub fn container_key<'k>(
 /// The map source for `layers` under `pem`'s options, compiling whatever is
 /// missing, stale or damaged under the output folder first. Maps or a
 /// container the user named (`--infer-dir`, `--container`) are inputs:
-/// read, checked, never rebuilt.
+/// read, checked, never rebuilt. The sphere PEM's maps, asked for by
+/// `layers`, have their own container under the output folder
+/// ([`MapSet::Sphere`]; `--container` names the scene's).
 pub fn map_source(
     ctx: &CompileContext,
     pem: &PemOptions,
@@ -92,27 +94,28 @@ pub fn map_source(
     if let Some(d) = &pem.infer_dir {
         dirs.infer = d.clone();
     }
-    let sphere = layers.contains(&MapLayer::Sphere);
-    let req = ctx.request(&dirs, sphere);
+    let set = MapSet::of(layers);
+    let req = ctx.request(&dirs, set == MapSet::Sphere);
     let plan = Plan::new(scene, &req)?;
-    let wanted: Vec<MapLayer> = if pem.maps == Maps::Exr || sphere {
+    let wanted: Vec<MapLayer> = if pem.maps == Maps::Exr {
         layers.to_vec()
     } else {
-        crate::maps::map_specs(scene)
-            .iter()
-            .map(|s| s.layer)
-            .collect()
+        set.specs(scene).iter().map(|s| s.layer).collect()
     };
     let stale = stale_maps(&plan, &req, &wanted)?;
-    let plays_container = pem.maps == Maps::Container && !sphere;
-    if !stale.is_empty() && plays_container && pem.infer_dir.is_none() && pem.container.is_none() {
+    let named = pem.container.as_ref().filter(|_| set == MapSet::Scene);
+    let plays_container = pem.maps == Maps::Container;
+    if !stale.is_empty() && plays_container && pem.infer_dir.is_none() && named.is_none() {
         // A fresh container needs no maps: the one under --out, else the
         // shipped one.
-        let key = expected_container_key(ctx, &plan, &req)?;
-        if inference::key::freshness(&dirs.container, &key) == Freshness::Fresh {
-            return MapSource::container(scene, &dirs.container);
+        let key = expected_container_key(ctx, &plan, &req, set)?;
+        let path = dirs.container_of(set);
+        if inference::key::freshness(&path, &key) == Freshness::Fresh {
+            return MapSource::container_of(scene, set, &path);
         }
-        if let Some(path) = shipped::container(ctx, &key) {
+        if set == MapSet::Scene
+            && let Some(path) = shipped::container(ctx, &key)
+        {
             // Read only: a shipped file that fails to read is passed over.
             match MapSource::container(scene, &path) {
                 Ok(source) => {
@@ -152,10 +155,10 @@ pub fn map_source(
             );
         }
     }
-    if pem.maps == Maps::Exr || sphere {
+    if pem.maps == Maps::Exr {
         return Ok(MapSource::exr(&dirs.infer));
     }
-    container_source(ctx, pem, &plan, &req, &dirs)
+    container_source(ctx, named, set, (&plan, &req), &dirs)
 }
 
 /// The samples of `ctx`'s scene some map of which is not fresh under its
@@ -225,17 +228,22 @@ pub fn container_key_for(ctx: &CompileContext) -> Result<Key> {
     let dirs = DataDirs::under(ctx.out, ctx.scene);
     let req = ctx.request(&dirs, false);
     let plan = Plan::new(ctx.scene, &req)?;
-    expected_container_key(ctx, &plan, &req)
+    expected_container_key(ctx, &plan, &req, MapSet::Scene)
 }
 
-/// The key the container of `req`'s samples carries when encoded from
-/// fresh maps at the default ratio.
-fn expected_container_key(ctx: &CompileContext, plan: &Plan, req: &InferRequest) -> Result<Key> {
+/// The key the container of `set` of `req`'s samples carries when encoded
+/// from fresh maps at the default ratio.
+fn expected_container_key(
+    ctx: &CompileContext,
+    plan: &Plan,
+    req: &InferRequest,
+    set: MapSet,
+) -> Result<Key> {
     let target = codec::Target::Ratio(encode::DEFAULT_RATIO);
     let mut map_keys = Vec::new();
     for &k in &req.samples {
         let trace_key = plan.trace_key(k)?;
-        for spec in crate::maps::map_specs(ctx.scene) {
+        for spec in set.specs(ctx.scene) {
             if let Some(job) = plan
                 .jobs
                 .iter()
@@ -249,23 +257,21 @@ fn expected_container_key(ctx: &CompileContext, plan: &Plan, req: &InferRequest)
     Ok(container_key(map_keys.iter(), target, grid))
 }
 
-/// The container: the one named by the user (checked, read only) or the
-/// one under the output folder, encoded again when stale or damaged.
+/// The container of `set`: the one `named` by the user (checked, read
+/// only) or the one under the output folder, encoded again when stale or
+/// damaged.
 fn container_source(
     ctx: &CompileContext,
-    pem: &PemOptions,
-    plan: &Plan,
-    req: &InferRequest,
+    named: Option<&std::path::PathBuf>,
+    set: MapSet,
+    (plan, req): (&Plan, &InferRequest),
     dirs: &DataDirs,
 ) -> Result<MapSource> {
-    let key = expected_container_key(ctx, plan, req)?;
-    let path = pem
-        .container
-        .clone()
-        .unwrap_or_else(|| dirs.container.clone());
+    let key = expected_container_key(ctx, plan, req, set)?;
+    let path = named.cloned().unwrap_or_else(|| dirs.container_of(set));
     match inference::key::freshness(&path, &key) {
-        Freshness::Fresh => return MapSource::container(ctx.scene, &path),
-        why if pem.container.is_some() => bail!(
+        Freshness::Fresh => return MapSource::container_of(ctx.scene, set, &path),
+        why if named.is_some() => bail!(
             "{}: {} (encode it with `engine encode --scene {} --out {}`, or drop --container to compile under --out)",
             path.display(),
             match why {
@@ -282,9 +288,9 @@ fn container_source(
         ),
         _ => {}
     }
-    let input = load_or_reinfer(ctx, req, dirs)?;
+    let input = load_or_reinfer(ctx, req, dirs, set)?;
     let target = codec::Target::Ratio(encode::DEFAULT_RATIO);
-    let budget = infer::inputs_budget(plan, &dirs.trace, &dirs.infer);
+    let budget = infer::inputs_budget(plan, set, &dirs.trace, &dirs.infer);
     let e = encode::encode_to(&input, target, &path, &key, budget.seconds())?;
     eprintln!(
         "{}: {} bytes from {} raw (ratio {:.1}:1, worst texture {:.1} dB) in {:.1} s{}",
@@ -297,7 +303,7 @@ fn container_source(
         e.note.map_or(String::new(), |n| format!(" ({n})"))
     );
     eprintln!("{}", budget_line(&budget, e.seconds));
-    MapSource::container(ctx.scene, &path)
+    MapSource::container_of(ctx.scene, set, &path)
 }
 
 /// What the container cost to compile, as its record keeps it.
@@ -318,25 +324,27 @@ fn budget_line(budget: &infer::Budget, encode_s: f64) -> String {
     }
 }
 
-/// The encoder's input; a map that fails to read (damaged since it was
-/// checked) is forgotten and inferred again, once.
+/// The encoder's input of `set`; a map that fails to read (damaged since
+/// it was checked) is forgotten and inferred again, once.
 fn load_or_reinfer(
     ctx: &CompileContext,
     req: &InferRequest,
     dirs: &DataDirs,
+    set: MapSet,
 ) -> Result<codec::EncodeInput> {
-    match encode::load_input(ctx.scene, &dirs.infer, encode::MapsFor::Encode) {
+    let load = || encode::load_input(ctx.scene, set, &dirs.infer, encode::MapsFor::Encode);
+    match load() {
         Ok(input) => Ok(input),
         Err(e) => {
             let Some(bad) = e.downcast_ref::<encode::BadMap>() else {
                 return Err(e);
             };
             eprintln!("{bad}: inferring it again");
-            let specs = crate::maps::map_specs(ctx.scene);
+            let specs = set.specs(ctx.scene);
             let spec = &specs[bad.spec];
             inference::key::forget(&map_path(&dirs.infer, bad.sample, &spec.object, spec.layer));
             eprint!("{}", infer::infer(ctx.scene, req)?);
-            encode::load_input(ctx.scene, &dirs.infer, encode::MapsFor::Encode)
+            load()
         }
     }
 }

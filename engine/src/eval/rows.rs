@@ -101,6 +101,7 @@ pub fn all_rows() -> Vec<Row> {
         Row::new("static-em", Mode::StaticEm),
         Row::new("sphere-pem", Mode::SpherePem),
         Row::new("sphere-pem nearest-sample", Mode::SpherePem).with(|p| p.blend = false),
+        Row::new("sphere-pem uncompressed", Mode::SpherePem).with(|p| p.maps = Maps::Exr),
         layered(),
         labelled("layered-pem multipass").with(|p| p.compositing = Compositing::Multipass),
         labelled("layered-pem analytic-room").with(|p| p.room = RoomShading::Analytic),

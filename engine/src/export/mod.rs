@@ -12,7 +12,7 @@ pub mod sidecar;
 
 use crate::compile::encode::{MapsFor, map_keys};
 use crate::compile::infer::jobs_for;
-use crate::maps::{MapLayer, MapSpec, map_path, map_specs};
+use crate::maps::{MapLayer, MapSet, MapSpec, map_path, map_specs};
 use crate::util::files::{check_overwrite, claim_dir, write, write_json};
 use anyhow::{Context, Result, bail};
 use inference::infer::maps::parse_map;
@@ -82,7 +82,7 @@ pub fn file_name(spec: &MapSpec, sample: u32) -> String {
 pub fn export_ktx2(scene: &Scene, infer_dir: &Path, out: &Path) -> Result<Exported> {
     // Every map there with its key record, checked before the folder is
     // claimed: a run that cannot export leaves nothing.
-    map_keys(scene, infer_dir, MapsFor::Export)?;
+    map_keys(scene, MapSet::Scene, infer_dir, MapsFor::Export)?;
     let specs = map_specs(scene);
     let jobs = jobs_for(scene, None, false)?;
     claim_dir(out)?;

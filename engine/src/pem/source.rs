@@ -5,7 +5,7 @@
 
 use crate::backend::host_image::HostElement;
 pub use crate::maps::MapLayer;
-use crate::maps::{map_path, map_specs};
+use crate::maps::{MapSet, map_path};
 use anyhow::{Context, Result, bail};
 use codec::LeafSink;
 use half::f16;
@@ -66,9 +66,15 @@ impl MapSource {
     /// Opens the container at `path`, checking it holds the maps this scene
     /// asks for, in the order `engine encode` writes them.
     pub fn container(scene: &Scene, path: &Path) -> Result<Self> {
+        Self::container_of(scene, MapSet::Scene, path)
+    }
+
+    /// Opens the container of `set` at `path`, checking it holds that
+    /// set's maps, in order.
+    pub fn container_of(scene: &Scene, set: MapSet, path: &Path) -> Result<Self> {
         // Its errors name the file.
         let container = codec::Container::open(path).context("opening the map container")?;
-        let specs = map_specs(scene);
+        let specs = set.specs(scene);
         let textures = container.textures();
         if textures.len() != specs.len() {
             bail!(

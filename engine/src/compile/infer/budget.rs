@@ -7,7 +7,7 @@
 
 use super::Plan;
 use super::jobs::{StackedView, stacked_views_of};
-use crate::maps::{map_path, map_specs, traced_stem, view_stem};
+use crate::maps::{MapSet, map_path, traced_stem, view_stem};
 use inference::key::recorded_seconds;
 use inference::trace::output::with_suffix;
 use std::collections::BTreeSet;
@@ -32,16 +32,16 @@ impl Budget {
     }
 }
 
-/// The budget of the container of `plan`'s scene from the traces under
-/// `trace_dir` and the maps under `infer_dir`.
-pub fn inputs_budget(plan: &Plan, trace_dir: &Path, infer_dir: &Path) -> Budget {
+/// The budget of the container of `set` of `plan`'s scene from the traces
+/// under `trace_dir` and the maps under `infer_dir`.
+pub fn inputs_budget(plan: &Plan, set: MapSet, trace_dir: &Path, infer_dir: &Path) -> Budget {
     let orbit = &plan.scene.orbit;
     let samples = orbit.sample_count();
     let mut traces: BTreeSet<PathBuf> = (0..samples)
         .map(|k| with_suffix(&traced_stem(trace_dir, k), ".exr"))
         .collect();
-    // Only the maps the container holds (not, say, the sphere PEM's).
-    let specs = map_specs(plan.scene);
+    // Only the maps the container holds (the set's).
+    let specs = set.specs(plan.scene);
     let held = |job: &&super::Job| {
         specs
             .iter()

@@ -8,6 +8,7 @@ use engine::compile::container_key;
 use engine::compile::encode::{
     DEFAULT_RATIO, MapsFor, check_ratio, encode_to, load_input, map_keys, orbit_grid,
 };
+use engine::maps::MapSet;
 use inference::scene::Scene;
 
 pub fn run(args: &EncodeArgs) -> Result<String> {
@@ -25,8 +26,8 @@ pub fn run(args: &EncodeArgs) -> Result<String> {
     engine::util::files::check_folder_exists(&args.out)?;
     let dir = default_dir(&args.infer_dir, &scene, "infer");
     // The container's key is made of the keys its maps were inferred with.
-    let keys = map_keys(&scene, &dir, MapsFor::Encode)?;
-    let input = load_input(&scene, &dir, MapsFor::Encode)?;
+    let keys = map_keys(&scene, MapSet::Scene, &dir, MapsFor::Encode)?;
+    let input = load_input(&scene, MapSet::Scene, &dir, MapsFor::Encode)?;
     let e = encode_to(
         &input,
         target,
