@@ -113,9 +113,9 @@ fn specs_for(scene: &Scene, set: MapSet, purpose: MapsFor) -> Result<Vec<MapSpec
 }
 
 /// Every sample's maps of `set`: their key records in `infer_dir`, in
-/// [`load_input`]'s order. A map missing, or without its record, is refused naming it, its
-/// sample, the folder (and whether it exists), what `purpose` needs the
-/// maps for and how to make them.
+/// [`load_input`]'s order. A map missing, or without its record, is
+/// refused naming it, its sample, the folder (and whether it exists), what
+/// `purpose` needs the maps for and how to make them.
 pub fn map_keys(
     scene: &Scene,
     set: MapSet,
@@ -150,9 +150,9 @@ pub fn map_keys(
     Ok(keys)
 }
 
-/// Reads every sample's maps of `set` into the codec's input (sample-major; each
-/// sample MIP-major, then face, rows, texels, channels interleaved) for
-/// `purpose`. A map that is missing, damaged (its key record's checksum)
+/// Reads every sample's maps of `set` into the codec's input
+/// (sample-major; each sample MIP-major, then face, rows, texels, channels
+/// interleaved) for `purpose`. A map that is missing, damaged (its key record's checksum)
 /// or holds values playback cannot (beyond f16) is a [`BadMap`] naming it.
 pub fn load_input(
     scene: &Scene,

@@ -51,33 +51,31 @@ impl Mesh {
                 total += area;
             }
         }
-        let (mut positions, mut count) = (Vec3::ZERO, 0usize);
-        for mesh in meshes {
-            positions += mesh.positions.iter().copied().sum::<Vec3>();
-            count += mesh.positions.len();
-        }
         if total > 0.0 {
-            sum / total as f32
-        } else if count > 0 {
-            positions / count as f32
-        } else {
-            Vec3::ZERO
+            return sum / total as f32;
         }
+        let count: usize = meshes.clone().into_iter().map(|m| m.positions.len()).sum();
+        if count == 0 {
+            return Vec3::ZERO;
+        }
+        let positions: Vec3 = meshes
+            .into_iter()
+            .flat_map(|m| m.positions.iter().copied())
+            .sum();
+        positions / count as f32
     }
 
     /// The box around several meshes (empty ones add nothing).
     pub fn bounds_of<'a>(meshes: impl IntoIterator<Item = &'a Mesh>) -> (Vec3, Vec3) {
-        let boxes: Vec<_> = meshes
+        meshes
             .into_iter()
             .filter(|m| !m.positions.is_empty())
             .map(Mesh::bounds)
-            .collect();
-        boxes
-            .into_iter()
             .reduce(|(a0, a1), (b0, b1)| (a0.min(b0), a1.max(b1)))
             .unwrap_or((Vec3::ZERO, Vec3::ZERO))
     }
 
+    /// Axis-aligned bounds `(min, max)`; `(0, 0)` for an empty mesh.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         if self.positions.is_empty() {
             return (Vec3::ZERO, Vec3::ZERO);
